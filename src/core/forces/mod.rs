@@ -1,0 +1,34 @@
+//! Force terms. Each term is one file behind [`ForceTerm`]; a scene includes only the terms it
+//! lists, so an absent term costs nothing.
+
+pub mod contact;
+pub mod dipole;
+pub mod drag;
+pub mod gradient;
+pub mod gravity;
+pub mod shielding;
+
+use super::domain::Domain;
+use super::neighbours::Pair;
+use super::state::State;
+
+/// What a term may read besides the state during one force evaluation.
+pub struct ForceContext<'a> {
+    pub domain: &'a Domain,
+    /// Pairs within contact range (touching or overlapping within the touch tolerance).
+    pub near_pairs: &'a [Pair],
+    /// Time step, for history-dependent terms (tangential spring).
+    pub dt: f64,
+}
+
+/// One physical contribution to the force and torque on every particle.
+pub trait ForceTerm: Send {
+    /// Name used in timers and messages.
+    fn name(&self) -> &'static str;
+    /// Whether the term needs `ForceContext::near_pairs`.
+    fn needs_near_pairs(&self) -> bool {
+        false
+    }
+    /// Adds this term's force and torque into `state.particles.force/torque`.
+    fn apply(&mut self, ctx: &ForceContext, state: &mut State);
+}

@@ -1,0 +1,22 @@
+//! Explicit (forward) Euler, the paper's scheme: x' = x + v dt, v' = v + F(x, v)/m dt.
+//! First order; unconditionally unstable for an undamped oscillator.
+
+use super::{drift, kick, tick, Evaluate, Integrator};
+use crate::core::state::State;
+
+pub struct ExplicitEuler;
+
+impl Integrator for ExplicitEuler {
+    fn name(&self) -> &'static str {
+        "explicit-euler"
+    }
+    fn order(&self) -> u32 {
+        1
+    }
+    fn step(&mut self, state: &mut State, dt: f64, evaluate: &mut Evaluate) {
+        drift(&mut state.particles, dt);
+        kick(&mut state.particles, dt);
+        tick(state, dt);
+        evaluate(state);
+    }
+}

@@ -1,0 +1,61 @@
+//! Time integrators. An integrator does not own the state: it advances a [`State`] by one step,
+//! calling back into the force pipeline. On entry and on exit `force`/`torque` belong to the
+//! current state, so each step costs one force evaluation.
+
+mod explicit_euler;
+mod semi_implicit_euler;
+mod velocity_verlet;
+
+pub use explicit_euler::ExplicitEuler;
+pub use semi_implicit_euler::SemiImplicitEuler;
+pub use velocity_verlet::VelocityVerlet;
+
+use super::state::{Particles, State, Vec3};
+
+/// Re-evaluates forces and torques for the state as it stands.
+pub type Evaluate<'a> = dyn FnMut(&mut State) + 'a;
+
+pub trait Integrator: Send {
+    fn name(&self) -> &'static str;
+    /// Global order of accuracy for smooth forces.
+    fn order(&self) -> u32;
+    fn step(&mut self, state: &mut State, dt: f64, evaluate: &mut Evaluate);
+}
+
+/// Scheme names accepted by [`by_name`].
+pub const NAMES: [&str; 3] = ["explicit-euler", "semi-implicit-euler", "velocity-verlet"];
+
+pub fn by_name(name: &str) -> Option<Box<dyn Integrator>> {
+    match name {
+        "explicit-euler" => Some(Box::new(ExplicitEuler)),
+        "semi-implicit-euler" => Some(Box::new(SemiImplicitEuler)),
+        "velocity-verlet" => Some(Box::new(VelocityVerlet)),
+        _ => None,
+    }
+}
+
+/// v += F/m h, ω += T/I h.
+fn kick(p: &mut Particles, h: f64) {
+    for i in 0..p.len() {
+        p.velocity[i] += p.force[i] * (h / p.mass[i]);
+        p.angular_velocity[i] += p.torque[i] * (h / p.inertia[i]);
+    }
+}
+
+/// x += v h, and permanent moments turn with the particle by ω h (Rodrigues rotation).
+fn drift(p: &mut Particles, h: f64) {
+    for i in 0..p.len() {
+        p.position[i] += p.velocity[i] * h;
+        let m = p.permanent_moment[i];
+        if m != Vec3::zeros() {
+            let angle = p.angular_velocity[i] * h;
+            p.permanent_moment[i] = nalgebra::Rotation3::new(angle) * m;
+        }
+    }
+}
+
+/// Advances the clock after a completed step.
+fn tick(state: &mut State, dt: f64) {
+    state.step += 1;
+    state.time = state.step as f64 * dt;
+}

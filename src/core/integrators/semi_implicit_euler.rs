@@ -1,0 +1,22 @@
+//! Semi-implicit (symplectic) Euler: v' = v + F(x, v)/m dt, x' = x + v' dt. First order,
+//! stable for an oscillator while ω dt < 2.
+
+use super::{drift, kick, tick, Evaluate, Integrator};
+use crate::core::state::State;
+
+pub struct SemiImplicitEuler;
+
+impl Integrator for SemiImplicitEuler {
+    fn name(&self) -> &'static str {
+        "semi-implicit-euler"
+    }
+    fn order(&self) -> u32 {
+        1
+    }
+    fn step(&mut self, state: &mut State, dt: f64, evaluate: &mut Evaluate) {
+        kick(&mut state.particles, dt);
+        drift(&mut state.particles, dt);
+        tick(state, dt);
+        evaluate(state);
+    }
+}

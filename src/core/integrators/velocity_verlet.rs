@@ -1,0 +1,24 @@
+//! Velocity Verlet as in LAMMPS/LIGGGHTS `fix nve/sphere`: half kick, drift, forces (velocity-
+//! dependent ones see the half-step velocity), half kick. Second order for position-dependent
+//! forces; stable for an oscillator while ω dt < 2.
+
+use super::{drift, kick, tick, Evaluate, Integrator};
+use crate::core::state::State;
+
+pub struct VelocityVerlet;
+
+impl Integrator for VelocityVerlet {
+    fn name(&self) -> &'static str {
+        "velocity-verlet"
+    }
+    fn order(&self) -> u32 {
+        2
+    }
+    fn step(&mut self, state: &mut State, dt: f64, evaluate: &mut Evaluate) {
+        kick(&mut state.particles, 0.5 * dt);
+        drift(&mut state.particles, dt);
+        tick(state, dt);
+        evaluate(state);
+        kick(&mut state.particles, 0.5 * dt);
+    }
+}

@@ -1,0 +1,140 @@
+//! One simulation: state, force pipeline, integrator and monitor. A step runs the named phases
+//! neighbours → moments → one phase per force term (inside the integrator's force evaluation),
+//! then integrate and monitor; each is timed.
+
+use super::domain::Domain;
+use super::forces::{ForceContext, ForceTerm};
+use super::integrators::Integrator;
+use super::magnetisation::{InductionError, Magnetisation};
+use super::neighbours::{CellList, Pair};
+use super::stability::{Instability, Monitor, StepEstimate};
+use super::state::{State, Vec3};
+use super::timers::PhaseTimers;
+use std::time::{Duration, Instant};
+
+/// Everything that turns a state into forces and torques.
+pub struct ForceField {
+    pub domain: Domain,
+    pub magnetisation: Option<Magnetisation>,
+    pub terms: Vec<Box<dyn ForceTerm>>,
+    /// Range of the near-pair search (contact and shielding), if a term needs it.
+    near_range: Option<f64>,
+    cells: CellList,
+    near_pairs: Vec<Pair>,
+    pub timers: PhaseTimers,
+    /// Time spent in evaluations, to separate integration time from force time.
+    evaluation_time: Duration,
+    /// An induction failure inside an evaluation (reported after the step).
+    induction_error: Option<InductionError>,
+}
+
+impl ForceField {
+    /// `near_range`: largest contact distance times (1 + touch tolerance).
+    pub fn new(domain: Domain, magnetisation: Option<Magnetisation>, terms: Vec<Box<dyn ForceTerm>>, near_range: f64) -> Self {
+        let needs = terms.iter().any(|t| t.needs_near_pairs());
+        Self {
+            domain,
+            magnetisation,
+            terms,
+            near_range: needs.then_some(near_range),
+            cells: CellList::default(),
+            near_pairs: vec![],
+            timers: PhaseTimers::default(),
+            evaluation_time: Duration::ZERO,
+            induction_error: None,
+        }
+    }
+
+    /// Computes `force`, `torque` and `moment` for the current state.
+    pub fn evaluate(&mut self, state: &mut State, dt: f64) {
+        let start = Instant::now();
+        let p = &mut state.particles;
+        for x in p.position.iter_mut() {
+            self.domain.wrap(x);
+        }
+        if let Some(range) = self.near_range {
+            let (cells, pairs) = (&mut self.cells, &mut self.near_pairs);
+            self.timers.time("neighbours", || cells.pairs_within(&p.position, &self.domain, Some(range), pairs));
+        }
+        p.force.iter_mut().for_each(|f| *f = Vec3::zeros());
+        p.torque.iter_mut().for_each(|t| *t = Vec3::zeros());
+        if let Some(mag) = self.magnetisation.as_mut() {
+            let result = self.timers.time("moments", || mag.update(p, &self.domain));
+            if let Err(e) = result {
+                self.induction_error.get_or_insert(e);
+            }
+        }
+        let ctx = ForceContext { domain: &self.domain, near_pairs: &self.near_pairs, dt };
+        for term in self.terms.iter_mut() {
+            let t0 = Instant::now();
+            term.apply(&ctx, state);
+            self.timers.add(term.name(), t0.elapsed());
+        }
+        self.evaluation_time += start.elapsed();
+    }
+}
+
+/// A run that went unstable: what happened, when, and the step that would be stable.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "unstable at step {step} (t = {time:.6e} s): {cause}. Estimated stable dt {stable_dt:.3e} s \
+     ({limited_by}); this run used dt = {dt:.3e} s"
+)]
+pub struct RunError {
+    pub step: u64,
+    pub time: f64,
+    pub cause: Instability,
+    pub stable_dt: f64,
+    pub limited_by: &'static str,
+    pub dt: f64,
+}
+
+pub struct Simulation {
+    pub state: State,
+    pub field: ForceField,
+    pub integrator: Box<dyn Integrator>,
+    pub dt: f64,
+    pub monitor: Monitor,
+    pub estimate: StepEstimate,
+}
+
+impl Simulation {
+    /// Evaluates the forces of a fresh state (not needed after a checkpoint restore).
+    pub fn initialise(&mut self) -> Result<(), RunError> {
+        self.field.evaluate(&mut self.state, self.dt);
+        self.check()
+    }
+
+    /// Advances one step and checks it.
+    pub fn step(&mut self) -> Result<(), RunError> {
+        let start = Instant::now();
+        let eval_before = self.field.evaluation_time;
+        let (field, dt) = (&mut self.field, self.dt);
+        self.integrator.step(&mut self.state, dt, &mut |s| field.evaluate(s, dt));
+        let integrate = start.elapsed().saturating_sub(self.field.evaluation_time - eval_before);
+        self.field.timers.add("integrate", integrate);
+        let t0 = Instant::now();
+        let result = self.check();
+        self.field.timers.add("monitor", t0.elapsed());
+        result
+    }
+
+    fn check(&mut self) -> Result<(), RunError> {
+        let cause = match self.field.induction_error.take() {
+            Some(e) => Err(Instability::Induction(e)),
+            None => self.monitor.check(&self.state, &self.field.domain, self.dt),
+        };
+        cause.map_err(|cause| RunError {
+            step: self.state.step,
+            time: self.state.time,
+            cause,
+            stable_dt: self.estimate.stable_dt,
+            limited_by: self.estimate.limited_by,
+            dt: self.dt,
+        })
+    }
+
+    pub fn timers(&self) -> &PhaseTimers {
+        &self.field.timers
+    }
+}

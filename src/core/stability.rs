@@ -1,0 +1,207 @@
+//! Stable time-step estimates (before the run) and the instability monitor (during it).
+//!
+//! Bounds, for the linearised problem:
+//! - Rayleigh time T_R = π a √(ρ/G) / (0.1631 ν + 0.8766) (as LIGGGHTS prints it); DEM practice
+//!   keeps dt below ~0.2 T_R. Reported, not enforced.
+//! - Contact oscillator at the largest expected overlap: ω = √(k/m*), k = dδ/dF = 2E*√(R*δ),
+//!   damping ratio ζ = −√(5/6) β. Central-difference schemes (Verlet, semi-implicit Euler) are
+//!   stable for dt < (2/ω)(√(1+ζ²) − ζ); explicit Euler only for dt < 2ζ/ω (never when e = 1).
+//! - Drag relaxation τ = m/(6π μ a): explicit schemes are stable for dt < 2τ.
+//!
+//! The largest expected overlap comes from the fastest expected impact: the relative speed at
+//! which two touching dipoles meet when all the magnetic energy μ0 m²/(2π d³) goes into motion,
+//! capped by the drag-limited closing speed 2F/(6π μ a) under the contact attraction
+//! F = 3μ0 m²/(2π d⁴), or the fastest initial speed if larger; Hertz theory gives the overlap.
+
+use super::forces::drag::Drag;
+use super::state::{Particles, Species, State, Vec3};
+use super::magnetisation::MU0;
+use std::f64::consts::PI;
+
+/// What the estimate needs to know about the scene.
+#[derive(Debug, Clone)]
+pub struct StepEstimateInput<'a> {
+    pub species: &'a [Species],
+    pub integrator: &'a str,
+    pub contact: bool,
+    /// Viscosity if drag is included.
+    pub drag_viscosity: Option<f64>,
+    /// Largest isolated moment magnitude per species (A·m²), if magnetic terms are included.
+    pub moments: Vec<f64>,
+    pub max_initial_speed: f64,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepEstimate {
+    pub rayleigh_time: f64,
+    /// Fastest expected impact speed (m/s).
+    pub impact_speed: f64,
+    /// Hertz contact duration at that speed.
+    pub contact_duration: Option<f64>,
+    /// Stability bound of the contact oscillator for this integrator.
+    pub contact_bound: Option<f64>,
+    pub drag_relaxation_time: Option<f64>,
+    /// The smallest of the hard bounds, and what sets it.
+    pub stable_dt: f64,
+    pub limited_by: &'static str,
+}
+
+impl StepEstimate {
+    pub fn new(input: &StepEstimateInput) -> Self {
+        let rayleigh_time = input
+            .species
+            .iter()
+            .map(|s| PI * s.radius * (s.density / s.shear_modulus()).sqrt() / (0.1631 * s.poisson_ratio + 0.8766))
+            .fold(f64::INFINITY, f64::min);
+
+        let mut impact_speed = input.max_initial_speed;
+        let mut contact_duration: Option<f64> = None;
+        let mut contact_bound: Option<f64> = None;
+        if input.contact {
+            for (k, s) in input.species.iter().enumerate() {
+                let m_eff = 0.5 * s.mass();
+                let r_eff = 0.5 * s.radius;
+                let e_star = s.youngs_modulus / (2.0 * (1.0 - s.poisson_ratio.powi(2)));
+                let d = 2.0 * s.radius;
+                let moment = input.moments.get(k).copied().unwrap_or(0.0);
+                let magnetic_energy = MU0 * moment * moment / (2.0 * PI * d.powi(3));
+                let mut v = (2.0 * magnetic_energy / m_eff).sqrt();
+                if let Some(mu) = input.drag_viscosity {
+                    // Drag-limited closing speed under the contact attraction 3μ0 m²/(2π d⁴).
+                    let attraction = 3.0 * MU0 * moment * moment / (2.0 * PI * d.powi(4));
+                    v = v.min(2.0 * attraction / Drag::stokes_coefficient(mu, s.radius));
+                }
+                let v = v.max(input.max_initial_speed).max(1e-6);
+                impact_speed = impact_speed.max(v);
+                let overlap = (15.0 * m_eff * v * v / (16.0 * e_star * r_eff.sqrt())).powf(0.4);
+                let duration = 2.87 * (m_eff * m_eff / (r_eff * e_star * e_star * v)).powf(0.2);
+                let omega = (2.0 * e_star * (r_eff * overlap).sqrt() / m_eff).sqrt();
+                let ln_e = s.restitution.ln();
+                let zeta = -(5.0_f64 / 6.0).sqrt() * ln_e / (ln_e * ln_e + PI * PI).sqrt();
+                let bound = if input.integrator == "explicit-euler" {
+                    2.0 * zeta / omega
+                } else {
+                    2.0 / omega * ((1.0 + zeta * zeta).sqrt() - zeta)
+                };
+                contact_duration = Some(contact_duration.map_or(duration, |t: f64| t.min(duration)));
+                contact_bound = Some(contact_bound.map_or(bound, |t: f64| t.min(bound)));
+            }
+        }
+        let drag_relaxation_time = input.drag_viscosity.map(|mu| {
+            input
+                .species
+                .iter()
+                .map(|s| s.mass() / Drag::stokes_coefficient(mu, s.radius))
+                .fold(f64::INFINITY, f64::min)
+        });
+        let mut stable_dt = f64::INFINITY;
+        let mut limited_by = "nothing (no stiff term)";
+        if let Some(b) = contact_bound {
+            stable_dt = b;
+            limited_by = "contact oscillator";
+        }
+        if let Some(tau) = drag_relaxation_time {
+            if 2.0 * tau < stable_dt {
+                stable_dt = 2.0 * tau;
+                limited_by = "drag relaxation";
+            }
+        }
+        Self { rayleigh_time, impact_speed, contact_duration, contact_bound, drag_relaxation_time, stable_dt, limited_by }
+    }
+
+    pub fn summary(&self, dt: f64) -> String {
+        let mut s = format!(
+            "dt = {dt:.3e} s; Rayleigh time {:.3e} s (dt = {:.0}% of it)",
+            self.rayleigh_time,
+            100.0 * dt / self.rayleigh_time
+        );
+        if let (Some(tc), Some(b)) = (self.contact_duration, self.contact_bound) {
+            s += &format!(
+                "; impact speed up to {:.3e} m/s: Hertz contact {:.3e} s, stability bound {:.3e} s",
+                self.impact_speed, tc, b
+            );
+        }
+        if let Some(tau) = self.drag_relaxation_time {
+            s += &format!("; drag relaxation {tau:.3e} s");
+        }
+        s + &format!("; estimated stable dt {:.3e} s ({})", self.stable_dt, self.limited_by)
+    }
+}
+
+/// Why a run stopped early.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum Instability {
+    #[error("{quantity} of particle {particle} is not finite")]
+    NotFinite { quantity: &'static str, particle: usize },
+    #[error(
+        "runaway overlap: particles {i} and {j} overlap by {ratio:.3} of the smaller diameter \
+         (limit {limit})"
+    )]
+    Overlap { i: u32, j: String, ratio: f64, limit: f64 },
+    #[error(
+        "energy blow-up: particle {particle} moves {fraction:.2} of its radius per step at \
+         {speed:.3e} m/s (limit {limit}); kinetic energy {kinetic_energy:.3e} J"
+    )]
+    Runaway { particle: usize, speed: f64, fraction: f64, limit: f64, kinetic_energy: f64 },
+    #[error("particle {particle} left the box through the {face} wall at {position:?}")]
+    Escaped { particle: usize, face: String, position: [f64; 3] },
+    #[error(transparent)]
+    Induction(#[from] super::magnetisation::InductionError),
+}
+
+/// Thresholds checked after every step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Monitor {
+    /// Largest overlap allowed, as a fraction of the smaller diameter.
+    pub max_overlap: f64,
+    /// Largest distance a particle may travel in one step, as a fraction of its radius.
+    pub max_step_fraction: f64,
+}
+
+impl Default for Monitor {
+    fn default() -> Self {
+        Self { max_overlap: 0.1, max_step_fraction: 0.25 }
+    }
+}
+
+impl Monitor {
+    pub fn check(&self, state: &State, domain: &super::domain::Domain, dt: f64) -> Result<(), Instability> {
+        let p: &Particles = &state.particles;
+        for i in 0..p.len() {
+            for (q, v) in [("position", &p.position[i]), ("velocity", &p.velocity[i]), ("force", &p.force[i])] {
+                if !v.iter().all(|c| c.is_finite()) {
+                    return Err(Instability::NotFinite { quantity: q, particle: i });
+                }
+            }
+        }
+        let d = state.diagnostics;
+        if d.max_overlap_ratio > self.max_overlap {
+            let j = d.max_overlap_pair.1.map_or("the wall".to_string(), |j| j.to_string());
+            return Err(Instability::Overlap { i: d.max_overlap_pair.0, j, ratio: d.max_overlap_ratio, limit: self.max_overlap });
+        }
+        for i in 0..p.len() {
+            let speed = p.velocity[i].norm();
+            let fraction = speed * dt / p.radius[i];
+            if fraction > self.max_step_fraction {
+                return Err(Instability::Runaway {
+                    particle: i,
+                    speed,
+                    fraction,
+                    limit: self.max_step_fraction,
+                    kinetic_energy: p.kinetic_energy(),
+                });
+            }
+        }
+        for i in 0..p.len() {
+            let x: Vec3 = p.position[i];
+            for (_, k, upper) in domain.walls() {
+                let outside = if upper { x[k] - domain.hi[k] } else { domain.lo[k] - x[k] };
+                if outside > p.radius[i] {
+                    let face = format!("{}-{}", ["x", "y", "z"][k], if upper { "hi" } else { "lo" });
+                    return Err(Instability::Escaped { particle: i, face, position: [x.x, x.y, x.z] });
+                }
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,3 @@
+//! Input/output outside the physics core: HDF5 trajectories with checkpoints.
+
+pub mod trajectory;

@@ -1,0 +1,426 @@
+//! HDF5 trajectory files (schema in the README, "Trajectory files").
+//!
+//! Frames are appended one at a time into chunked, deflate-compressed datasets and the file is
+//! flushed after every frame, so a killed run leaves a readable file holding every frame written.
+//! The `checkpoint` group holds the full state (forces and contact history included) and is
+//! rewritten in place with every frame and on interruption; `--resume` continues from it.
+
+use crate::core::state::{ContactHistory, Particles, State, Vec3};
+use crate::scene::Scene;
+use hdf5::types::VarLenUnicode;
+use hdf5::{Dataset, Extent, File, Group, SimpleExtents};
+use ndarray::{s, Array1, Array2, Array3};
+use std::path::Path;
+
+/// Format identifier and version written at the root.
+pub const FORMAT: &str = "magdem-trajectory";
+pub const FORMAT_VERSION: u32 = 1;
+
+#[derive(Debug, thiserror::Error)]
+pub enum TrajectoryError {
+    #[error("HDF5 error on {path}: {source}")]
+    Hdf5 { path: String, source: hdf5::Error },
+    #[error("{path}: {message}")]
+    Mismatch { path: String, message: String },
+}
+
+/// Run status stored in the `status` root attribute.
+pub mod status {
+    pub const RUNNING: &str = "running";
+    pub const COMPLETED: &str = "completed";
+    pub const INTERRUPTED: &str = "interrupted";
+    pub const UNSTABLE: &str = "unstable";
+}
+
+type H5Result<T> = hdf5::Result<T>;
+
+fn write_str_attr(loc: &hdf5::Location, name: &str, value: &str) -> H5Result<()> {
+    let v: VarLenUnicode = value.parse().expect("no NUL in attribute text");
+    if loc.attr_names()?.iter().any(|n| n == name) {
+        loc.attr(name)?.write_scalar(&v)
+    } else {
+        loc.new_attr::<VarLenUnicode>().shape(()).create(name)?.write_scalar(&v)
+    }
+}
+
+fn read_str_attr(loc: &hdf5::Location, name: &str) -> H5Result<String> {
+    Ok(loc.attr(name)?.read_scalar::<VarLenUnicode>()?.as_str().to_string())
+}
+
+fn write_scalar_attr<T: hdf5::H5Type>(loc: &hdf5::Location, name: &str, value: T) -> H5Result<()> {
+    if loc.attr_names()?.iter().any(|n| n == name) {
+        loc.attr(name)?.write_scalar(&value)
+    } else {
+        loc.new_attr::<T>().shape(()).create(name)?.write_scalar(&value)
+    }
+}
+
+/// Extendible dataset of shape (0.., tail...) chunked one row at a time.
+fn extendible<T: hdf5::H5Type>(group: &Group, name: &str, tail: &[usize], units: &str) -> H5Result<Dataset> {
+    let mut extents = vec![Extent::resizable(0)];
+    extents.extend(tail.iter().map(|&n| Extent::fixed(n)));
+    let mut chunk = vec![1usize];
+    chunk.extend_from_slice(tail);
+    if tail.is_empty() {
+        chunk[0] = 1024;
+    }
+    let ds = group
+        .new_dataset::<T>()
+        .shape(SimpleExtents::from_vec(extents))
+        .chunk(chunk)
+        .deflate(4)
+        .create(name)?;
+    write_str_attr(&ds, "units", units)?;
+    Ok(ds)
+}
+
+fn vec3_rows(v: &[Vec3]) -> Array2<f64> {
+    Array2::from_shape_fn((v.len(), 3), |(i, k)| v[i][k])
+}
+
+fn rows_vec3(a: &Array2<f64>) -> Vec<Vec3> {
+    a.rows().into_iter().map(|r| Vec3::new(r[0], r[1], r[2])).collect()
+}
+
+/// Per-frame datasets: (name, units).
+const FRAME_VECTORS: [(&str, &str); 4] = [
+    ("position", "m"),
+    ("velocity", "m/s"),
+    ("angular_velocity", "rad/s"),
+    ("moment", "A m^2"),
+];
+const FORCE_VECTORS: [(&str, &str); 2] = [("force", "N"), ("torque", "N m")];
+/// Checkpoint per-particle vectors.
+const STATE_VECTORS: [&str; 7] =
+    ["position", "velocity", "angular_velocity", "force", "torque", "moment", "permanent_moment"];
+
+fn state_vector<'a>(p: &'a Particles, name: &str) -> &'a [Vec3] {
+    match name {
+        "position" => &p.position,
+        "velocity" => &p.velocity,
+        "angular_velocity" => &p.angular_velocity,
+        "force" => &p.force,
+        "torque" => &p.torque,
+        "moment" => &p.moment,
+        "permanent_moment" => &p.permanent_moment,
+        _ => unreachable!("unknown state vector {name}"),
+    }
+}
+
+fn state_vector_mut<'a>(p: &'a mut Particles, name: &str) -> &'a mut Vec<Vec3> {
+    match name {
+        "position" => &mut p.position,
+        "velocity" => &mut p.velocity,
+        "angular_velocity" => &mut p.angular_velocity,
+        "force" => &mut p.force,
+        "torque" => &mut p.torque,
+        "moment" => &mut p.moment,
+        "permanent_moment" => &mut p.permanent_moment,
+        _ => unreachable!("unknown state vector {name}"),
+    }
+}
+
+/// Metadata of a run, written at the root.
+pub struct RunInfo<'a> {
+    pub engine: &'a str,
+    pub integrator: &'a str,
+}
+
+/// Appends frames to a trajectory file and keeps its checkpoint current.
+pub struct TrajectoryWriter {
+    path: String,
+    file: File,
+    n: usize,
+    frames: usize,
+    forces: bool,
+    contacts: bool,
+}
+
+impl TrajectoryWriter {
+    fn err(&self) -> impl Fn(hdf5::Error) -> TrajectoryError + '_ {
+        move |source| TrajectoryError::Hdf5 { path: self.path.clone(), source }
+    }
+
+    /// Creates (overwrites) `path` for a fresh run of `scene`.
+    pub fn create(path: &Path, scene: &Scene, info: &RunInfo) -> Result<Self, TrajectoryError> {
+        let p = path.display().to_string();
+        let wrap = |source| TrajectoryError::Hdf5 { path: p.clone(), source };
+        let file = File::create(path).map_err(wrap)?;
+        let n = scene.initial.len();
+        let forces = scene.spec.output.forces;
+        let contacts = scene.spec.output.contacts;
+        (|| -> H5Result<()> {
+            write_str_attr(&file, "format", FORMAT)?;
+            write_scalar_attr(&file, "format_version", FORMAT_VERSION)?;
+            write_str_attr(&file, "magdem_version", env!("CARGO_PKG_VERSION"))?;
+            write_str_attr(&file, "git_commit", env!("MAGDEM_GIT_COMMIT"))?;
+            write_str_attr(&file, "engine", info.engine)?;
+            write_str_attr(&file, "integrator", info.integrator)?;
+            write_str_attr(&file, "scene_sha256", &scene.hash)?;
+            write_str_attr(&file, "scene_name", scene.spec.name.as_deref().unwrap_or(""))?;
+            write_str_attr(&file, "units", "SI: m, s, kg, N, A m^2, T")?;
+            write_scalar_attr(&file, "dt", scene.dt())?;
+            write_scalar_attr(&file, "total_steps", scene.total_steps())?;
+            write_scalar_attr(&file, "steps_per_frame", scene.steps_per_frame())?;
+            write_scalar_attr(&file, "n_particles", n as u64)?;
+            write_str_attr(&file, "status", status::RUNNING)?;
+            write_str_attr(&file, "status_message", "")?;
+            let text: VarLenUnicode = scene.text.parse().expect("scene text has no NUL");
+            file.new_dataset::<VarLenUnicode>().shape(()).create("scene")?.write_scalar(&text)?;
+
+            let particles = file.create_group("particles")?;
+            let p = &scene.initial;
+            particles.new_dataset_builder().with_data(&Array1::from(p.radius.clone())).create("radius")?;
+            particles.new_dataset_builder().with_data(&Array1::from(p.mass.clone())).create("mass")?;
+            particles.new_dataset_builder().with_data(&Array1::from(p.species.clone())).create("species")?;
+            let names = scene.species.iter().map(|s| s.name.as_str()).collect::<Vec<_>>().join(",");
+            write_str_attr(&particles, "species_names", &names)?;
+
+            let frames = file.create_group("frames")?;
+            extendible::<f64>(&frames, "time", &[], "s")?;
+            extendible::<u64>(&frames, "step", &[], "1")?;
+            let vectors = FRAME_VECTORS.iter().chain(if forces { &FORCE_VECTORS[..] } else { &[] });
+            for (name, units) in vectors {
+                extendible::<f64>(&frames, name, &[n, 3], units)?;
+            }
+            if contacts {
+                let c = file.create_group("contacts")?;
+                extendible::<u64>(&c, "frame_start", &[], "index into pair")?;
+                extendible::<u32>(&c, "pair", &[2], "particle index")?;
+                extendible::<f64>(&c, "overlap", &[], "m")?;
+            }
+            let ck = file.create_group("checkpoint")?;
+            for name in STATE_VECTORS {
+                ck.new_dataset::<f64>().shape((n, 3)).create(name)?;
+            }
+            extendible::<u32>(&ck, "pair_keys", &[2], "particle index")?;
+            extendible::<f64>(&ck, "pair_shear", &[3], "m")?;
+            extendible::<u32>(&ck, "wall_keys", &[2], "particle index, wall face")?;
+            extendible::<f64>(&ck, "wall_shear", &[3], "m")?;
+            file.flush()
+        })()
+        .map_err(wrap)?;
+        Ok(Self { path: p, file, n, frames: 0, forces, contacts })
+    }
+
+    /// Opens a trajectory to continue it: checks it belongs to `scene`, drops frames written
+    /// after the checkpoint, and returns the checkpointed state.
+    pub fn resume(path: &Path, scene: &Scene) -> Result<(Self, State), TrajectoryError> {
+        let p = path.display().to_string();
+        let wrap = |source| TrajectoryError::Hdf5 { path: p.clone(), source };
+        let file = File::open_rw(path).map_err(wrap)?;
+        let hash = read_str_attr(&file, "scene_sha256").map_err(wrap)?;
+        if hash != scene.hash {
+            return Err(TrajectoryError::Mismatch {
+                path: p,
+                message: format!(
+                    "was written for a different scene (sha256 {hash}, this scene {}); refusing to resume into it",
+                    scene.hash
+                ),
+            });
+        }
+        let reader = Trajectory { path: p.clone(), file };
+        let (state, frames) = reader.checkpoint().map_err(wrap)?;
+        let Trajectory { file, .. } = reader;
+        let forces = file.link_exists("frames/force");
+        let contacts = file.link_exists("contacts");
+        let writer = Self { path: p, file, n: scene.initial.len(), frames, forces, contacts };
+        writer.truncate(frames).map_err(writer.err())?;
+        write_str_attr(&writer.file, "status", status::RUNNING).map_err(writer.err())?;
+        Ok((writer, state))
+    }
+
+    fn truncate(&self, frames: usize) -> H5Result<()> {
+        let g = self.file.group("frames")?;
+        for name in g.member_names()? {
+            let ds = g.dataset(&name)?;
+            let mut shape = ds.shape();
+            shape[0] = frames;
+            ds.resize(shape)?;
+        }
+        if self.contacts {
+            let c = self.file.group("contacts")?;
+            c.dataset("frame_start")?.resize(frames)?;
+            let rows: u64 = self.file.group("checkpoint")?.attr("contact_rows")?.read_scalar()?;
+            c.dataset("pair")?.resize((rows as usize, 2))?;
+            c.dataset("overlap")?.resize(rows as usize)?;
+        }
+        self.file.flush()
+    }
+
+    pub fn frames(&self) -> usize {
+        self.frames
+    }
+
+    /// Appends one frame, rewrites the checkpoint, flushes.
+    pub fn write_frame(&mut self, state: &State) -> Result<(), TrajectoryError> {
+        self.append(state).map_err(self.err())?;
+        self.frames += 1;
+        self.write_checkpoint(state)
+    }
+
+    fn append(&self, state: &State) -> H5Result<()> {
+        let f = self.frames;
+        let g = self.file.group("frames")?;
+        let time = g.dataset("time")?;
+        time.resize(f + 1)?;
+        time.write_slice(&[state.time], s![f..f + 1])?;
+        let step = g.dataset("step")?;
+        step.resize(f + 1)?;
+        step.write_slice(&[state.step], s![f..f + 1])?;
+        let vectors = FRAME_VECTORS.iter().chain(if self.forces { &FORCE_VECTORS[..] } else { &[] });
+        for (name, _) in vectors {
+            let ds = g.dataset(name)?;
+            ds.resize((f + 1, self.n, 3))?;
+            let data = vec3_rows(state_vector(&state.particles, name));
+            ds.write_slice(&data, s![f, .., ..])?;
+        }
+        if self.contacts {
+            let c = self.file.group("contacts")?;
+            let pairs = c.dataset("pair")?;
+            let start = pairs.shape()[0];
+            let starts = c.dataset("frame_start")?;
+            starts.resize(f + 1)?;
+            starts.write_slice(&[start as u64], s![f..f + 1])?;
+            let p = &state.particles;
+            let active: Vec<(u32, u32, f64)> = state
+                .contacts
+                .sorted_pairs()
+                .into_iter()
+                .map(|((i, j), _)| {
+                    let (a, b) = (i as usize, j as usize);
+                    (i, j, p.radius[a] + p.radius[b] - (p.position[a] - p.position[b]).norm())
+                })
+                .collect();
+            let k = active.len();
+            pairs.resize((start + k, 2))?;
+            c.dataset("overlap")?.resize(start + k)?;
+            if k > 0 {
+                let ij = Array2::from_shape_fn((k, 2), |(r, col)| if col == 0 { active[r].0 } else { active[r].1 });
+                pairs.write_slice(&ij, s![start..start + k, ..])?;
+                let ov = Array1::from_iter(active.iter().map(|a| a.2));
+                c.dataset("overlap")?.write_slice(&ov, s![start..start + k])?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Rewrites the checkpoint group with `state` and flushes the file.
+    pub fn write_checkpoint(&self, state: &State) -> Result<(), TrajectoryError> {
+        (|| -> H5Result<()> {
+            let ck = self.file.group("checkpoint")?;
+            for name in STATE_VECTORS {
+                ck.dataset(name)?.write(&vec3_rows(state_vector(&state.particles, name)))?;
+            }
+            let pairs = state.contacts.sorted_pairs();
+            let walls = state.contacts.sorted_walls();
+            let keys = Array2::from_shape_fn((pairs.len(), 2), |(r, c)| if c == 0 { pairs[r].0 .0 } else { pairs[r].0 .1 });
+            let shear = vec3_rows(&pairs.iter().map(|p| p.1).collect::<Vec<_>>());
+            let wkeys = Array2::from_shape_fn((walls.len(), 2), |(r, c)| if c == 0 { walls[r].0 .0 } else { walls[r].0 .1 as u32 });
+            let wshear = vec3_rows(&walls.iter().map(|p| p.1).collect::<Vec<_>>());
+            for (name, data) in [("pair_keys", &keys), ("wall_keys", &wkeys)] {
+                let ds = ck.dataset(name)?;
+                ds.resize(data.dim())?;
+                ds.write(data)?;
+            }
+            for (name, data) in [("pair_shear", &shear), ("wall_shear", &wshear)] {
+                let ds = ck.dataset(name)?;
+                ds.resize(data.dim())?;
+                ds.write(data)?;
+            }
+            write_scalar_attr(&ck, "step", state.step)?;
+            write_scalar_attr(&ck, "time", state.time)?;
+            write_scalar_attr(&ck, "frames", self.frames as u64)?;
+            let rows = if self.contacts { self.file.dataset("contacts/pair")?.shape()[0] } else { 0 };
+            write_scalar_attr(&ck, "contact_rows", rows as u64)?;
+            self.file.flush()
+        })()
+        .map_err(self.err())
+    }
+
+    /// Records how the run ended.
+    pub fn finish(&self, run_status: &str, message: &str) -> Result<(), TrajectoryError> {
+        (|| -> H5Result<()> {
+            write_str_attr(&self.file, "status", run_status)?;
+            write_str_attr(&self.file, "status_message", message)?;
+            self.file.flush()
+        })()
+        .map_err(self.err())
+    }
+}
+
+/// Read access to a trajectory file.
+pub struct Trajectory {
+    pub path: String,
+    pub file: File,
+}
+
+impl Trajectory {
+    pub fn open(path: &Path) -> Result<Self, TrajectoryError> {
+        let p = path.display().to_string();
+        let file = File::open(path).map_err(|source| TrajectoryError::Hdf5 { path: p.clone(), source })?;
+        Ok(Self { path: p, file })
+    }
+
+    pub fn attr_string(&self, name: &str) -> H5Result<String> {
+        read_str_attr(&self.file, name)
+    }
+
+    pub fn attr<T: hdf5::H5Type>(&self, name: &str) -> H5Result<T> {
+        self.file.attr(name)?.read_scalar::<T>()
+    }
+
+    pub fn scene_text(&self) -> H5Result<String> {
+        Ok(self.file.dataset("scene")?.read_scalar::<VarLenUnicode>()?.as_str().to_string())
+    }
+
+    pub fn frames(&self) -> H5Result<usize> {
+        Ok(self.file.dataset("frames/time")?.shape()[0])
+    }
+
+    pub fn times(&self) -> H5Result<Vec<f64>> {
+        self.file.dataset("frames/time")?.read_raw()
+    }
+
+    /// One per-particle vector dataset of frame `k` (e.g. "position").
+    pub fn frame_vectors(&self, name: &str, k: usize) -> H5Result<Vec<Vec3>> {
+        let a: Array2<f64> = self.file.dataset(&format!("frames/{name}"))?.read_slice_2d(s![k, .., ..])?;
+        Ok(rows_vec3(&a))
+    }
+
+    /// All frames of one vector dataset, shape (frames, N, 3).
+    pub fn all_vectors(&self, name: &str) -> H5Result<Array3<f64>> {
+        self.file.dataset(&format!("frames/{name}"))?.read::<f64, ndarray::Ix3>()
+    }
+
+    /// The checkpointed state and the number of frames it follows.
+    pub fn checkpoint(&self) -> H5Result<(State, usize)> {
+        let ck = self.file.group("checkpoint")?;
+        let mut particles = Particles {
+            radius: self.file.dataset("particles/radius")?.read_raw()?,
+            mass: self.file.dataset("particles/mass")?.read_raw()?,
+            species: self.file.dataset("particles/species")?.read_raw()?,
+            ..Particles::default()
+        };
+        particles.inertia = particles.mass.iter().zip(&particles.radius).map(|(m, a)| 0.4 * m * a * a).collect();
+        for name in STATE_VECTORS {
+            *state_vector_mut(&mut particles, name) = rows_vec3(&ck.dataset(name)?.read_2d()?);
+        }
+        let keys: Array2<u32> = ck.dataset("pair_keys")?.read_2d()?;
+        let shear: Array2<f64> = ck.dataset("pair_shear")?.read_2d()?;
+        let wkeys: Array2<u32> = ck.dataset("wall_keys")?.read_2d()?;
+        let wshear: Array2<f64> = ck.dataset("wall_shear")?.read_2d()?;
+        let mut contacts = ContactHistory::default();
+        for (k, s) in keys.rows().into_iter().zip(rows_vec3(&shear)) {
+            contacts.pairs.insert((k[0], k[1]), s);
+        }
+        for (k, s) in wkeys.rows().into_iter().zip(rows_vec3(&wshear)) {
+            contacts.walls.insert((k[0], k[1] as u8), s);
+        }
+        let step: u64 = ck.attr("step")?.read_scalar()?;
+        let time: f64 = ck.attr("time")?.read_scalar()?;
+        let frames: u64 = ck.attr("frames")?.read_scalar()?;
+        let state = State { particles, contacts, diagnostics: Default::default(), step, time };
+        Ok((state, frames as usize))
+    }
+}

@@ -1,0 +1,9 @@
+//! magdem: a research harness for magnetic particle DEM.
+//!
+//! Layers: [`core`] (physics, never touches files) ← [`scene`] (the only TOML reader, builds a
+//! simulation) ← [`io`] (HDF5 trajectories and checkpoints) ← [`run`] (the driver used by the CLI).
+
+pub mod core;
+pub mod io;
+pub mod run;
+pub mod scene;

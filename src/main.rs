@@ -1,0 +1,175 @@
+//! `magdem` command line: run, validate and inspect scenes and trajectories.
+
+use clap::{Parser, Subcommand};
+use magdem::io::trajectory::Trajectory;
+use magdem::run::{run, RunFailure, RunOptions, INTERRUPTED};
+use magdem::scene::Scene;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// Magnetic particle DEM research harness.
+#[derive(Parser)]
+#[command(name = "magdem", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a scene and write its trajectory (HDF5).
+    Run {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Output trajectory file.
+        #[arg(short, long, default_value = "runs/out.h5")]
+        output: PathBuf,
+        /// Continue an interrupted run from the output file's checkpoint.
+        #[arg(long)]
+        resume: bool,
+        /// Print wall time per step phase at the end.
+        #[arg(long)]
+        timings: bool,
+        /// No progress bar.
+        #[arg(short, long)]
+        quiet: bool,
+        /// Testing aid: abort without clean-up right after writing frame K.
+        #[arg(long, hide = true)]
+        abort_after_frame: Option<usize>,
+    },
+    /// Check a scene without running it: prints its particles, terms and step estimates.
+    Validate {
+        scene: PathBuf,
+    },
+    /// Describe a trajectory file.
+    Info {
+        file: PathBuf,
+    },
+}
+
+fn load(scene: &Path) -> Result<Scene, ExitCode> {
+    Scene::from_file(scene).map_err(|e| {
+        eprintln!("error: {e}");
+        ExitCode::from(2)
+    })
+}
+
+fn describe(scene: &Scene) {
+    let s = &scene.spec;
+    println!("scene {} ({})", s.name.as_deref().unwrap_or("unnamed"), &scene.hash[..12]);
+    println!("  particles: {}  box: {:?} .. {:?}", scene.initial.len(), s.domain.lo, s.domain.hi);
+    let f = &s.forces;
+    let terms: Vec<&str> = [
+        ("contact", f.contact.is_some()),
+        ("dipole", f.dipole.is_some()),
+        ("gradient", f.gradient.is_some()),
+        ("drag", f.drag.is_some()),
+        ("gravity", f.gravity.is_some()),
+    ]
+    .iter()
+    .filter(|t| t.1)
+    .map(|t| t.0)
+    .collect();
+    println!("  terms: {}", terms.join(", "));
+    println!(
+        "  integrator {}: {} steps, a frame every {} steps",
+        s.integration.scheme,
+        scene.total_steps(),
+        scene.steps_per_frame()
+    );
+    println!("  {}", scene.estimate.summary(scene.dt()));
+    for w in &scene.warnings {
+        println!("  warning: {w}");
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Validate { scene } => {
+            let scene = match load(&scene) {
+                Ok(s) => s,
+                Err(code) => return code,
+            };
+            describe(&scene);
+            ExitCode::SUCCESS
+        }
+        Command::Run { scene, output, resume, timings, quiet, abort_after_frame } => {
+            let scene = match load(&scene) {
+                Ok(s) => s,
+                Err(code) => return code,
+            };
+            for w in &scene.warnings {
+                eprintln!("warning: {w}");
+            }
+            if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
+                if let Err(e) = std::fs::create_dir_all(dir) {
+                    eprintln!("error: cannot create {}: {e}", dir.display());
+                    return ExitCode::from(2);
+                }
+            }
+            let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed));
+            let options = RunOptions { resume, progress: !quiet, abort_after_frame };
+            match run(&scene, &output, &options) {
+                Ok(summary) => {
+                    if summary.already_complete {
+                        println!("{} is already complete ({} frames); nothing to do", output.display(), summary.frames);
+                    } else {
+                        let secs = summary.wall_time.as_secs_f64();
+                        println!(
+                            "{}: {} steps, {} frames in {:.2} s ({:.0} steps/s)",
+                            output.display(),
+                            summary.steps,
+                            summary.frames,
+                            secs,
+                            summary.steps as f64 / secs.max(1e-9)
+                        );
+                    }
+                    if timings {
+                        let total: f64 = summary.simulation.timers().phases().iter().map(|p| p.1.as_secs_f64()).sum();
+                        println!("phase timings:");
+                        for (name, d) in summary.simulation.timers().phases() {
+                            println!("  {name:<12} {:>9.3} s  {:>5.1}%", d.as_secs_f64(), 100.0 * d.as_secs_f64() / total.max(1e-12));
+                        }
+                    }
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    match e {
+                        RunFailure::Interrupted { .. } => ExitCode::from(130),
+                        RunFailure::Unstable(_) => ExitCode::from(3),
+                        RunFailure::Trajectory(_) => ExitCode::from(1),
+                    }
+                }
+            }
+        }
+        Command::Info { file } => match info(&file) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {}: {e}", file.display());
+                ExitCode::from(2)
+            }
+        },
+    }
+}
+
+fn info(path: &Path) -> Result<(), Box<dyn std::error::Error>> {
+    let t = Trajectory::open(path)?;
+    for key in ["format", "magdem_version", "git_commit", "engine", "integrator", "scene_name", "scene_sha256", "status", "status_message", "units"] {
+        println!("{key:<16} {}", t.attr_string(key)?);
+    }
+    println!("{:<16} {}", "particles", t.attr::<u64>("n_particles")?);
+    println!("{:<16} {:e} s", "dt", t.attr::<f64>("dt")?);
+    let times = t.times()?;
+    println!(
+        "{:<16} {} ({} to {} s)",
+        "frames",
+        times.len(),
+        times.first().map_or("-".into(), |v| format!("{v:e}")),
+        times.last().map_or("-".into(), |v| format!("{v:e}"))
+    );
+    let (state, frames) = t.checkpoint()?;
+    println!("{:<16} step {} (t = {:e} s) after frame {}, {} contacts", "checkpoint", state.step, state.time, frames, state.contacts.pairs.len());
+    Ok(())
+}

@@ -1,0 +1,500 @@
+//! The scene layer: the only code that reads TOML. It parses a scene, checks every value (errors
+//! name the key, the value and why), places particles and builds a [`Simulation`].
+
+pub mod placement;
+pub mod spec;
+
+use crate::core::domain::Domain;
+use crate::core::forces::contact::Contact;
+use crate::core::forces::dipole::DipoleForce;
+use crate::core::forces::drag::{Drag, DragLaw, Shielding};
+use crate::core::forces::gradient::GradientForce;
+use crate::core::forces::gravity::GravityBuoyancy;
+use crate::core::forces::ForceTerm;
+use crate::core::integrators;
+use crate::core::magnetisation::{Induction, Magnetisation, MU0};
+use crate::core::simulation::{ForceField, Simulation};
+use crate::core::stability::{Monitor, StepEstimate, StepEstimateInput};
+use crate::core::state::{Particles, Species, State, Vec3};
+use nalgebra::Matrix3;
+use sha2::{Digest, Sha256};
+pub use spec::*;
+use std::path::Path;
+
+/// A scene that cannot be used. Shown as one line; the CLI exits with code 2.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("cannot read scene {path}: {source}")]
+    Read { path: String, source: std::io::Error },
+    #[error("{origin}:{line}: {message}")]
+    Syntax { origin: String, line: usize, message: String },
+    #[error("{key} = {value}: {reason}")]
+    Invalid { key: String, value: String, reason: String },
+}
+
+fn invalid(key: impl Into<String>, value: impl std::fmt::Display, reason: impl Into<String>) -> SceneError {
+    SceneError::Invalid { key: key.into(), value: value.to_string(), reason: reason.into() }
+}
+
+fn fmt3(v: &[f64; 3]) -> String {
+    format!("[{:e}, {:e}, {:e}]", v[0], v[1], v[2])
+}
+
+/// A parsed, checked scene with its particles placed.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    pub spec: SceneSpec,
+    /// The TOML text as read (stored in every trajectory).
+    pub text: String,
+    /// SHA-256 of `text`, hex.
+    pub hash: String,
+    pub domain: Domain,
+    pub species: Vec<Species>,
+    pub initial: Particles,
+    pub estimate: StepEstimate,
+    /// Non-fatal findings (e.g. a gradient that is not divergence-free, dt above the estimate).
+    pub warnings: Vec<String>,
+}
+
+impl Scene {
+    pub fn from_file(path: &Path) -> Result<Self, SceneError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| SceneError::Read { path: path.display().to_string(), source })?;
+        Self::parse(&text, &path.display().to_string())
+    }
+
+    /// Parses and checks `text`; `origin` names it in messages.
+    pub fn parse(text: &str, origin: &str) -> Result<Self, SceneError> {
+        let spec: SceneSpec = toml::from_str(text).map_err(|e| {
+            let line = e.span().map_or(0, |s| text[..s.start.min(text.len())].lines().count().max(1));
+            let at = e.span().and_then(|s| text[s.start.min(text.len())..].lines().next()).unwrap_or("");
+            let message = e.message().trim().replace('\n', " ");
+            let message = if at.trim_start().starts_with('[') { format!("in {}: {message}", at.trim()) } else { message };
+            SceneError::Syntax { origin: origin.to_string(), line, message }
+        })?;
+        let mut hasher = Sha256::new();
+        hasher.update(text.as_bytes());
+        let hash = hasher.finalize().iter().map(|b| format!("{b:02x}")).collect();
+        Self::build(spec, text.to_string(), hash)
+    }
+
+    fn build(spec: SceneSpec, text: String, hash: String) -> Result<Self, SceneError> {
+        let mut warnings = vec![];
+        if spec.version != 1 {
+            return Err(invalid("version", spec.version, "this magdem reads scene version 1"));
+        }
+        let domain = check_domain(&spec.domain)?;
+        if let Some(f) = &spec.fluid {
+            positive("fluid.viscosity", f.viscosity)?;
+            non_negative("fluid.density", f.density)?;
+        }
+        let species = spec.species.iter().enumerate().map(|(k, s)| check_species(k, s)).collect::<Result<Vec<_>, _>>()?;
+        if species.is_empty() {
+            return Err(invalid("species", "[]", "at least one [[species]] is needed"));
+        }
+        for (k, s) in species.iter().enumerate() {
+            if species[..k].iter().any(|o| o.name == s.name) {
+                return Err(invalid(format!("species[{k}].name"), &s.name, "the name is used twice"));
+            }
+        }
+        check_forces(&spec, &domain, &species, &mut warnings)?;
+        let initial = place_particles(&spec, &domain, &species)?;
+        check_integration(&spec)?;
+
+        let moments = species.iter().map(|s| isolated_moment(&spec, &domain, s)).collect();
+        let estimate = StepEstimate::new(&StepEstimateInput {
+            species: &species,
+            integrator: &spec.integration.scheme,
+            contact: spec.forces.contact.is_some(),
+            drag_viscosity: spec.forces.drag.as_ref().and(spec.fluid.as_ref()).map(|f| f.viscosity),
+            moments,
+            max_initial_speed: initial.velocity.iter().map(|v| v.norm()).fold(0.0, f64::max),
+        });
+        let dt = spec.integration.dt;
+        if dt > estimate.stable_dt {
+            let why = format!("exceeds the estimated stable step: {}", estimate.summary(dt));
+            match spec.stability.on_unstable_dt {
+                OnUnstable::Refuse => {
+                    return Err(invalid(
+                        "integration.dt",
+                        dt,
+                        format!("{why} (set stability.on_unstable_dt = \"warn\" to run anyway)"),
+                    ))
+                }
+                OnUnstable::Warn => warnings.push(format!("integration.dt = {dt:e} {why}")),
+            }
+        }
+        Ok(Self { spec, text, hash, domain, species, initial, estimate, warnings })
+    }
+
+    pub fn dt(&self) -> f64 {
+        self.spec.integration.dt
+    }
+
+    /// Total number of steps, end_time / dt rounded to the nearest integer.
+    pub fn total_steps(&self) -> u64 {
+        (self.spec.integration.end_time / self.dt()).round() as u64
+    }
+
+    /// Steps between output frames (≥ 1).
+    pub fn steps_per_frame(&self) -> u64 {
+        let interval = self.spec.output.interval.unwrap_or(self.spec.integration.end_time / 100.0);
+        ((interval / self.dt()).round() as u64).max(1)
+    }
+
+    /// The initial state (forces not yet evaluated).
+    pub fn initial_state(&self) -> State {
+        State { particles: self.initial.clone(), ..State::default() }
+    }
+
+    /// A simulation at t = 0 (call `initialise` before stepping), or around `state` if given.
+    pub fn simulation(&self, state: Option<State>) -> Simulation {
+        let spec = &self.spec;
+        let largest_diameter = self.species.iter().map(|s| 2.0 * s.radius).fold(0.0, f64::max);
+        let (b0, gradient) = field_of(spec);
+        let fluid = spec.fluid.clone().unwrap_or(FluidSpec { density: 0.0, viscosity: 0.0, velocity: [0.0; 3] });
+        let mut terms: Vec<Box<dyn ForceTerm>> = vec![];
+        let f = &spec.forces;
+        let magnetic = f.dipole.is_some() || f.gradient.is_some();
+        let magnetisation = magnetic.then(|| {
+            let induction = match &f.dipole {
+                None => Induction::None,
+                Some(d) => match d.induction {
+                    InductionSpec::None => Induction::None,
+                    InductionSpec::Paper => Induction::Paper { radius: d.paper_radius_diameters * largest_diameter },
+                    InductionSpec::Exact => Induction::Exact {
+                        tolerance: d.tolerance,
+                        max_iterations: d.max_iterations,
+                        dense_max: d.dense_max,
+                    },
+                },
+            };
+            Magnetisation::new(induction, b0, gradient, &self.species)
+        });
+        if let Some(d) = &f.dipole {
+            terms.push(Box::new(DipoleForce::new(d.cutoff_diameters.map(|c| c * largest_diameter), b0, gradient)));
+        }
+        if f.gradient.is_some() {
+            terms.push(Box::new(GradientForce { gradient }));
+        }
+        let mut touch_tolerance = 0.0;
+        if let Some(d) = &f.drag {
+            touch_tolerance = d.touch_tolerance;
+            let law = match d.law {
+                DragLawSpec::Stokes => DragLaw::Stokes,
+                DragLawSpec::SchillerNaumann => DragLaw::SchillerNaumann,
+            };
+            let shielding = match d.shielding {
+                ShieldingSpec::None => Shielding::None,
+                ShieldingSpec::Paper => Shielding::Paper,
+            };
+            terms.push(Box::new(Drag::new(
+                law,
+                shielding,
+                d.rotational,
+                fluid.density,
+                fluid.viscosity,
+                Vec3::from(fluid.velocity),
+                d.touch_tolerance,
+            )));
+        }
+        if let Some(g) = &f.gravity {
+            terms.push(Box::new(GravityBuoyancy { gravity: Vec3::from(g.g), fluid_density: fluid.density }));
+        }
+        if let Some(c) = &f.contact {
+            terms.push(Box::new(Contact::new(&self.species, c.walls)));
+        }
+        let near_range = largest_diameter * (1.0 + touch_tolerance.max(1e-9));
+        let field = ForceField::new(self.domain.clone(), magnetisation, terms, near_range);
+        Simulation {
+            state: state.unwrap_or_else(|| self.initial_state()),
+            field,
+            integrator: integrators::by_name(&spec.integration.scheme).expect("scheme checked at load"),
+            dt: spec.integration.dt,
+            monitor: Monitor { max_overlap: spec.stability.max_overlap, max_step_fraction: spec.stability.max_step_fraction },
+            estimate: self.estimate.clone(),
+        }
+    }
+}
+
+fn field_of(spec: &SceneSpec) -> (Vec3, Matrix3<f64>) {
+    match &spec.field {
+        Some(f) => (Vec3::from(f.b0), Matrix3::from_fn(|r, c| f.gradient[r][c])),
+        None => (Vec3::zeros(), Matrix3::zeros()),
+    }
+}
+
+fn positive(key: &str, v: f64) -> Result<(), SceneError> {
+    if v > 0.0 && v.is_finite() {
+        Ok(())
+    } else {
+        Err(invalid(key, v, "must be a positive finite number"))
+    }
+}
+
+fn non_negative(key: &str, v: f64) -> Result<(), SceneError> {
+    if v >= 0.0 && v.is_finite() {
+        Ok(())
+    } else {
+        Err(invalid(key, v, "must be zero or positive"))
+    }
+}
+
+fn check_domain(d: &DomainSpec) -> Result<Domain, SceneError> {
+    for k in 0..3 {
+        if !(d.hi[k] > d.lo[k]) || !d.lo[k].is_finite() || !d.hi[k].is_finite() {
+            return Err(invalid("domain.hi", fmt3(&d.hi), format!("must exceed domain.lo = {} on every axis", fmt3(&d.lo))));
+        }
+    }
+    let b = &d.boundary;
+    Ok(Domain {
+        lo: Vec3::from(d.lo),
+        hi: Vec3::from(d.hi),
+        periodic: [b.x == Boundary::Periodic, b.y == Boundary::Periodic, b.z == Boundary::Periodic],
+    })
+}
+
+fn check_species(k: usize, s: &SpeciesSpec) -> Result<Species, SceneError> {
+    let key = |name: &str| format!("species[{k}].{name}");
+    positive(&key("diameter"), s.diameter)?;
+    positive(&key("density"), s.density)?;
+    positive(&key("youngs_modulus"), s.youngs_modulus)?;
+    if !(0.0..=0.5).contains(&s.poisson_ratio) {
+        return Err(invalid(key("poisson_ratio"), s.poisson_ratio, "must lie in [0, 0.5]"));
+    }
+    non_negative(&key("friction"), s.friction)?;
+    if !(s.restitution > 0.0 && s.restitution <= 1.0) {
+        return Err(invalid(key("restitution"), s.restitution, "must lie in (0, 1]"));
+    }
+    let chi = match (s.relative_permeability, s.susceptibility) {
+        (Some(_), Some(_)) => {
+            return Err(invalid(key("susceptibility"), s.susceptibility.unwrap(), "give relative_permeability or susceptibility, not both"))
+        }
+        (Some(mu_r), None) if mu_r >= 1.0 && mu_r.is_finite() => mu_r - 1.0,
+        (Some(mu_r), None) => return Err(invalid(key("relative_permeability"), mu_r, "must be ≥ 1 (paramagnetic)")),
+        (None, Some(chi)) => {
+            non_negative(&key("susceptibility"), chi)?;
+            chi
+        }
+        (None, None) => 0.0,
+    };
+    if let Some(ms) = s.saturation_magnetisation {
+        positive(&key("saturation_magnetisation"), ms)?;
+    }
+    Ok(Species {
+        name: s.name.clone(),
+        radius: 0.5 * s.diameter,
+        density: s.density,
+        youngs_modulus: s.youngs_modulus,
+        poisson_ratio: s.poisson_ratio,
+        friction: s.friction,
+        restitution: s.restitution,
+        // Clausius–Mossotti: χ_eff = 3(μr − 1)/(μr + 2) = 3χ/(χ + 3).
+        susceptibility: 3.0 * chi / (chi + 3.0),
+        saturation_magnetisation: s.saturation_magnetisation,
+        permanent_moment: s.permanent_moment.map(Vec3::from),
+    })
+}
+
+fn check_forces(spec: &SceneSpec, domain: &Domain, species: &[Species], warnings: &mut Vec<String>) -> Result<(), SceneError> {
+    let f = &spec.forces;
+    if (f.dipole.is_some() || f.gradient.is_some()) && spec.field.is_none() {
+        return Err(invalid("forces", "dipole/gradient", "magnetic terms need a [field] table"));
+    }
+    if f.drag.is_some() && spec.fluid.is_none() {
+        return Err(invalid("forces.drag", "{}", "drag needs a [fluid] table"));
+    }
+    let largest_diameter = species.iter().map(|s| 2.0 * s.radius).fold(0.0, f64::max);
+    if let Some(d) = &f.dipole {
+        let tol = d.tolerance;
+        if !(tol >= 1e-15 && tol < 1.0) {
+            return Err(invalid(
+                "forces.dipole.tolerance",
+                tol,
+                "impossible mutual-induction tolerance: double precision resolves relative changes \
+                 down to about 1e-15, and it must be below 1",
+            ));
+        }
+        if d.max_iterations == 0 {
+            return Err(invalid("forces.dipole.max_iterations", 0, "must be at least 1"));
+        }
+        let mut ranges = vec![];
+        if let Some(c) = d.cutoff_diameters {
+            positive("forces.dipole.cutoff_diameters", c)?;
+            ranges.push(("forces.dipole.cutoff_diameters", c));
+        }
+        if d.induction == InductionSpec::Paper {
+            positive("forces.dipole.paper_radius_diameters", d.paper_radius_diameters)?;
+            ranges.push(("forces.dipole.paper_radius_diameters", d.paper_radius_diameters));
+        }
+        for (key, diameters) in ranges {
+            for k in 0..3 {
+                let half = 0.5 * domain.length()[k];
+                if domain.periodic[k] && diameters * largest_diameter >= half {
+                    return Err(invalid(
+                        key,
+                        diameters,
+                        format!("{:e} m is not below half the periodic box length {half:e} m along {}", diameters * largest_diameter, ["x", "y", "z"][k]),
+                    ));
+                }
+            }
+        }
+    }
+    if let Some(d) = &f.drag {
+        non_negative("forces.drag.touch_tolerance", d.touch_tolerance)?;
+    }
+    if let Some(field) = &spec.field {
+        let g = field.gradient;
+        let div = g[0][0] + g[1][1] + g[2][2];
+        let scale = g.iter().flatten().fold(0.0_f64, |a, v| a.max(v.abs()));
+        if scale > 0.0 && div.abs() > 1e-12 * scale {
+            warnings.push(format!("field.gradient has divergence {div:e} T/m: the applied field does not satisfy ∇·B = 0"));
+        }
+        if (0..3).any(|a| (0..3).any(|b| (g[a][b] - g[b][a]).abs() > 1e-12 * scale)) {
+            warnings.push("field.gradient is not symmetric: the applied field is not curl-free".into());
+        }
+    }
+    Ok(())
+}
+
+fn check_integration(spec: &SceneSpec) -> Result<(), SceneError> {
+    let i = &spec.integration;
+    if integrators::by_name(&i.scheme).is_none() {
+        return Err(invalid("integration.scheme", &i.scheme, format!("unknown scheme; one of {}", integrators::NAMES.join(", "))));
+    }
+    positive("integration.dt", i.dt)?;
+    positive("integration.end_time", i.end_time)?;
+    if i.dt > i.end_time {
+        return Err(invalid("integration.dt", i.dt, format!("is longer than integration.end_time = {:e}", i.end_time)));
+    }
+    if let Some(iv) = spec.output.interval {
+        positive("output.interval", iv)?;
+        if iv < i.dt {
+            return Err(invalid("output.interval", iv, format!("is shorter than integration.dt = {:e}", i.dt)));
+        }
+    }
+    let s = &spec.stability;
+    if !(s.max_overlap > 0.0 && s.max_overlap < 1.0) {
+        return Err(invalid("stability.max_overlap", s.max_overlap, "must lie in (0, 1)"));
+    }
+    if !(s.max_step_fraction > 0.0 && s.max_step_fraction <= 1.0) {
+        return Err(invalid("stability.max_step_fraction", s.max_step_fraction, "must lie in (0, 1]"));
+    }
+    Ok(())
+}
+
+/// Moment of an isolated particle at the box centre, enhanced by mutual induction with one
+/// touching neighbour along the field when induction is on: m/(1 − χ_eff/12). For the step estimate.
+fn isolated_moment(spec: &SceneSpec, domain: &Domain, s: &Species) -> f64 {
+    let f = &spec.forces;
+    if f.dipole.is_none() && f.gradient.is_none() {
+        return 0.0;
+    }
+    let (b0, gradient) = field_of(spec);
+    let centre = 0.5 * (domain.lo + domain.hi);
+    let h = ((b0 + gradient * centre) / MU0).norm();
+    let mut m = s.susceptibility * s.volume() * h;
+    if let Some(ms) = s.saturation_magnetisation {
+        m = m.min(ms * s.volume());
+    }
+    let induced = matches!(f.dipole.as_ref().map(|d| d.induction), Some(InductionSpec::Paper | InductionSpec::Exact));
+    if induced && s.saturation_magnetisation.is_none() {
+        m /= 1.0 - s.susceptibility / 12.0;
+    }
+    m + s.permanent_moment.map_or(0.0, |p| p.norm())
+}
+
+fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Result<Particles, SceneError> {
+    let mut particles = Particles::default();
+    if spec.particles.is_empty() {
+        return Err(invalid("particles", "[]", "at least one [[particles]] group is needed"));
+    }
+    for (g, group) in spec.particles.iter().enumerate() {
+        let key = |name: &str| format!("particles[{g}].{name}");
+        let Some(si) = species.iter().position(|s| s.name == group.species) else {
+            let names: Vec<_> = species.iter().map(|s| s.name.as_str()).collect();
+            return Err(invalid(key("species"), &group.species, format!("no such species; defined: {}", names.join(", "))));
+        };
+        let s = &species[si];
+        let given = [group.positions.is_some(), group.count.is_some(), group.concentration.is_some()];
+        if given.iter().filter(|&&b| b).count() != 1 {
+            return Err(invalid(format!("particles[{g}]"), &group.species, "give exactly one of positions, count, concentration"));
+        }
+        if let Some(positions) = &group.positions {
+            let velocities = group.velocities.clone().unwrap_or_else(|| vec![[0.0; 3]; positions.len()]);
+            if velocities.len() != positions.len() {
+                return Err(invalid(key("velocities"), format!("{} entries", velocities.len()), format!("must match the {} positions", positions.len())));
+            }
+            for (k, (x, v)) in positions.iter().zip(&velocities).enumerate() {
+                let at = Vec3::from(*x);
+                check_inside(&key(&format!("positions[{k}]")), x, at, s.radius, domain)?;
+                for j in 0..particles.len() {
+                    let gap = domain.displacement(&at, &particles.position[j]).norm() - s.radius - particles.radius[j];
+                    if gap < 0.0 {
+                        return Err(invalid(
+                            key(&format!("positions[{k}]")),
+                            fmt3(x),
+                            format!("overlaps particle {j} by {:e} m (explicit particles must not overlap)", -gap),
+                        ));
+                    }
+                }
+                particles.push(si as u16, s, at, Vec3::from(*v));
+            }
+            continue;
+        }
+        if group.velocities.is_some() {
+            return Err(invalid(key("velocities"), "[...]", "only explicit positions take velocities"));
+        }
+        let (lo, hi) = match &group.region {
+            Some(r) => {
+                for k in 0..3 {
+                    if !(r.hi[k] > r.lo[k]) || r.lo[k] < domain.lo[k] || r.hi[k] > domain.hi[k] {
+                        return Err(invalid(key("region"), format!("{} .. {}", fmt3(&r.lo), fmt3(&r.hi)), "must be a non-empty box inside the domain"));
+                    }
+                }
+                (Vec3::from(r.lo), Vec3::from(r.hi))
+            }
+            None => (domain.lo, domain.hi),
+        };
+        let count = match (group.count, group.concentration) {
+            (Some(n), _) => n,
+            (_, Some(c)) => {
+                positive(&key("concentration"), c)?;
+                let l = hi - lo;
+                (c * l.x * l.y * l.z / s.mass()).floor() as usize
+            }
+            _ => unreachable!(),
+        };
+        let existing: Vec<(Vec3, f64)> = (0..particles.len()).map(|j| (particles.position[j], particles.radius[j])).collect();
+        let seed = spec.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(g as u64);
+        let placed = placement::place_random(count, s.radius, lo, hi, domain, &existing, seed).map_err(|k| {
+            let l = hi - lo;
+            let fraction = count as f64 * s.volume() / (l.x * l.y * l.z);
+            invalid(
+                key(if group.count.is_some() { "count" } else { "concentration" }),
+                group.count.map_or_else(|| group.concentration.unwrap().to_string(), |n| n.to_string()),
+                format!(
+                    "could not place particle {k} of {count} without overlap after {} attempts (solid fraction {fraction:.3})",
+                    placement::MAX_ATTEMPTS
+                ),
+            )
+        })?;
+        for x in placed {
+            particles.push(si as u16, s, x, Vec3::zeros());
+        }
+    }
+    Ok(particles)
+}
+
+fn check_inside(key: &str, raw: &[f64; 3], x: Vec3, radius: f64, domain: &Domain) -> Result<(), SceneError> {
+    for k in 0..3 {
+        let axis = ["x", "y", "z"][k];
+        if !(x[k] >= domain.lo[k] && x[k] <= domain.hi[k]) {
+            return Err(invalid(key, fmt3(raw), format!("{axis} is outside the box [{:e}, {:e}]", domain.lo[k], domain.hi[k])));
+        }
+        if !domain.periodic[k] && (x[k] - domain.lo[k] < radius || domain.hi[k] - x[k] < radius) {
+            return Err(invalid(key, fmt3(raw), format!("the sphere (radius {radius:e} m) overlaps a wall normal to {axis}")));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,347 @@
+//! The scene file format (TOML, SI units throughout). Every table denies unknown keys, so a
+//! misspelt key or an unknown force term is an error, never silently ignored.
+
+use serde::Deserialize;
+
+fn default_true() -> bool {
+    true
+}
+
+/// Top level of a scene file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneSpec {
+    /// Scene format version; this magdem reads 1.
+    pub version: u32,
+    pub name: Option<String>,
+    pub description: Option<String>,
+    /// Seed of random particle placement (default 1).
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    pub domain: DomainSpec,
+    pub fluid: Option<FluidSpec>,
+    pub field: Option<FieldSpec>,
+    pub species: Vec<SpeciesSpec>,
+    pub particles: Vec<ParticleGroupSpec>,
+    #[serde(default)]
+    pub forces: ForcesSpec,
+    pub integration: IntegrationSpec,
+    #[serde(default)]
+    pub output: OutputSpec,
+    #[serde(default)]
+    pub stability: StabilitySpec,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum Boundary {
+    Wall,
+    Periodic,
+}
+
+/// `[domain]`: an axis-aligned box (m).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DomainSpec {
+    pub lo: [f64; 3],
+    pub hi: [f64; 3],
+    /// Per axis `"wall"` (default) or `"periodic"`.
+    #[serde(default)]
+    pub boundary: BoundarySpec,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoundarySpec {
+    pub x: Boundary,
+    pub y: Boundary,
+    pub z: Boundary,
+}
+
+impl Default for BoundarySpec {
+    fn default() -> Self {
+        Self { x: Boundary::Wall, y: Boundary::Wall, z: Boundary::Wall }
+    }
+}
+
+/// `[fluid]`: the still (or uniformly moving) carrier fluid.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FluidSpec {
+    /// kg/m³
+    pub density: f64,
+    /// Dynamic viscosity, Pa·s
+    pub viscosity: f64,
+    /// m/s (default at rest)
+    #[serde(default)]
+    pub velocity: [f64; 3],
+}
+
+/// `[field]`: B_ext(x) = b0 + gradient · x, x in scene coordinates.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FieldSpec {
+    /// Uniform field B0 at the origin (T).
+    pub b0: [f64; 3],
+    /// gradient[a][b] = ∂B_a/∂x_b (T/m); default zero.
+    #[serde(default)]
+    pub gradient: [[f64; 3]; 3],
+}
+
+/// `[[species]]`: one kind of particle.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpeciesSpec {
+    pub name: String,
+    /// m
+    pub diameter: f64,
+    /// kg/m³
+    pub density: f64,
+    /// Pa
+    pub youngs_modulus: f64,
+    pub poisson_ratio: f64,
+    pub friction: f64,
+    /// Normal coefficient of restitution, 0 < e ≤ 1.
+    pub restitution: f64,
+    /// Relative permeability μr of the material (χ_eff = 3(μr − 1)/(μr + 2)).
+    pub relative_permeability: Option<f64>,
+    /// Or the material susceptibility χ = μr − 1.
+    pub susceptibility: Option<f64>,
+    /// Saturation magnetisation Ms (A/m).
+    pub saturation_magnetisation: Option<f64>,
+    /// Permanent moment (A·m²), turning with the particle.
+    pub permanent_moment: Option<[f64; 3]>,
+}
+
+/// `[[particles]]`: a group of particles of one species, given by exactly one of `positions`,
+/// `count` or `concentration`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParticleGroupSpec {
+    pub species: String,
+    /// Explicit centres (m).
+    pub positions: Option<Vec<[f64; 3]>>,
+    /// Initial velocities of explicit particles (m/s), default at rest.
+    pub velocities: Option<Vec<[f64; 3]>>,
+    /// Number of randomly placed particles.
+    pub count: Option<usize>,
+    /// Mass concentration (mg/ml = kg/m³) of randomly placed particles over the region's volume;
+    /// the count is rounded down.
+    pub concentration: Option<f64>,
+    /// Placement region (default: the whole box).
+    pub region: Option<RegionSpec>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RegionSpec {
+    pub lo: [f64; 3],
+    pub hi: [f64; 3],
+}
+
+/// `[forces.*]`: the terms of the model; a term absent here is not computed.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ForcesSpec {
+    pub contact: Option<ContactSpec>,
+    pub dipole: Option<DipoleSpec>,
+    pub gradient: Option<GradientSpec>,
+    pub drag: Option<DragSpec>,
+    pub gravity: Option<GravitySpec>,
+}
+
+/// Hertz–Mindlin with history and restitution damping (LIGGGHTS' `hertz tangential history`).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// Particle–wall contacts on the wall faces (default true).
+    #[serde(default = "default_true")]
+    pub walls: bool,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum InductionSpec {
+    None,
+    Paper,
+    Exact,
+}
+
+/// Dipole–dipole forces and the moments they act between.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DipoleSpec {
+    /// `none` | `paper` | `exact`.
+    pub induction: InductionSpec,
+    /// Pair cut-off of the force sum in diameters (largest species); absent = all pairs.
+    pub cutoff_diameters: Option<f64>,
+    /// Radius of the `paper` induction neighbourhood, in diameters (default 15, as the paper).
+    #[serde(default = "default_paper_radius")]
+    pub paper_radius_diameters: f64,
+    /// `exact`: relative change of the moments at which iteration stops (default 1e-10).
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+    /// `exact`: most fixed-point sweeps per step (default 500).
+    #[serde(default = "default_max_iterations")]
+    pub max_iterations: usize,
+    /// `exact`: largest N solved by a dense LU instead of iteration (default 150).
+    #[serde(default = "default_dense_max")]
+    pub dense_max: usize,
+}
+
+fn default_paper_radius() -> f64 {
+    15.0
+}
+fn default_tolerance() -> f64 {
+    1e-10
+}
+fn default_max_iterations() -> usize {
+    500
+}
+fn default_dense_max() -> usize {
+    150
+}
+
+/// Force of the applied gradient on each moment (needs `[field]`).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GradientSpec {}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum DragLawSpec {
+    Stokes,
+    SchillerNaumann,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum ShieldingSpec {
+    None,
+    Paper,
+}
+
+/// Hydrodynamic drag (needs `[fluid]`).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DragSpec {
+    /// `stokes` | `schiller-naumann` (default `schiller-naumann`, the paper's).
+    #[serde(default = "default_drag_law")]
+    pub law: DragLawSpec,
+    /// `none` | `paper` (default `paper`, the paper's A_eff).
+    #[serde(default = "default_shielding")]
+    pub shielding: ShieldingSpec,
+    /// Rotational drag −8π μ a³ ω (default true).
+    #[serde(default = "default_true")]
+    pub rotational: bool,
+    /// Gap below which two particles count as touching for shielding, as a fraction of the
+    /// smaller radius (default 1e-3).
+    #[serde(default = "default_touch_tolerance")]
+    pub touch_tolerance: f64,
+}
+
+fn default_drag_law() -> DragLawSpec {
+    DragLawSpec::SchillerNaumann
+}
+fn default_shielding() -> ShieldingSpec {
+    ShieldingSpec::Paper
+}
+fn default_touch_tolerance() -> f64 {
+    1e-3
+}
+
+/// Weight minus buoyancy.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GravitySpec {
+    /// m/s² (default [0, 0, −9.81]).
+    #[serde(default = "default_g")]
+    pub g: [f64; 3],
+}
+
+fn default_g() -> [f64; 3] {
+    [0.0, 0.0, -9.81]
+}
+
+/// `[integration]`
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct IntegrationSpec {
+    /// `explicit-euler` | `semi-implicit-euler` | `velocity-verlet` (default).
+    #[serde(default = "default_scheme")]
+    pub scheme: String,
+    /// s
+    pub dt: f64,
+    /// s
+    pub end_time: f64,
+}
+
+fn default_scheme() -> String {
+    "velocity-verlet".into()
+}
+
+/// `[output]`
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Simulated time between frames (s); default: 100 frames over the run.
+    pub interval: Option<f64>,
+    /// Also store per-particle force and torque (default false).
+    #[serde(default)]
+    pub forces: bool,
+    /// Also store the contact list of each frame (default true).
+    #[serde(default = "default_true")]
+    pub contacts: bool,
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        Self { interval: None, forces: false, contacts: true }
+    }
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum OnUnstable {
+    Warn,
+    Refuse,
+}
+
+/// `[stability]`
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StabilitySpec {
+    /// What to do when dt exceeds the estimated stable step: `warn` (default) | `refuse`.
+    #[serde(default = "default_on_unstable")]
+    pub on_unstable_dt: OnUnstable,
+    /// Stop when an overlap exceeds this fraction of the smaller diameter (default 0.1).
+    #[serde(default = "default_max_overlap")]
+    pub max_overlap: f64,
+    /// Stop when a particle moves more than this fraction of its radius in one step (default 0.25).
+    #[serde(default = "default_max_step_fraction")]
+    pub max_step_fraction: f64,
+}
+
+fn default_on_unstable() -> OnUnstable {
+    OnUnstable::Warn
+}
+fn default_max_overlap() -> f64 {
+    0.1
+}
+fn default_max_step_fraction() -> f64 {
+    0.25
+}
+
+impl Default for StabilitySpec {
+    fn default() -> Self {
+        Self {
+            on_unstable_dt: default_on_unstable(),
+            max_overlap: default_max_overlap(),
+            max_step_fraction: default_max_step_fraction(),
+        }
+    }
+}
