@@ -6,6 +6,12 @@ set -euo pipefail
 packages=(libhdf5-dev pkg-config)
 # h5dump (from hdf5-tools) lets the tests check files without Python's h5py.
 packages+=(hdf5-tools)
+# Figures: DejaVu Sans, loaded at run time by the plotting code.
+packages+=(fonts-dejavu-core)
+# The reference codes (about 1.9 GB with their VTK dependencies; skip with MAGDEM_NO_REFERENCE=1).
+if [ "${MAGDEM_NO_REFERENCE:-0}" != 1 ]; then
+    packages+=(liggghts libliggghts-dev lammps liblammps-dev)
+fi
 
 missing=()
 for p in "${packages[@]}"; do

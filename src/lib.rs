@@ -5,5 +5,8 @@
 
 pub mod core;
 pub mod io;
+pub mod plot;
+pub mod reference;
 pub mod run;
 pub mod scene;
+pub mod verify;

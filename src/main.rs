@@ -2,6 +2,7 @@
 
 use clap::{Parser, Subcommand};
 use magdem::io::trajectory::Trajectory;
+use magdem::reference::{self, Engine as ReferenceEngine};
 use magdem::run::{run, RunFailure, RunOptions, INTERRUPTED};
 use magdem::scene::Scene;
 use std::path::{Path, PathBuf};
@@ -15,6 +16,26 @@ struct Cli {
     command: Command,
 }
 
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum EngineChoice {
+    Magdem,
+    Liggghts,
+    Lammps,
+}
+
+#[derive(Subcommand)]
+enum Study {
+    /// Chung & Ooi single-contact benchmarks in magdem, LIGGGHTS and LAMMPS; writes the report.
+    Contacts {
+        /// Report directory.
+        #[arg(long, default_value = "reports")]
+        report: PathBuf,
+        /// Directory for the runs' trajectories and decks.
+        #[arg(long, default_value = "runs/verify-contacts")]
+        work: PathBuf,
+    },
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Run a scene and write its trajectory (HDF5).
@@ -24,6 +45,9 @@ enum Command {
         /// Output trajectory file.
         #[arg(short, long, default_value = "runs/out.h5")]
         output: PathBuf,
+        /// Solver: magdem's own, or a reference code run from a generated deck.
+        #[arg(long, value_enum, default_value_t = EngineChoice::Magdem)]
+        engine: EngineChoice,
         /// Continue an interrupted run from the output file's checkpoint.
         #[arg(long)]
         resume: bool,
@@ -36,6 +60,20 @@ enum Command {
         /// Testing aid: abort without clean-up right after writing frame K.
         #[arg(long, hide = true)]
         abort_after_frame: Option<usize>,
+    },
+    /// Write the scene as a LIGGGHTS or LAMMPS input deck (in.scene + data.scene).
+    Deck {
+        scene: PathBuf,
+        #[arg(long, value_enum)]
+        engine: ReferenceEngine,
+        /// Directory for the deck.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Cross-verification studies against the reference codes.
+    Verify {
+        #[command(subcommand)]
+        study: Study,
     },
     /// Check a scene without running it: prints its particles, terms and step estimates.
     Validate {
@@ -94,11 +132,48 @@ fn main() -> ExitCode {
             describe(&scene);
             ExitCode::SUCCESS
         }
-        Command::Run { scene, output, resume, timings, quiet, abort_after_frame } => {
+        Command::Deck { scene, engine, output } => {
             let scene = match load(&scene) {
                 Ok(s) => s,
                 Err(code) => return code,
             };
+            match reference::deck::write(engine, &scene, &output) {
+                Ok(deck) => {
+                    println!("wrote {} and {} in {}", deck.input.display(), deck.data.display(), output.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(2)
+                }
+            }
+        }
+        Command::Run { scene, output, engine, resume, timings, quiet, abort_after_frame } => {
+            let scene = match load(&scene) {
+                Ok(s) => s,
+                Err(code) => return code,
+            };
+            let reference_engine = match engine {
+                EngineChoice::Magdem => None,
+                EngineChoice::Liggghts => Some(ReferenceEngine::Liggghts),
+                EngineChoice::Lammps => Some(ReferenceEngine::Lammps),
+            };
+            if let Some(engine) = reference_engine {
+                let dir = output.with_extension(format!("{}.deck", engine.name()));
+                return match reference::run(engine, &scene, &dir, &output) {
+                    Ok(r) => {
+                        println!("{}: {} frames from {} in {:.2} s (deck and dump in {}, log {})", output.display(), r.frames, engine.name(), r.wall_time.as_secs_f64(), dir.display(), r.log.display());
+                        ExitCode::SUCCESS
+                    }
+                    Err(e) => {
+                        eprintln!("error: {e}");
+                        match e {
+                            reference::ReferenceError::Unsupported { .. } | reference::ReferenceError::NotInstalled { .. } => ExitCode::from(2),
+                            _ => ExitCode::from(1),
+                        }
+                    }
+                };
+            }
             for w in &scene.warnings {
                 eprintln!("warning: {w}");
             }
@@ -141,6 +216,28 @@ fn main() -> ExitCode {
                         RunFailure::Unstable(_) => ExitCode::from(3),
                         RunFailure::Trajectory(_) => ExitCode::from(1),
                     }
+                }
+            }
+        }
+        Command::Verify { study: Study::Contacts { report, work } } => {
+            let engines: Vec<ReferenceEngine> = [ReferenceEngine::Liggghts, ReferenceEngine::Lammps].into_iter().filter(|e| e.available()).collect();
+            if engines.len() < 2 {
+                eprintln!("note: reference engines missing ({}); their columns stay empty. `make setup` installs them.", [ReferenceEngine::Liggghts, ReferenceEngine::Lammps].iter().filter(|e| !e.available()).map(|e| e.name()).collect::<Vec<_>>().join(", "));
+            }
+            match magdem::verify::contacts::verify(&report, &work, &engines) {
+                Ok(r) => {
+                    println!(
+                        "wrote {} and {} figures; largest difference to LIGGGHTS: {:.4}% normal, {:.4}% tangential",
+                        report.join("contact-verification.md").display(),
+                        r.figures.len(),
+                        100.0 * r.worst_normal,
+                        100.0 * r.worst_tangential
+                    );
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(1)
                 }
             }
         }

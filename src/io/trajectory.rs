@@ -34,6 +34,19 @@ pub mod status {
 
 type H5Result<T> = hdf5::Result<T>;
 
+/// Turns off HDF5's file locking (before the first file is opened). HDF5 takes an flock on every
+/// open file through a descriptor that child processes inherit, so a LIGGGHTS/LAMMPS run started
+/// while a trajectory is open would hold that lock and make a later open of the file fail.
+/// magdem never opens one file from two writers, so the lock protects nothing here.
+fn disable_file_locking() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        if std::env::var_os("HDF5_USE_FILE_LOCKING").is_none() {
+            std::env::set_var("HDF5_USE_FILE_LOCKING", "FALSE");
+        }
+    });
+}
+
 fn write_str_attr(loc: &hdf5::Location, name: &str, value: &str) -> H5Result<()> {
     let v: VarLenUnicode = value.parse().expect("no NUL in attribute text");
     if loc.attr_names()?.iter().any(|n| n == name) {
@@ -145,6 +158,7 @@ impl TrajectoryWriter {
     pub fn create(path: &Path, scene: &Scene, info: &RunInfo) -> Result<Self, TrajectoryError> {
         let p = path.display().to_string();
         let wrap = |source| TrajectoryError::Hdf5 { path: p.clone(), source };
+        disable_file_locking();
         let file = File::create(path).map_err(wrap)?;
         let n = scene.initial.len();
         let forces = scene.spec.output.forces;
@@ -208,6 +222,7 @@ impl TrajectoryWriter {
     pub fn resume(path: &Path, scene: &Scene) -> Result<(Self, State), TrajectoryError> {
         let p = path.display().to_string();
         let wrap = |source| TrajectoryError::Hdf5 { path: p.clone(), source };
+        disable_file_locking();
         let file = File::open_rw(path).map_err(wrap)?;
         let hash = read_str_attr(&file, "scene_sha256").map_err(wrap)?;
         if hash != scene.hash {
@@ -358,6 +373,7 @@ pub struct Trajectory {
 impl Trajectory {
     pub fn open(path: &Path) -> Result<Self, TrajectoryError> {
         let p = path.display().to_string();
+        disable_file_locking();
         let file = File::open(path).map_err(|source| TrajectoryError::Hdf5 { path: p.clone(), source })?;
         Ok(Self { path: p, file })
     }

@@ -422,8 +422,11 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
         }
         if let Some(positions) = &group.positions {
             let velocities = group.velocities.clone().unwrap_or_else(|| vec![[0.0; 3]; positions.len()]);
-            if velocities.len() != positions.len() {
-                return Err(invalid(key("velocities"), format!("{} entries", velocities.len()), format!("must match the {} positions", positions.len())));
+            let spins = group.angular_velocities.clone().unwrap_or_else(|| vec![[0.0; 3]; positions.len()]);
+            for (name, len) in [("velocities", velocities.len()), ("angular_velocities", spins.len())] {
+                if len != positions.len() {
+                    return Err(invalid(key(name), format!("{len} entries"), format!("must match the {} positions", positions.len())));
+                }
             }
             for (k, (x, v)) in positions.iter().zip(&velocities).enumerate() {
                 let at = Vec3::from(*x);
@@ -439,10 +442,11 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
                     }
                 }
                 particles.push(si as u16, s, at, Vec3::from(*v));
+                *particles.angular_velocity.last_mut().expect("just pushed") = Vec3::from(spins[k]);
             }
             continue;
         }
-        if group.velocities.is_some() {
+        if group.velocities.is_some() || group.angular_velocities.is_some() {
             return Err(invalid(key("velocities"), "[...]", "only explicit positions take velocities"));
         }
         let (lo, hi) = match &group.region {

@@ -127,6 +127,8 @@ pub struct ParticleGroupSpec {
     pub positions: Option<Vec<[f64; 3]>>,
     /// Initial velocities of explicit particles (m/s), default at rest.
     pub velocities: Option<Vec<[f64; 3]>>,
+    /// Initial angular velocities of explicit particles (rad/s), default zero.
+    pub angular_velocities: Option<Vec<[f64; 3]>>,
     /// Number of randomly placed particles.
     pub count: Option<usize>,
     /// Mass concentration (mg/ml = kg/m³) of randomly placed particles over the region's volume;

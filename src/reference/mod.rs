@@ -1,0 +1,104 @@
+//! The reference codes: the same scene as an input deck for LIGGGHTS 3.8 or LAMMPS (Debian's
+//! `liggghts` and `lmp`), run as a separate process, and its dump read back into magdem's HDF5
+//! trajectory schema. Outside the physics core.
+//!
+//! What the decks express: Hertz–Mindlin contact with restitution damping (particle–particle and
+//! walls), weight minus buoyancy (`fix gravity`), Stokes drag without shielding (`fix viscous`).
+//! Anything else is refused with a message naming the term (magnetic terms need magdem's lock-step
+//! force coupling, which is not built yet).
+
+pub mod deck;
+pub mod dump;
+
+use crate::io::trajectory::{status, RunInfo, TrajectoryError, TrajectoryWriter};
+use crate::scene::Scene;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Engine {
+    Liggghts,
+    Lammps,
+}
+
+impl Engine {
+    pub fn name(self) -> &'static str {
+        match self {
+            Engine::Liggghts => "liggghts",
+            Engine::Lammps => "lammps",
+        }
+    }
+
+    pub fn binary(self) -> &'static str {
+        match self {
+            Engine::Liggghts => "liggghts",
+            Engine::Lammps => "lmp",
+        }
+    }
+
+    /// Whether the engine's binary is on the PATH.
+    pub fn available(self) -> bool {
+        std::env::var_os("PATH")
+            .map(|paths| std::env::split_paths(&paths).any(|d| d.join(self.binary()).is_file()))
+            .unwrap_or(false)
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ReferenceError {
+    #[error("{engine} cannot express {term}: {why}")]
+    Unsupported { engine: &'static str, term: String, why: String },
+    #[error("{engine} is not installed (no `{binary}` on the PATH): run `make setup` as root, or `apt-get install liggghts lammps`")]
+    NotInstalled { engine: &'static str, binary: &'static str },
+    #[error("{0}")]
+    Io(#[from] std::io::Error),
+    #[error("{engine} failed (exit {code:?}); the end of its log {log}:\n{tail}")]
+    Failed { engine: &'static str, code: Option<i32>, log: String, tail: String },
+    #[error("reading the {engine} dump {path}: {message}")]
+    Dump { engine: &'static str, path: String, message: String },
+    #[error(transparent)]
+    Trajectory(#[from] TrajectoryError),
+}
+
+/// A reference-code run that finished.
+pub struct ReferenceRun {
+    pub frames: usize,
+    pub log: PathBuf,
+    pub wall_time: std::time::Duration,
+}
+
+/// Writes the deck for `scene` into `dir`, runs the engine there, and converts its dump into the
+/// trajectory `output` (same schema as a native run, `engine` attribute set). The engine's log is
+/// kept beside the output as `OUTPUT.ENGINE.log`.
+pub fn run(engine: Engine, scene: &Scene, dir: &Path, output: &Path) -> Result<ReferenceRun, ReferenceError> {
+    if !engine.available() {
+        return Err(ReferenceError::NotInstalled { engine: engine.name(), binary: engine.binary() });
+    }
+    let start = std::time::Instant::now();
+    std::fs::create_dir_all(dir)?;
+    let written = deck::write(engine, scene, dir)?;
+    let result = Command::new(engine.binary()).arg("-in").arg(&written.input).arg("-log").arg("log.engine").current_dir(dir).output()?;
+    let log = output.with_extension(format!("{}.log", engine.name()));
+    let engine_log = dir.join("log.engine");
+    if engine_log.exists() {
+        std::fs::copy(&engine_log, &log)?;
+    }
+    if !result.status.success() {
+        let text = String::from_utf8_lossy(&result.stdout);
+        let tail: Vec<&str> = text.lines().rev().take(15).collect::<Vec<_>>().into_iter().rev().collect();
+        return Err(ReferenceError::Failed {
+            engine: engine.name(),
+            code: result.status.code(),
+            log: log.display().to_string(),
+            tail: tail.join("\n"),
+        });
+    }
+    let frames = dump::read(engine, &dir.join(&written.dump), scene)?;
+    let info = RunInfo { engine: engine.name(), integrator: "velocity-verlet (nve/sphere)" };
+    let mut writer = TrajectoryWriter::create(output, scene, &info)?;
+    for state in &frames {
+        writer.write_frame(state)?;
+    }
+    writer.finish(status::COMPLETED, "")?;
+    Ok(ReferenceRun { frames: frames.len(), log, wall_time: start.elapsed() })
+}

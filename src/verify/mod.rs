@@ -1,0 +1,4 @@
+//! Cross-verification studies that run the same scenes in magdem and the reference codes.
+
+pub mod contacts;
+pub mod contacts_report;
