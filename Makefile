@@ -1,5 +1,7 @@
 # The two commands: `make reproduce` (the main job) and `make test` (all tests).
 CARGO ?= cargo
+# The LIGGGHTS callback shim is built when LIGGGHTS' headers are installed (after setup).
+FEATURES = $$(test -f /usr/include/liggghts/fix_external.h && echo --features liggghts-shim)
 
 .PHONY: setup build reproduce test clean
 
@@ -7,13 +9,13 @@ setup:
 	@bash scripts/setup.sh
 
 build: setup
-	$(CARGO) build --release
+	$(CARGO) build --release $(FEATURES)
 
 reproduce: build
 	@bash scripts/reproduce.sh
 
 test: setup
-	$(CARGO) test --release
+	$(CARGO) test --release $(FEATURES)
 
 clean:
 	$(CARGO) clean

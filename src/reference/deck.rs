@@ -59,13 +59,6 @@ fn unsupported(engine: Engine, term: &str, why: &str) -> ReferenceError {
 /// Refuses what the engine cannot express, naming the term.
 pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
     let f = &scene.spec.forces;
-    if f.dipole.is_some() || f.gradient.is_some() {
-        return Err(unsupported(
-            engine,
-            "forces.dipole / forces.gradient",
-            "magnetic forces reach the reference codes only through magdem's lock-step coupling (fix external), which this version does not have yet",
-        ));
-    }
     if let Some(d) = &f.drag {
         if d.law != DragLawSpec::Stokes {
             return Err(unsupported(engine, "forces.drag.law = \"schiller-naumann\"", "fix viscous applies linear (Stokes) drag only"));
@@ -249,6 +242,16 @@ fn input_deck(engine: Engine, scene: &Scene, data: &Path, dump: &str) -> String 
             let _ = write!(s, " scale {} {:.17e}", k + 1, gamma(k) / gamma(0));
         }
         s += "\n";
+    }
+    if spec.forces.dipole.is_some() || spec.forces.gradient.is_some() {
+        let _ = writeln!(
+            s,
+            "\n# Magnetic forces (moments with mutual induction, dipole and gradient forces) come from\n\
+             # magdem's own code every step through this fix: run the deck with\n\
+             # `magdem run --engine {}`, which sets the callback.\nfix {} all external pf/callback 1 1",
+            engine.name(),
+            super::library::FIX_ID
+        );
     }
     let every = scene.steps_per_frame();
     let cols = "id type x y z vx vy vz fx fy fz omegax omegay omegaz";

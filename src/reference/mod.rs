@@ -3,12 +3,13 @@
 //! trajectory schema. Outside the physics core.
 //!
 //! What the decks express: Hertz–Mindlin contact with restitution damping (particle–particle and
-//! walls), weight minus buoyancy (`fix gravity`), Stokes drag without shielding (`fix viscous`).
-//! Anything else is refused with a message naming the term (magnetic terms need magdem's lock-step
-//! force coupling, which is not built yet).
+//! walls), weight minus buoyancy (`fix gravity`), Stokes drag without shielding (`fix viscous`),
+//! and a `fix external` through which magdem supplies the magnetic forces in lock step
+//! ([`library`]). Anything else is refused with a message naming the term.
 
 pub mod deck;
 pub mod dump;
+pub mod library;
 
 use crate::io::trajectory::{status, RunInfo, TrajectoryError, TrajectoryWriter};
 use crate::scene::Scene;
@@ -67,10 +68,14 @@ pub struct ReferenceRun {
     pub wall_time: std::time::Duration,
 }
 
-/// Writes the deck for `scene` into `dir`, runs the engine there, and converts its dump into the
+/// Writes the deck for `scene` into `dir`, runs the engine there (its binary; a magnetic scene
+/// in process, in lock step with magdem's magnetic forces), and converts its dump into the
 /// trajectory `output` (same schema as a native run, `engine` attribute set). The engine's log is
 /// kept beside the output as `OUTPUT.ENGINE.log`.
 pub fn run(engine: Engine, scene: &Scene, dir: &Path, output: &Path) -> Result<ReferenceRun, ReferenceError> {
+    if scene.magnetic_force_field().is_some() {
+        return library::run_coupled(engine, scene, dir, output);
+    }
     if !engine.available() {
         return Err(ReferenceError::NotInstalled { engine: engine.name(), binary: engine.binary() });
     }

@@ -147,36 +147,50 @@ impl Scene {
         State { particles: self.initial.clone(), ..State::default() }
     }
 
-    /// A simulation at t = 0 (call `initialise` before stepping), or around `state` if given.
-    pub fn simulation(&self, state: Option<State>) -> Simulation {
-        let spec = &self.spec;
-        let largest_diameter = self.species.iter().map(|s| 2.0 * s.radius).fold(0.0, f64::max);
-        let (b0, gradient) = field_of(spec);
-        let fluid = spec.fluid.clone().unwrap_or(FluidSpec { density: 0.0, viscosity: 0.0, velocity: [0.0; 3] });
+    fn largest_diameter(&self) -> f64 {
+        self.species.iter().map(|s| 2.0 * s.radius).fold(0.0, f64::max)
+    }
+
+    /// The moments model and the magnetic force terms (dipole, gradient) the scene lists.
+    fn magnetic_parts(&self) -> (Option<Magnetisation>, Vec<Box<dyn ForceTerm>>) {
+        let f = &self.spec.forces;
+        let (b0, gradient) = field_of(&self.spec);
         let mut terms: Vec<Box<dyn ForceTerm>> = vec![];
-        let f = &spec.forces;
-        let magnetic = f.dipole.is_some() || f.gradient.is_some();
-        let magnetisation = magnetic.then(|| {
-            let induction = match &f.dipole {
-                None => Induction::None,
-                Some(d) => match d.induction {
-                    InductionSpec::None => Induction::None,
-                    InductionSpec::Paper => Induction::Paper { radius: d.paper_radius_diameters * largest_diameter },
-                    InductionSpec::Exact => Induction::Exact {
-                        tolerance: d.tolerance,
-                        max_iterations: d.max_iterations,
-                        dense_max: d.dense_max,
-                    },
-                },
-            };
-            Magnetisation::new(induction, b0, gradient, &self.species)
-        });
+        if !(f.dipole.is_some() || f.gradient.is_some()) {
+            return (None, terms);
+        }
+        let induction = match &f.dipole {
+            None => Induction::None,
+            Some(d) => match d.induction {
+                InductionSpec::None => Induction::None,
+                InductionSpec::Paper => Induction::Paper { radius: d.paper_radius_diameters * self.largest_diameter() },
+                InductionSpec::Exact => {
+                    Induction::Exact { tolerance: d.tolerance, max_iterations: d.max_iterations, dense_max: d.dense_max }
+                }
+            },
+        };
         if let Some(d) = &f.dipole {
-            terms.push(Box::new(DipoleForce::new(d.cutoff_diameters.map(|c| c * largest_diameter), b0, gradient)));
+            terms.push(Box::new(DipoleForce::new(d.cutoff_diameters.map(|c| c * self.largest_diameter()), b0, gradient)));
         }
         if f.gradient.is_some() {
             terms.push(Box::new(GradientForce { gradient }));
         }
+        (Some(Magnetisation::new(induction, b0, gradient, &self.species)), terms)
+    }
+
+    /// Only the magnetic forces (moments, dipole and gradient terms): what magdem supplies to a
+    /// reference code in lock step. `None` when the scene has no magnetic term.
+    pub fn magnetic_force_field(&self) -> Option<ForceField> {
+        let (magnetisation, terms) = self.magnetic_parts();
+        magnetisation.map(|m| ForceField::new(self.domain.clone(), Some(m), terms, self.largest_diameter()))
+    }
+
+    /// A simulation at t = 0 (call `initialise` before stepping), or around `state` if given.
+    pub fn simulation(&self, state: Option<State>) -> Simulation {
+        let spec = &self.spec;
+        let fluid = spec.fluid.clone().unwrap_or(FluidSpec { density: 0.0, viscosity: 0.0, velocity: [0.0; 3] });
+        let f = &spec.forces;
+        let (magnetisation, mut terms) = self.magnetic_parts();
         let mut touch_tolerance = 0.0;
         if let Some(d) = &f.drag {
             touch_tolerance = d.touch_tolerance;
@@ -204,7 +218,7 @@ impl Scene {
         if let Some(c) = &f.contact {
             terms.push(Box::new(Contact::new(&self.species, c.walls)));
         }
-        let near_range = largest_diameter * (1.0 + touch_tolerance.max(1e-9));
+        let near_range = self.largest_diameter() * (1.0 + touch_tolerance.max(1e-9));
         let field = ForceField::new(self.domain.clone(), magnetisation, terms, near_range);
         Simulation {
             state: state.unwrap_or_else(|| self.initial_state()),
