@@ -34,6 +34,16 @@ enum Study {
         #[arg(long, default_value = "runs/verify-contacts")]
         work: PathBuf,
     },
+    /// Magnetic scenes in lock step (two-particle approach, case 1 at 4.5 mg/ml); writes the report.
+    Magnetic {
+        #[arg(long, default_value = "reports")]
+        report: PathBuf,
+        #[arg(long, default_value = "runs/verify-magnetic")]
+        work: PathBuf,
+        /// Simulated time of the case-1 comparison (s).
+        #[arg(long, default_value_t = 2.0e-4)]
+        case1_time: f64,
+    },
 }
 
 #[derive(Subcommand)]
@@ -233,6 +243,28 @@ fn main() -> ExitCode {
                         100.0 * r.worst_normal,
                         100.0 * r.worst_tangential
                     );
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(1)
+                }
+            }
+        }
+        Command::Verify { study: Study::Magnetic { report, work, case1_time } } => {
+            let engines: Vec<ReferenceEngine> = [ReferenceEngine::Liggghts, ReferenceEngine::Lammps]
+                .into_iter()
+                .filter(|e| match reference::library::available(*e) {
+                    Ok(()) => true,
+                    Err(why) => {
+                        eprintln!("note: {} skipped: {why}", e.name());
+                        false
+                    }
+                })
+                .collect();
+            match magdem::verify::magnetic::verify(&report, &work, &engines, case1_time) {
+                Ok(_) => {
+                    println!("wrote {}", report.join("magnetic-verification.md").display());
                     ExitCode::SUCCESS
                 }
                 Err(e) => {

@@ -2,3 +2,4 @@
 
 pub mod contacts;
 pub mod contacts_report;
+pub mod magnetic;

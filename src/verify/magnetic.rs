@@ -1,0 +1,179 @@
+//! `magdem verify magnetic`: magnetic scenes in magdem and, in lock step with magdem's magnetic
+//! forces, in LIGGGHTS and LAMMPS — a two-particle approach and the paper's case 1 at 4.5 mg/ml
+//! (307 particles) over a short time — with the per-particle position difference against time.
+//!
+//! The reference decks cannot express the paper's drag (Schiller–Naumann with shielding and
+//! rotational drag), so the case-1 scene is run here with Stokes drag, no shielding and no
+//! rotational drag in all three engines; everything else is the shipped scene.
+
+use crate::io::trajectory::Trajectory;
+use crate::plot::{line_chart, Series};
+use crate::reference::{self, Engine};
+use crate::run::{run, RunOptions};
+use crate::scene::Scene;
+use plotters::style::RGBColor;
+use std::fmt::Write as _;
+use std::path::Path;
+
+const PAIR: &str = r#"# Two 11 um Fe3O4 spheres 6 diameters apart, slightly off the field axis, exact induction.
+version = 1
+name = "pair-approach"
+[domain]
+lo = [-1.0e-4, -5.0e-5, -5.0e-5]
+hi = [1.0e-4, 5.0e-5, 5.0e-5]
+[fluid]
+density = 1000.0
+viscosity = 1.0e-3
+[field]
+b0 = [0.4, 0.0, 0.0]
+[[species]]
+name = "p"
+diameter = 11.0e-6
+density = 1087.0
+youngs_modulus = 1.0e9
+poisson_ratio = 0.5
+friction = 0.5
+restitution = 0.5
+relative_permeability = 12.3
+[[particles]]
+species = "p"
+positions = [[-3.3e-5, 0.0, 0.0], [3.3e-5, 1.0e-6, 0.0]]
+[forces.contact]
+[forces.dipole]
+induction = "exact"
+[forces.drag]
+law = "stokes"
+shielding = "none"
+rotational = false
+[integration]
+dt = 1.0e-9
+end_time = 2.0e-4
+[output]
+interval = 2.0e-6
+"#;
+
+/// The shipped case-1 scene at 4.5 mg/ml with the drag the reference codes can express, run for
+/// `end_time` seconds.
+pub fn case1_scene(end_time: f64) -> Result<String, String> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/scenes/case1-c4.5.toml");
+    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let replace = |text: String, from: &str, to: &str| -> Result<String, String> {
+        if text.contains(from) { Ok(text.replacen(from, to, 1)) } else { Err(format!("{} lacks {from:?}", path.display())) }
+    };
+    let text = replace(text, "law = \"schiller-naumann\"\nshielding = \"paper\"", "law = \"stokes\"\nshielding = \"none\"\nrotational = false")?;
+    let text = replace(text, "end_time = 5.0e-3", &format!("end_time = {end_time:e}"))?;
+    let text = replace(text, "interval = 5.0e-5", &format!("interval = {:e}", end_time / 50.0))?;
+    let text = replace(text, "name = \"case1-c4.5\"", "name = \"case1-c4.5-stokes\"")?;
+    Ok(format!("# verify magnetic: case1-c4.5.toml with Stokes drag, no shielding, no rotational drag\n{text}"))
+}
+
+/// Per-frame maximum and median over particles of |x_engine − x_magdem|.
+pub struct Difference {
+    pub engine: &'static str,
+    pub times: Vec<f64>,
+    pub max: Vec<f64>,
+    pub median: Vec<f64>,
+}
+
+fn difference(engine: &'static str, native: &Path, other: &Path) -> hdf5::Result<Difference> {
+    let a = Trajectory::open(native).map_err(|e| e.to_string())?;
+    let b = Trajectory::open(other).map_err(|e| e.to_string())?;
+    let (x, y) = (a.all_vectors("position")?, b.all_vectors("position")?);
+    let times = a.times()?;
+    let (frames, n) = (x.shape()[0], x.shape()[1]);
+    let (mut max, mut median) = (vec![], vec![]);
+    for k in 0..frames {
+        let mut d: Vec<f64> = (0..n).map(|i| (0..3).map(|c| (x[[k, i, c]] - y[[k, i, c]]).powi(2)).sum::<f64>().sqrt()).collect();
+        d.sort_by(f64::total_cmp);
+        max.push(d[n - 1]);
+        median.push(d[n / 2]);
+    }
+    Ok(Difference { engine, times, max, median })
+}
+
+/// Runs one scene in magdem and the engines; returns the differences and magdem's wall time.
+pub fn compare(text: &str, name: &str, work: &Path, engines: &[Engine]) -> Result<(Vec<Difference>, Vec<(String, f64)>), Box<dyn std::error::Error>> {
+    let scene = Scene::parse(text, name)?;
+    std::fs::create_dir_all(work)?;
+    let native = work.join(format!("{name}.magdem.h5"));
+    let start = std::time::Instant::now();
+    run(&scene, &native, &RunOptions::default())?;
+    let mut times = vec![("magdem".to_string(), start.elapsed().as_secs_f64())];
+    let mut diffs = vec![];
+    for &engine in engines {
+        let out = work.join(format!("{name}.{}.h5", engine.name()));
+        let r = reference::run(engine, &scene, &work.join(format!("{name}.{}", engine.name())), &out)?;
+        times.push((engine.name().to_string(), r.wall_time.as_secs_f64()));
+        diffs.push(difference(engine.name(), &native, &out)?);
+    }
+    Ok((diffs, times))
+}
+
+fn colour(engine: &str) -> RGBColor {
+    if engine == "liggghts" { RGBColor(20, 90, 200) } else { RGBColor(30, 150, 60) }
+}
+
+/// Runs both scenes and writes `dir/magnetic-verification.md` with one figure per scene.
+pub fn verify(dir: &Path, work: &Path, engines: &[Engine], case1_end: f64) -> Result<String, Box<dyn std::error::Error>> {
+    std::fs::create_dir_all(dir)?;
+    let mut md = String::from("# Magnetic forces in lock step: magdem, LIGGGHTS and LAMMPS\n\n");
+    let _ = writeln!(
+        md,
+        "Generated by `magdem verify magnetic` (magdem {}, commit {}). LIGGGHTS and LAMMPS run in process from their \
+         shared libraries; a `fix external pf/callback` hands magdem the positions every step and magdem's core returns \
+         the magnetic forces (moments with the scene's mutual induction, dipole and gradient forces). Contact, drag and \
+         integration are the reference code's own. The figures show the largest and the median distance between a \
+         particle's position in the reference code and in magdem (log10 of metres; exactly equal positions are drawn at −22). The pair touches at about 0.1 ms.\n",
+        env!("CARGO_PKG_VERSION"),
+        env!("MAGDEM_GIT_COMMIT")
+    );
+    let case1 = case1_scene(case1_end)?;
+    for (name, text, title) in [
+        ("pair-approach", PAIR.to_string(), "Two dipoles closing (exact induction), 0.4 T"),
+        ("case1-c4.5-stokes", case1, "Case 1, 4.5 mg/ml, 307 particles, Stokes drag"),
+    ] {
+        let (diffs, times) = compare(&text, name, work, engines)?;
+        let _ = writeln!(md, "## {title}\n\nScene `{name}` (its TOML is stored in each trajectory). Wall time: {}.\n", times.iter().map(|(e, t)| format!("{e} {t:.1} s")).collect::<Vec<_>>().join(", "));
+        md += "| time (s) |";
+        let mut rule = String::from("|---|");
+        for d in &diffs {
+            md += &format!(" {} max (m) | {} median (m) |", d.engine, d.engine);
+            rule += "---|---|";
+        }
+        let _ = writeln!(md, "\n{rule}");
+        let frames = diffs.first().map_or(0, |d| d.times.len());
+        let step = (frames / 10).max(1);
+        let rows = (0..frames).step_by(step).chain((frames > 0 && (frames - 1) % step != 0).then(|| frames - 1));
+        for k in rows {
+            let _ = write!(md, "| {:.3e} |", diffs[0].times[k]);
+            for d in &diffs {
+                let _ = write!(md, " {:.3e} | {:.3e} |", d.max[k], d.median[k]);
+            }
+            md += "\n";
+        }
+        let floor = |v: f64| v.max(1e-22).log10();
+        let series: Vec<Series> = diffs
+            .iter()
+            .flat_map(|d| {
+                [
+                    Series { label: format!("{} max", d.engine), points: d.times.iter().zip(&d.max).map(|(t, v)| (t * 1e3, floor(*v))).collect(), color: colour(d.engine), markers: None },
+                    Series { label: format!("{} median", d.engine), points: d.times.iter().zip(&d.median).map(|(t, v)| (t * 1e3, floor(*v))).collect(), color: colour(d.engine), markers: Some(3) },
+                ]
+            })
+            .collect();
+        let figure = format!("magnetic-{name}.png");
+        line_chart(&dir.join(&figure), title, "time (ms)", "log10 |x_engine − x_magdem| (m)", &series)?;
+        let _ = writeln!(md, "\n![{title}]({figure})\n");
+    }
+    md += "## Reading it\n\n\
+- **LIGGGHTS** uses the same contact law as magdem (`reports/contact-verification.md`), so with the same magnetic \
+forces the trajectories agree to round-off until contact chaos amplifies the last bits of the force sums, which are \
+added in a different order.\n\
+- **LAMMPS** agrees to round-off until the first contacts with tangential motion, where its Mindlin implementation \
+differs from LIGGGHTS' (history rescaled after projection, damping inside the Coulomb check); from there the \
+trajectories separate.\n\
+- Over longer times differences of either kind grow, because aggregation is chaotic; over a full run the \
+comparison that matters is statistical (aggregate size and length distributions, the reproduction report).\n";
+    std::fs::write(dir.join("magnetic-verification.md"), &md)?;
+    Ok(md)
+}
