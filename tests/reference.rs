@@ -240,3 +240,20 @@ fn case1_in_lock_step_tracks_magdem() {
         assert!(worst < limit, "{}: {worst:e}", d.engine);
     }
 }
+
+/// magdem's dipole force against LAMMPS' independent `lj/cut/dipole/cut` on the case-1 scenes'
+/// initial configurations (paper induction moments, 15-diameter cut-off) and all pairs.
+#[test]
+fn dipole_forces_match_lammps_lj_cut_dipole_cut() {
+    if engines().is_none() {
+        return;
+    }
+    for (name, cutoff) in [("case1-c4.5", "cutoff_diameters = 15.0"), ("case1-c0.563", "")] {
+        let path = format!("{}/experiments/scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+        let text = std::fs::read_to_string(path).unwrap().replace("cutoff_diameters = 15.0", cutoff);
+        let scene = Scene::parse(&text, name).unwrap();
+        let check = reference::dipole_check::check(&scene, &workdir(&format!("dipole-{name}"))).unwrap();
+        println!("{name} ({}): {} particles, largest force {:.3e} N, max error {:.3e} relative", if cutoff.is_empty() { "all pairs" } else { "15 d" }, check.particles, check.largest_force, check.max_relative_error);
+        assert!(check.max_relative_error < 1e-9, "{name}: {check:?}");
+    }
+}

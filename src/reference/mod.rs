@@ -8,6 +8,7 @@
 //! ([`library`]). Anything else is refused with a message naming the term.
 
 pub mod deck;
+pub mod dipole_check;
 pub mod dump;
 pub mod library;
 
