@@ -58,6 +58,11 @@ enum Command {
         /// Solver: magdem's own, or a reference code run from a generated deck.
         #[arg(long, value_enum, default_value_t = EngineChoice::Magdem)]
         engine: EngineChoice,
+        /// Reference codes, magnetic scenes: pass magdem's forces by file exchange every K steps
+        /// through the engine's binary (no shared library needed; lags up to K steps) instead of
+        /// the in-process callback every step.
+        #[arg(long, value_name = "K")]
+        exchange_every: Option<u64>,
         /// Continue an interrupted run from the output file's checkpoint.
         #[arg(long)]
         resume: bool,
@@ -85,6 +90,9 @@ enum Command {
         #[command(subcommand)]
         study: Study,
     },
+    /// Files route of the reference codes: compute magnetic forces for a positions dump.
+    #[command(hide = true)]
+    MagneticForces { scene: PathBuf, positions: PathBuf, prefix: PathBuf },
     /// Check a scene without running it: prints its particles, terms and step estimates.
     Validate {
         scene: PathBuf,
@@ -158,7 +166,7 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Command::Run { scene, output, engine, resume, timings, quiet, abort_after_frame } => {
+        Command::Run { scene, output, engine, exchange_every, resume, timings, quiet, abort_after_frame } => {
             let scene = match load(&scene) {
                 Ok(s) => s,
                 Err(code) => return code,
@@ -170,7 +178,14 @@ fn main() -> ExitCode {
             };
             if let Some(engine) = reference_engine {
                 let dir = output.with_extension(format!("{}.deck", engine.name()));
-                return match reference::run(engine, &scene, &dir, &output) {
+                let result = match exchange_every {
+                    Some(every) => {
+                        let magdem = std::env::current_exe().unwrap_or_else(|_| PathBuf::from("magdem"));
+                        reference::run_binary(engine, &scene, &dir, &output, &reference::deck::Coupling::Files { magdem, every })
+                    }
+                    None => reference::run(engine, &scene, &dir, &output),
+                };
+                return match result {
                     Ok(r) => {
                         println!("{}: {} frames from {} in {:.2} s (deck and dump in {}, log {})", output.display(), r.frames, engine.name(), r.wall_time.as_secs_f64(), dir.display(), r.log.display());
                         ExitCode::SUCCESS
@@ -262,11 +277,25 @@ fn main() -> ExitCode {
                     }
                 })
                 .collect();
-            match magdem::verify::magnetic::verify(&report, &work, &engines, case1_time) {
+            let magdem = std::env::current_exe().unwrap_or_else(|_| PathBuf::from("magdem"));
+            match magdem::verify::magnetic::verify(&report, &work, &engines, case1_time, &magdem) {
                 Ok(_) => {
                     println!("wrote {}", report.join("magnetic-verification.md").display());
                     ExitCode::SUCCESS
                 }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(1)
+                }
+            }
+        }
+        Command::MagneticForces { scene, positions, prefix } => {
+            let scene = match load(&scene) {
+                Ok(s) => s,
+                Err(code) => return code,
+            };
+            match reference::files_route::magnetic_forces(&scene, &positions, &prefix) {
+                Ok(()) => ExitCode::SUCCESS,
                 Err(e) => {
                     eprintln!("error: {e}");
                     ExitCode::from(1)

@@ -257,3 +257,23 @@ fn dipole_forces_match_lammps_lj_cut_dipole_cut() {
         assert!(check.max_relative_error < 1e-9, "{name}: {check:?}");
     }
 }
+
+/// The files route (bare binaries: positions out, `magdem magnetic-forces` through `shell`,
+/// atomfile variables and `fix addforce` in) agrees with the in-process route up to a lag error
+/// first order in the exchange interval K (measured 1.1e-7 m at K = 30, 3.4e-7 m at K = 100).
+#[test]
+fn files_route_agrees_with_the_callback_route_to_first_order_in_the_lag() {
+    let Some(engines) = engines() else { return };
+    let magdem_bin = std::path::Path::new(env!("CARGO_BIN_EXE_magdem"));
+    let text = magdem::verify::magnetic::files_route_scene();
+    let rows = magdem::verify::magnetic::files_route_lag(Engine::Liggghts, &text, &workdir("files"), magdem_bin, &[30, 100]).unwrap();
+    println!("liggghts files route: {rows:?}");
+    let ratio = rows[1].1 / rows[0].1;
+    assert!(rows[0].1 < 2e-7 && (2.5..4.5).contains(&ratio), "{rows:?}");
+    // LAMMPS' binary accepts the same files-route deck.
+    if engines.contains(&Engine::Lammps) {
+        let rows = magdem::verify::magnetic::files_route_lag(Engine::Lammps, &text, &workdir("files-lammps"), magdem_bin, &[300]).unwrap();
+        println!("lammps files route: {rows:?}");
+        assert!(rows[0].1 < 2e-6, "{rows:?}");
+    }
+}

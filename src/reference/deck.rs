@@ -94,17 +94,42 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
     Ok(())
 }
 
-/// Writes `in.scene` and `data.scene` for `engine` into `dir`.
+/// How magdem's magnetic forces reach the engine.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Coupling {
+    /// `fix external pf/callback`, set by magdem when it runs the engine in process.
+    Callback,
+    /// Files only (a bare binary, or MPI): every `every` steps the deck writes the positions,
+    /// calls `magdem magnetic-forces` through `shell`, reads the forces as atomfile variables and
+    /// applies them with `fix addforce` until the next exchange (a lag of up to `every` steps).
+    Files { magdem: PathBuf, every: u64 },
+}
+
+/// Writes `in.scene` and `data.scene` for `engine` into `dir` (magnetic forces by callback).
 pub fn write(engine: Engine, scene: &Scene, dir: &Path) -> Result<WrittenDeck, ReferenceError> {
+    write_with(engine, scene, dir, &Coupling::Callback)
+}
+
+/// Writes the deck with the given coupling of the magnetic forces.
+pub fn write_with(engine: Engine, scene: &Scene, dir: &Path, coupling: &Coupling) -> Result<WrittenDeck, ReferenceError> {
     check(engine, scene)?;
     std::fs::create_dir_all(dir)?;
+    if let Coupling::Files { every, .. } = coupling {
+        if *every == 0 || scene.total_steps() % every != 0 {
+            return Err(unsupported(engine, "the files route", &format!("the exchange interval ({every} steps) must divide the run ({} steps)", scene.total_steps())));
+        }
+        std::fs::write(dir.join(SCENE_COPY), &scene.text)?;
+    }
     let data = PathBuf::from("data.scene");
     std::fs::write(dir.join(&data), data_file(scene))?;
     let dump = "dump.scene".to_string();
     let input = PathBuf::from("in.scene");
-    std::fs::write(dir.join(&input), input_deck(engine, scene, &data, &dump))?;
+    std::fs::write(dir.join(&input), input_deck(engine, scene, &data, &dump, coupling))?;
     Ok(WrittenDeck { input, data, dump })
 }
+
+/// The scene as the files route's `magdem magnetic-forces` reads it, beside the deck.
+pub const SCENE_COPY: &str = "scene.toml";
 
 /// The initial particles, in the `atom_style granular` / `sphere` data format (id type diameter
 /// density x y z), and their velocities and angular velocities.
@@ -135,7 +160,7 @@ fn data_file(scene: &Scene) -> String {
     s
 }
 
-fn input_deck(engine: Engine, scene: &Scene, data: &Path, dump: &str) -> String {
+fn input_deck(engine: Engine, scene: &Scene, data: &Path, dump: &str, coupling: &Coupling) -> String {
     let spec = &scene.spec;
     let species = &scene.species;
     let n_types = species.len();
@@ -243,7 +268,8 @@ fn input_deck(engine: Engine, scene: &Scene, data: &Path, dump: &str) -> String 
         }
         s += "\n";
     }
-    if spec.forces.dipole.is_some() || spec.forces.gradient.is_some() {
+    let magnetic = spec.forces.dipole.is_some() || spec.forces.gradient.is_some();
+    if magnetic && *coupling == Coupling::Callback {
         let _ = writeln!(
             s,
             "\n# Magnetic forces (moments with mutual induction, dipole and gradient forces) come from\n\
@@ -258,15 +284,33 @@ fn input_deck(engine: Engine, scene: &Scene, data: &Path, dump: &str) -> String 
     let fmt = format!("%d %d{}", " %.17g".repeat(12));
     let _ = writeln!(s, "\n# Full-precision dump every {every} steps (one frame per magdem output interval).");
     let _ = writeln!(s, "dump trajectory all custom {every} {dump} {cols}");
-    match engine {
-        Engine::Liggghts => {
-            let _ = writeln!(s, "dump_modify trajectory sort id format \"{fmt}\"");
+    let format_kw = if engine == Engine::Liggghts { "format" } else { "format line" };
+    let _ = writeln!(s, "dump_modify trajectory sort id {format_kw} \"{fmt}\"");
+    let _ = writeln!(s, "thermo {}", every.max(1000));
+    match coupling {
+        Coupling::Files { magdem, every: k } if magnetic => {
+            let exchanges = scene.total_steps() / k;
+            let _ = writeln!(
+                s,
+                "\n# Magnetic forces by file exchange every {k} steps (files route): positions out, magdem\n\
+                 # computes the forces (moments carried in forces.moments), atomfile variables in,\n\
+                 # fix addforce applies them until the next exchange.\n\
+                 variable fx atom 0.0\nvariable fy atom 0.0\nvariable fz atom 0.0\n\
+                 fix {id} all addforce v_fx v_fy v_fz\n\
+                 variable exchange loop {exchanges}\nlabel exchange_loop\n\
+                 write_dump all custom positions.dump id x y z modify sort id {format_kw} \"%d %.17g %.17g %.17g\"\n\
+                 shell {bin} magnetic-forces {SCENE_COPY} positions.dump forces\n\
+                 variable fx delete\nvariable fy delete\nvariable fz delete\n\
+                 variable fx atomfile forces.x\nvariable fy atomfile forces.y\nvariable fz atomfile forces.z\n\
+                 run {k}\nnext exchange\njump SELF exchange_loop",
+                id = super::library::FIX_ID,
+                bin = magdem.display()
+            );
         }
-        Engine::Lammps => {
-            let _ = writeln!(s, "dump_modify trajectory sort id format line \"{fmt}\"");
+        _ => {
+            let _ = writeln!(s, "run {}", scene.total_steps());
         }
     }
-    let _ = writeln!(s, "thermo {}\nrun {}", every.max(1000), scene.total_steps());
     s
 }
 

@@ -10,6 +10,7 @@
 pub mod deck;
 pub mod dipole_check;
 pub mod dump;
+pub mod files_route;
 pub mod library;
 
 use crate::io::trajectory::{status, RunInfo, TrajectoryError, TrajectoryWriter};
@@ -77,12 +78,17 @@ pub fn run(engine: Engine, scene: &Scene, dir: &Path, output: &Path) -> Result<R
     if scene.magnetic_force_field().is_some() {
         return library::run_coupled(engine, scene, dir, output);
     }
+    run_binary(engine, scene, dir, output, &deck::Coupling::Callback)
+}
+
+/// Runs the engine's binary on the deck (with the files route for magnetic forces, if given).
+pub fn run_binary(engine: Engine, scene: &Scene, dir: &Path, output: &Path, coupling: &deck::Coupling) -> Result<ReferenceRun, ReferenceError> {
     if !engine.available() {
         return Err(ReferenceError::NotInstalled { engine: engine.name(), binary: engine.binary() });
     }
     let start = std::time::Instant::now();
     std::fs::create_dir_all(dir)?;
-    let written = deck::write(engine, scene, dir)?;
+    let written = deck::write_with(engine, scene, dir, coupling)?;
     let result = Command::new(engine.binary()).arg("-in").arg(&written.input).arg("-log").arg("log.engine").current_dir(dir).output()?;
     let log = output.with_extension(format!("{}.log", engine.name()));
     let engine_log = dir.join("log.engine");
@@ -100,7 +106,13 @@ pub fn run(engine: Engine, scene: &Scene, dir: &Path, output: &Path) -> Result<R
         });
     }
     let frames = dump::read(engine, &dir.join(&written.dump), scene)?;
-    let info = RunInfo { engine: engine.name(), integrator: "velocity-verlet (nve/sphere)" };
+    let integrator = match coupling {
+        deck::Coupling::Files { every, .. } if scene.magnetic_force_field().is_some() => {
+            format!("velocity-verlet (nve/sphere), magnetic forces from magdem by file exchange every {every} steps")
+        }
+        _ => "velocity-verlet (nve/sphere)".to_string(),
+    };
+    let info = RunInfo { engine: engine.name(), integrator: &integrator };
     let mut writer = TrajectoryWriter::create(output, scene, &info)?;
     for state in &frames {
         writer.write_frame(state)?;
