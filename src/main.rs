@@ -157,7 +157,7 @@ fn main() -> ExitCode {
             };
             match reference::deck::write(engine, &scene, &output) {
                 Ok(deck) => {
-                    println!("wrote {} and {} in {}", deck.input.display(), deck.data.display(), output.display());
+                    println!("wrote {}, its fix.* include files and {} in {}", deck.input.display(), deck.data.display(), output.display());
                     ExitCode::SUCCESS
                 }
                 Err(e) => {

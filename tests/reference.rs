@@ -139,7 +139,9 @@ fn decks_carry_the_magnetic_fix_and_refuse_what_the_codes_cannot_express() {
         let dir = workdir(&format!("magnetic-{}", engine.name()));
         let deck = reference::deck::write(engine, &scene, &dir).unwrap();
         let text = std::fs::read_to_string(dir.join(deck.input)).unwrap();
-        assert!(text.contains("fix magnetic all external pf/callback 1 1"), "{text}");
+        assert!(text.contains("include fix.magnetic") && text.contains("include fix.contact"), "{text}");
+        let fix = std::fs::read_to_string(dir.join("fix.magnetic")).unwrap();
+        assert!(fix.contains("fix magnetic all external pf/callback 1 1"), "{fix}");
     }
     let sn = Scene::parse(&SETTLING.replace("law = \"stokes\"", "law = \"schiller-naumann\""), "sn").unwrap();
     let err = reference::deck::write(Engine::Lammps, &sn, &workdir("refuse1")).unwrap_err().to_string();

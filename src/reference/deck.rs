@@ -124,7 +124,11 @@ pub fn write_with(engine: Engine, scene: &Scene, dir: &Path, coupling: &Coupling
     std::fs::write(dir.join(&data), data_file(scene))?;
     let dump = "dump.scene".to_string();
     let input = PathBuf::from("in.scene");
-    std::fs::write(dir.join(&input), input_deck(engine, scene, &data, &dump, coupling))?;
+    let deck = input_deck(engine, scene, &data, &dump, coupling);
+    std::fs::write(dir.join(&input), deck.main)?;
+    for (name, text) in &deck.includes {
+        std::fs::write(dir.join(name), text)?;
+    }
     Ok(WrittenDeck { input, data, dump })
 }
 
@@ -160,10 +164,16 @@ fn data_file(scene: &Scene) -> String {
     s
 }
 
-fn input_deck(engine: Engine, scene: &Scene, data: &Path, dump: &str, coupling: &Coupling) -> String {
+/// The deck: `in.scene` (set-up, output, run control) and the fix files it includes.
+struct DeckText {
+    main: String,
+    /// (file name, content), included in this order.
+    includes: Vec<(&'static str, String)>,
+}
+
+fn input_deck(engine: Engine, scene: &Scene, data: &Path, dump: &str, coupling: &Coupling) -> DeckText {
     let spec = &scene.spec;
     let species = &scene.species;
-    let n_types = species.len();
     let largest_d = species.iter().map(|s| 2.0 * s.radius).fold(0.0, f64::max);
     let periodic = [spec.domain.boundary.x, spec.domain.boundary.y, spec.domain.boundary.z];
     let bflag = |b: Boundary| if b == Boundary::Periodic { "p" } else { "f" };
@@ -194,124 +204,151 @@ fn input_deck(engine: Engine, scene: &Scene, data: &Path, dump: &str, coupling: 
         Engine::Liggghts => s += "neigh_modify delay 0 contact_distance_factor 1.1\n",
         Engine::Lammps => s += "neigh_modify delay 0\n",
     }
-
-    if let Some(c) = &spec.forces.contact {
-        s += "\n# Contact: Hertz normal, Mindlin tangential with history and Coulomb limit, damping from restitution.\n";
-        let _ = c;
-        match engine {
-            Engine::Liggghts => {
-                let list = |f: &dyn Fn(usize) -> f64| (0..n_types).map(|k| format!("{:e}", f(k))).collect::<Vec<_>>().join(" ");
-                let matrix = |f: &dyn Fn(usize, usize) -> f64| {
-                    (0..n_types * n_types).map(|k| format!("{:e}", f(k / n_types, k % n_types))).collect::<Vec<_>>().join(" ")
-                };
-                let _ = writeln!(s, "fix m1 all property/global youngsModulus peratomtype {}", list(&|k| species[k].youngs_modulus));
-                let _ = writeln!(s, "fix m2 all property/global poissonsRatio peratomtype {}", list(&|k| species[k].poisson_ratio));
-                let _ = writeln!(
-                    s,
-                    "fix m3 all property/global coefficientRestitution peratomtypepair {n_types} {}",
-                    matrix(&|a, b| 0.5 * (species[a].restitution + species[b].restitution))
-                );
-                let _ = writeln!(
-                    s,
-                    "fix m4 all property/global coefficientFriction peratomtypepair {n_types} {}",
-                    matrix(&|a, b| 0.5 * (species[a].friction + species[b].friction))
-                );
-                s += "pair_style gran model hertz tangential history\npair_coeff * *\n";
-            }
-            Engine::Lammps => {
-                s += "pair_style granular\n";
-                for a in 0..n_types {
-                    for b in a..n_types {
-                        let _ = writeln!(s, "pair_coeff {} {} {}", a + 1, b + 1, lammps_granular_model(&species[a], &species[b], false));
-                    }
-                }
-            }
-        }
-        let walls: Vec<(usize, &str)> = (0..3).filter(|&k| periodic[k] == Boundary::Wall).map(|k| (k, ["xplane", "yplane", "zplane"][k])).collect();
-        if !walls.is_empty() {
-            s += "# Walls: planes of infinite radius and mass, of the first species' material.\n";
-        }
-        for (k, plane) in walls {
-            let (lo, hi) = (scene.domain.lo[k], scene.domain.hi[k]);
-            match engine {
-                Engine::Liggghts => {
-                    let _ = writeln!(s, "fix wall_{plane}_lo all wall/gran model hertz tangential history primitive type 1 {plane} {lo:.17e}");
-                    let _ = writeln!(s, "fix wall_{plane}_hi all wall/gran model hertz tangential history primitive type 1 {plane} {hi:.17e}");
-                }
-                Engine::Lammps => {
-                    let _ = writeln!(s, "fix wall_{plane} all wall/gran granular {} {plane} {lo:.17e} {hi:.17e}", lammps_granular_model(&species[0], &species[0], true));
-                }
-            }
-        }
-    } else {
-        s += "\npair_style none\n";
-    }
-
-    let _ = writeln!(s, "\ntimestep {:.17e}\nfix integrate all nve/sphere", scene.dt());
-    if let Some(g) = &spec.forces.gravity {
-        let rho_f = spec.fluid.as_ref().map_or(0.0, |f| f.density);
-        let gv = nalgebra::Vector3::from(g.g);
-        let reduced = gv.norm() * (1.0 - rho_f / species[0].density);
-        let dir = gv / gv.norm();
-        let _ = writeln!(
-            s,
-            "\n# Weight minus buoyancy: |g| (1 - rho_f/rho_p).\nfix gravity all gravity {reduced:.17e} vector {:.17e} {:.17e} {:.17e}",
-            dir.x, dir.y, dir.z
-        );
-    }
-    if spec.forces.drag.is_some() {
-        let mu = spec.fluid.as_ref().map_or(0.0, |f| f.viscosity);
-        let gamma = |k: usize| crate::core::forces::drag::Drag::stokes_coefficient(mu, species[k].radius);
-        let _ = write!(s, "\n# Stokes drag 6 pi mu a per type.\nfix drag all viscous {:.17e}", gamma(0));
-        for k in 1..n_types {
-            let _ = write!(s, " scale {} {:.17e}", k + 1, gamma(k) / gamma(0));
-        }
-        s += "\n";
-    }
     let magnetic = spec.forces.dipole.is_some() || spec.forces.gradient.is_some();
-    if magnetic && *coupling == Coupling::Callback {
-        let _ = writeln!(
-            s,
-            "\n# Magnetic forces (moments with mutual induction, dipole and gradient forces) come from\n\
-             # magdem's own code every step through this fix: run the deck with\n\
-             # `magdem run --engine {}`, which sets the callback.\nfix {} all external pf/callback 1 1",
-            engine.name(),
-            super::library::FIX_ID
-        );
+    let includes: Vec<(&'static str, String)> = [
+        ("fix.contact", Some(contact_section(engine, scene))),
+        ("fix.gravity", gravity_section(scene)),
+        ("fix.drag", drag_section(scene)),
+        ("fix.magnetic", magnetic.then(|| magnetic_section(engine, coupling))),
+    ]
+    .into_iter()
+    .filter_map(|(name, text)| text.map(|t| (name, t)))
+    .collect();
+    let _ = writeln!(s, "\ntimestep {:.17e}\nfix integrate all nve/sphere\n", scene.dt());
+    for (name, _) in &includes {
+        let _ = writeln!(s, "include {name}");
     }
     let every = scene.steps_per_frame();
     let cols = "id type x y z vx vy vz fx fy fz omegax omegay omegaz";
     let fmt = format!("%d %d{}", " %.17g".repeat(12));
     let _ = writeln!(s, "\n# Full-precision dump every {every} steps (one frame per magdem output interval).");
     let _ = writeln!(s, "dump trajectory all custom {every} {dump} {cols}");
-    let format_kw = if engine == Engine::Liggghts { "format" } else { "format line" };
-    let _ = writeln!(s, "dump_modify trajectory sort id {format_kw} \"{fmt}\"");
+    let _ = writeln!(s, "dump_modify trajectory sort id {} \"{fmt}\"", format_keyword(engine));
     let _ = writeln!(s, "thermo {}", every.max(1000));
     match coupling {
         Coupling::Files { magdem, every: k } if magnetic => {
-            let exchanges = scene.total_steps() / k;
             let _ = writeln!(
                 s,
-                "\n# Magnetic forces by file exchange every {k} steps (files route): positions out, magdem\n\
-                 # computes the forces (moments carried in forces.moments), atomfile variables in,\n\
-                 # fix addforce applies them until the next exchange.\n\
-                 variable fx atom 0.0\nvariable fy atom 0.0\nvariable fz atom 0.0\n\
-                 fix {id} all addforce v_fx v_fy v_fz\n\
-                 variable exchange loop {exchanges}\nlabel exchange_loop\n\
-                 write_dump all custom positions.dump id x y z modify sort id {format_kw} \"%d %.17g %.17g %.17g\"\n\
-                 shell {bin} magnetic-forces {SCENE_COPY} positions.dump forces\n\
+                "\n# Files route: every {k} steps the positions go out, magdem computes the magnetic forces\n\
+                 # (moments carried in forces.moments), and fix.magnetic's atomfile variables read them back.\n\
+                 variable exchange loop {}\nlabel exchange_loop\n\
+                 write_dump all custom positions.dump id x y z modify sort id {} \"%d %.17g %.17g %.17g\"\n\
+                 shell {} magnetic-forces {SCENE_COPY} positions.dump forces\n\
                  variable fx delete\nvariable fy delete\nvariable fz delete\n\
                  variable fx atomfile forces.x\nvariable fy atomfile forces.y\nvariable fz atomfile forces.z\n\
                  run {k}\nnext exchange\njump SELF exchange_loop",
-                id = super::library::FIX_ID,
-                bin = magdem.display()
+                scene.total_steps() / k,
+                format_keyword(engine),
+                magdem.display()
             );
         }
         _ => {
             let _ = writeln!(s, "run {}", scene.total_steps());
         }
     }
+    DeckText { main: s, includes }
+}
+
+fn format_keyword(engine: Engine) -> &'static str {
+    if engine == Engine::Liggghts { "format" } else { "format line" }
+}
+
+/// Materials, pair style and walls.
+fn contact_section(engine: Engine, scene: &Scene) -> String {
+    let species = &scene.species;
+    let n_types = species.len();
+    let mut s = String::new();
+    if scene.spec.forces.contact.is_none() {
+        return "# No contact term in the scene.\npair_style none\n".into();
+    }
+    s += "# Contact: Hertz normal, Mindlin tangential with history and Coulomb limit, damping from restitution.\n";
+    match engine {
+        Engine::Liggghts => {
+            let list = |f: &dyn Fn(usize) -> f64| (0..n_types).map(|k| format!("{:e}", f(k))).collect::<Vec<_>>().join(" ");
+            let matrix = |f: &dyn Fn(usize, usize) -> f64| {
+                (0..n_types * n_types).map(|k| format!("{:e}", f(k / n_types, k % n_types))).collect::<Vec<_>>().join(" ")
+            };
+            let _ = writeln!(s, "fix m1 all property/global youngsModulus peratomtype {}", list(&|k| species[k].youngs_modulus));
+            let _ = writeln!(s, "fix m2 all property/global poissonsRatio peratomtype {}", list(&|k| species[k].poisson_ratio));
+            let _ = writeln!(
+                s,
+                "fix m3 all property/global coefficientRestitution peratomtypepair {n_types} {}",
+                matrix(&|a, b| 0.5 * (species[a].restitution + species[b].restitution))
+            );
+            let _ = writeln!(
+                s,
+                "fix m4 all property/global coefficientFriction peratomtypepair {n_types} {}",
+                matrix(&|a, b| 0.5 * (species[a].friction + species[b].friction))
+            );
+            s += "pair_style gran model hertz tangential history\npair_coeff * *\n";
+        }
+        Engine::Lammps => {
+            s += "# (E, nu) per pair solved so LAMMPS' effective moduli equal magdem's; tsuji input calibrated.\npair_style granular\n";
+            for a in 0..n_types {
+                for b in a..n_types {
+                    let _ = writeln!(s, "pair_coeff {} {} {}", a + 1, b + 1, lammps_granular_model(&species[a], &species[b], false));
+                }
+            }
+        }
+    }
+    let d = &scene.domain;
+    let walls: Vec<(usize, &str)> = (0..3).filter(|&k| !d.periodic[k]).map(|k| (k, ["xplane", "yplane", "zplane"][k])).collect();
+    if !walls.is_empty() {
+        s += "# Walls: planes of infinite radius and mass, of the first species' material.\n";
+    }
+    for (k, plane) in walls {
+        let (lo, hi) = (d.lo[k], d.hi[k]);
+        match engine {
+            Engine::Liggghts => {
+                let _ = writeln!(s, "fix wall_{plane}_lo all wall/gran model hertz tangential history primitive type 1 {plane} {lo:.17e}");
+                let _ = writeln!(s, "fix wall_{plane}_hi all wall/gran model hertz tangential history primitive type 1 {plane} {hi:.17e}");
+            }
+            Engine::Lammps => {
+                let _ = writeln!(s, "fix wall_{plane} all wall/gran granular {} {plane} {lo:.17e} {hi:.17e}", lammps_granular_model(&species[0], &species[0], true));
+            }
+        }
+    }
     s
+}
+
+fn gravity_section(scene: &Scene) -> Option<String> {
+    let g = scene.spec.forces.gravity.as_ref()?;
+    let rho_f = scene.spec.fluid.as_ref().map_or(0.0, |f| f.density);
+    let gv = nalgebra::Vector3::from(g.g);
+    let reduced = gv.norm() * (1.0 - rho_f / scene.species[0].density);
+    let dir = gv / gv.norm();
+    Some(format!(
+        "# Weight minus buoyancy: |g| (1 - rho_f/rho_p).\nfix gravity all gravity {reduced:.17e} vector {:.17e} {:.17e} {:.17e}\n",
+        dir.x, dir.y, dir.z
+    ))
+}
+
+fn drag_section(scene: &Scene) -> Option<String> {
+    scene.spec.forces.drag.as_ref()?;
+    let mu = scene.spec.fluid.as_ref().map_or(0.0, |f| f.viscosity);
+    let gamma = |k: usize| crate::core::forces::drag::Drag::stokes_coefficient(mu, scene.species[k].radius);
+    let mut s = format!("# Stokes drag 6 pi mu a per type.\nfix drag all viscous {:.17e}", gamma(0));
+    for k in 1..scene.species.len() {
+        let _ = write!(s, " scale {} {:.17e}", k + 1, gamma(k) / gamma(0));
+    }
+    Some(s + "\n")
+}
+
+fn magnetic_section(engine: Engine, coupling: &Coupling) -> String {
+    let id = super::library::FIX_ID;
+    match coupling {
+        Coupling::Callback => format!(
+            "# Magnetic forces (moments with mutual induction, dipole and gradient forces) come from\n\
+             # magdem's own code every step through this fix: run the deck with\n\
+             # `magdem run --engine {}`, which sets the callback.\nfix {id} all external pf/callback 1 1\n",
+            engine.name()
+        ),
+        Coupling::Files { .. } => format!(
+            "# Magnetic forces from magdem by file exchange (see the loop in in.scene): per-atom\n\
+             # variables read from atomfiles, applied by fix addforce until the next exchange.\n\
+             variable fx atom 0.0\nvariable fy atom 0.0\nvariable fz atom 0.0\nfix {id} all addforce v_fx v_fy v_fz\n"
+        ),
+    }
 }
 
 /// Young's modulus and Poisson ratio to give LAMMPS so that its effective moduli equal magdem's

@@ -197,8 +197,16 @@ pub fn run_coupled(engine: Engine, scene: &Scene, dir: &Path, output: &Path) -> 
     let _guard = INSTANCE.lock().unwrap_or_else(|e| e.into_inner());
     let instance = Instance::open(engine, &log)?;
     let absolute = |name: &Path| dir.join(name).display().to_string();
-    let mut run_line = None;
+    // Included fix files are read here (the engine would resolve them against magdem's cwd).
+    let mut lines = vec![];
     for line in text.lines() {
+        match line.trim().strip_prefix("include ") {
+            Some(name) => lines.extend(std::fs::read_to_string(dir.join(name.trim()))?.lines().map(str::to_string)),
+            None => lines.push(line.to_string()),
+        }
+    }
+    let mut run_line = None;
+    for line in &lines {
         let line = line.trim();
         if line.starts_with("run ") {
             run_line = Some(line.to_string());
