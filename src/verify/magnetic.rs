@@ -228,7 +228,7 @@ pub fn verify(dir: &Path, work: &Path, engines: &[Engine], case1_end: f64, magde
         md += "## The dipole force against LAMMPS' own\n\n\
 LAMMPS' `lj/cut/dipole/cut` (ε = 0; electric dipoles p = m √(1e-7/k_e), k_e = 8.9876e9) evaluates the dipole–dipole \
 forces between the same moments (magdem's, at the initial positions of the shipped scenes) independently of magdem's \
-code (`src/reference/dipole_check.rs`).\n\n| scene | pair sum | particles | largest force (N) | max |F_lammps − F_magdem| / max |F| |\n|---|---|---|---|---|\n";
+code (`src/reference/dipole_check.rs`).\n\n| scene | pair sum | particles | largest force (N) | max ‖F_lammps − F_magdem‖ / max ‖F‖ |\n|---|---|---|---|---|\n";
         for (name, cutoff, label) in [("case1-c4.5", "cutoff_diameters = 15.0", "15 diameters"), ("case1-c0.563", "", "all pairs")] {
             let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("experiments/scenes/{name}.toml"));
             let text = std::fs::read_to_string(&path)?.replace("cutoff_diameters = 15.0", cutoff);
