@@ -82,6 +82,15 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
     if scene.species.iter().any(|s| s.permanent_moment.is_some()) {
         return Err(unsupported(engine, "species.permanent_moment", "no dipole atom style is used"));
     }
+    let material = |s: &crate::core::state::Species| (s.youngs_modulus, s.poisson_ratio, s.restitution, s.friction);
+    let mixed = scene.species.iter().any(|s| material(s) != material(&scene.species[0]));
+    if mixed && scene.spec.forces.contact.is_some() && scene.domain.walls().next().is_some() {
+        return Err(unsupported(
+            engine,
+            "walls with species of different materials",
+            "magdem gives each particle a wall of its own material; the decks' walls have one material",
+        ));
+    }
     if engine == Engine::Liggghts && scene.species.iter().any(|s| s.restitution <= 0.05) {
         return Err(unsupported(engine, "species.restitution ≤ 0.05", "LIGGGHTS requires 0.05 < e ≤ 1"));
     }
