@@ -161,41 +161,7 @@ fn decks_carry_the_magnetic_fix_and_refuse_what_the_codes_cannot_express() {
 #[test]
 fn magnetic_forces_in_lock_step_reproduce_magdem() {
     let Some(engines) = engines() else { return };
-    let text = r#"version = 1
-name = "pair-approach"
-[domain]
-lo = [-1.0e-4, -5.0e-5, -5.0e-5]
-hi = [1.0e-4, 5.0e-5, 5.0e-5]
-[fluid]
-density = 1000.0
-viscosity = 1.0e-3
-[field]
-b0 = [0.4, 0.0, 0.0]
-[[species]]
-name = "p"
-diameter = 11.0e-6
-density = 1087.0
-youngs_modulus = 1.0e9
-poisson_ratio = 0.5
-friction = 0.5
-restitution = 0.5
-relative_permeability = 12.3
-[[particles]]
-species = "p"
-positions = [[-3.3e-5, 0.0, 0.0], [3.3e-5, 1.0e-6, 0.0]]
-[forces.contact]
-[forces.dipole]
-induction = "exact"
-[forces.drag]
-law = "stokes"
-shielding = "none"
-rotational = false
-[integration]
-dt = 1.0e-9
-end_time = 2.0e-4
-[output]
-interval = 2.0e-6
-"#;
+    let text = magdem::verify::magnetic::PAIR;
     let scene = Scene::parse(text, "pair").unwrap();
     let dir = workdir("lockstep");
     let native = dir.join("magdem.h5");

@@ -89,24 +89,39 @@ extern "C" fn magnetic_forces(data: *mut c_void, step: i64, nlocal: c_int, ids: 
     }
 }
 
+/// The engine's library (and LIGGGHTS' shim), loaded once per process and kept: unloading and
+/// reloading LIGGGHTS runs its static style registration again, which it reports as collisions.
+fn load(engine: Engine) -> Result<&'static (Library, Option<Library>), String> {
+    static LIGGGHTS: std::sync::OnceLock<Result<(Library, Option<Library>), String>> = std::sync::OnceLock::new();
+    static LAMMPS: std::sync::OnceLock<Result<(Library, Option<Library>), String>> = std::sync::OnceLock::new();
+    let cell = if engine == Engine::Liggghts { &LIGGGHTS } else { &LAMMPS };
+    cell.get_or_init(|| {
+        available(engine)?;
+        // SAFETY: see `available`; the symbols are used with their C signatures from library.h.
+        let library = unsafe { Library::new(library_name(engine)) }.map_err(|e| e.to_string())?;
+        let shim = match engine {
+            Engine::Liggghts => Some(unsafe { Library::new(option_env!("MAGDEM_LIGGGHTS_SHIM").unwrap_or_default()) }.map_err(|e| e.to_string())?),
+            Engine::Lammps => None,
+        };
+        Ok((library, shim))
+    })
+    .as_ref()
+    .map_err(Clone::clone)
+}
+
 /// A loaded engine instance.
 struct Instance {
     engine: Engine,
-    library: Library,
-    shim: Option<Library>,
+    library: &'static Library,
+    shim: Option<&'static Library>,
     handle: *mut c_void,
 }
 
 impl Instance {
     fn open(engine: Engine, log: &Path) -> Result<Self, ReferenceError> {
         let fail = |why: String| ReferenceError::Unsupported { engine: engine.name(), term: "the in-process lock step".into(), why };
-        available(engine).map_err(fail)?;
-        // SAFETY: see `available`; the symbols are used with their C signatures from library.h.
-        let library = unsafe { Library::new(library_name(engine)) }.map_err(|e| fail(e.to_string()))?;
-        let shim = match engine {
-            Engine::Liggghts => Some(unsafe { Library::new(env!("MAGDEM_LIGGGHTS_SHIM")) }.map_err(|e| fail(e.to_string()))?),
-            Engine::Lammps => None,
-        };
+        let (library, shim) = load(engine).map_err(fail)?;
+        let shim = shim.as_ref();
         let args: Vec<CString> = ["magdem", "-screen", "none", "-log", log.to_str().unwrap_or("log.engine")]
             .iter()
             .map(|a| CString::new(*a).expect("no NUL"))
@@ -149,7 +164,7 @@ impl Instance {
         let id = CString::new(FIX_ID).expect("no NUL");
         let fail = |why: String| ReferenceError::Unsupported { engine: self.engine.name(), term: "fix external".into(), why };
         unsafe {
-            match &self.shim {
+            match self.shim {
                 Some(shim) => {
                     let set: libloading::Symbol<unsafe extern "C" fn(*mut c_void, *const c_char, Callback, *mut c_void) -> c_int> =
                         shim.get(b"magdem_liggghts_set_callback").map_err(|e| fail(e.to_string()))?;

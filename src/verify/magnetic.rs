@@ -15,7 +15,8 @@ use plotters::style::RGBColor;
 use std::fmt::Write as _;
 use std::path::Path;
 
-const PAIR: &str = r#"# Two 11 um Fe3O4 spheres 6 diameters apart, slightly off the field axis, exact induction.
+/// Two dipoles closing with exact induction, touching at about 0.1 ms (the lock-step check).
+pub const PAIR: &str = r#"# Two 11 um Fe3O4 spheres 6 diameters apart, slightly off the field axis, exact induction.
 version = 1
 name = "pair-approach"
 [domain]
