@@ -127,14 +127,14 @@ scale). Target: 0.5% on normal quantities, 1% on tangential ones against LIGGGHT
         for q in quantities(case) {
             let mv = (q.get)(&magdem.metrics);
             let mut row = format!("| {} | {} | {} | {} |", case.name, q.name, q.closed.map_or("–".into(), sci), sci(mv));
-            let _ = writeln!(csv, "{},{},{},magdem,{mv:e},{}", case.name, case.group, q.name, q.closed.map_or(String::new(), |c| format!("{c:e}")));
+            let _ = writeln!(csv, "\"{}\",\"{}\",\"{}\",magdem,{mv:e},{}", case.name, case.group, q.name, q.closed.map_or(String::new(), |c| format!("{c:e}")));
             for n in &names {
                 match runs.iter().find(|o| o.engine == *n) {
                     Some(o) => {
                         let rv = (q.get)(&o.metrics);
                         let d = relative(mv, rv, q.scale);
                         row += &format!(" {} | {} |", sci(rv), pct(d));
-                        let _ = writeln!(csv, "{},{},{},{n},{rv:e},", case.name, case.group, q.name);
+                        let _ = writeln!(csv, "\"{}\",\"{}\",\"{}\",{n},{rv:e},", case.name, case.group, q.name);
                         if *n == "liggghts" {
                             if q.normal {
                                 worst_normal = worst_normal.max(d.abs());
