@@ -3,6 +3,7 @@
 //! Layers: [`core`] (physics, never touches files) ← [`scene`] (the only TOML reader, builds a
 //! simulation) ← [`io`] (HDF5 trajectories and checkpoints) ← [`run`] (the driver used by the CLI).
 
+pub mod analysis;
 pub mod core;
 pub mod io;
 pub mod plot;

@@ -1,0 +1,5 @@
+//! Analysis of trajectories (outside the core): aggregates and their statistics.
+
+pub mod aggregates;
+pub mod stats;
+pub mod trajectory;

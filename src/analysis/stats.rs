@@ -1,0 +1,52 @@
+//! Summary statistics: mean, population and sample standard deviation, and the 95% confidence
+//! interval of a mean over independent runs (Student's t, statrs).
+
+use statrs::distribution::{ContinuousCDF, StudentsT};
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Summary {
+    pub n: usize,
+    pub mean: f64,
+    /// √(Σ(x − x̄)²/n): what the paper's Table 3 uses (its 4.5 mg/ml row is reproduced only so).
+    pub population_std: f64,
+    /// √(Σ(x − x̄)²/(n − 1)).
+    pub sample_std: f64,
+}
+
+pub fn summary(values: &[f64]) -> Summary {
+    let n = values.len();
+    let mean = values.iter().sum::<f64>() / n.max(1) as f64;
+    let ss: f64 = values.iter().map(|v| (v - mean).powi(2)).sum();
+    Summary {
+        n,
+        mean,
+        population_std: if n > 0 { (ss / n as f64).sqrt() } else { f64::NAN },
+        sample_std: if n > 1 { (ss / (n - 1) as f64).sqrt() } else { f64::NAN },
+    }
+}
+
+/// Half-width of the 95% confidence interval of the mean of `values` (independent samples).
+pub fn ci95_half_width(values: &[f64]) -> f64 {
+    let s = summary(values);
+    if s.n < 2 {
+        return f64::NAN;
+    }
+    let t = StudentsT::new(0.0, 1.0, (s.n - 1) as f64).expect("valid degrees of freedom").inverse_cdf(0.975);
+    t * s.sample_std / (s.n as f64).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn textbook_values() {
+        let s = summary(&[2.0, 4.0, 4.0, 4.0, 5.0, 5.0, 7.0, 9.0]);
+        assert_eq!(s.mean, 5.0);
+        assert_eq!(s.population_std, 2.0);
+        assert!((s.sample_std - (32.0_f64 / 7.0).sqrt()).abs() < 1e-15);
+        // t(0.975, 7) = 2.364624...
+        let h = ci95_half_width(&[2.0, 4.0, 4.0, 4.0, 5.0, 5.0, 7.0, 9.0]);
+        assert!((h - 2.364624251592785 * s.sample_std / 8.0_f64.sqrt()).abs() < 1e-9);
+    }
+}
