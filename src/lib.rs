@@ -5,6 +5,7 @@
 
 pub mod analysis;
 pub mod core;
+pub mod experiment;
 pub mod io;
 pub mod plot;
 pub mod reference;

@@ -108,6 +108,18 @@ enum Command {
         #[arg(long, default_value_t = 1e-3)]
         gap: f64,
     },
+    /// Run every point of an experiment file (sweeps over scene parameters), in parallel.
+    Experiment {
+        file: PathBuf,
+        /// Runs at once (default: the number of cores).
+        #[arg(short, long)]
+        jobs: Option<usize>,
+        /// Replace finished runs whose scene changed (otherwise they are kept and reported).
+        #[arg(long)]
+        overwrite_changed: bool,
+        #[arg(short, long)]
+        quiet: bool,
+    },
     /// Describe a trajectory file.
     Info {
         file: PathBuf,
@@ -307,6 +319,35 @@ fn main() -> ExitCode {
             };
             match reference::files_route::magnetic_forces(&scene, &positions, &prefix) {
                 Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(1)
+                }
+            }
+        }
+        Command::Experiment { file, jobs, overwrite_changed, quiet } => {
+            let experiment = match magdem::scene::experiment::Experiment::from_file(&file) {
+                Ok(e) => e,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return ExitCode::from(2);
+                }
+            };
+            let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed));
+            let options = magdem::experiment::ExperimentOptions { jobs, overwrite_changed, progress: !quiet };
+            match magdem::experiment::run_experiment(&experiment, &options) {
+                Ok(results) => {
+                    use magdem::experiment::Outcome;
+                    let mut failed = false;
+                    for r in &results {
+                        if matches!(r.outcome, Outcome::Failed(_) | Outcome::KeptChanged { .. } | Outcome::Interrupted) {
+                            failed = true;
+                            eprintln!("{}: {}", r.id, r.outcome.label());
+                        }
+                    }
+                    println!("{} runs in {} (manifest.csv)", results.len(), experiment.output.display());
+                    if failed { ExitCode::from(1) } else { ExitCode::SUCCESS }
+                }
                 Err(e) => {
                     eprintln!("error: {e}");
                     ExitCode::from(1)

@@ -1,6 +1,7 @@
 //! The scene layer: the only code that reads TOML. It parses a scene, checks every value (errors
 //! name the key, the value and why), places particles and builds a [`Simulation`].
 
+pub mod experiment;
 pub mod placement;
 pub mod spec;
 

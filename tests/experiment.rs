@@ -1,0 +1,119 @@
+//! Experiments: sweeps expand to the Cartesian product, every point runs once, finished runs are
+//! skipped, interrupted ones resumed, and a finished run whose scene changed is never silently
+//! overwritten.
+
+use magdem::experiment::{run_experiment, ExperimentOptions, Outcome};
+use magdem::scene::experiment::Experiment;
+use std::path::PathBuf;
+use std::process::Command;
+
+const BASE: &str = r#"version = 1
+name = "tiny"
+seed = 1
+[domain]
+lo = [0.0, 0.0, 0.0]
+hi = [1.0e-4, 1.0e-4, 1.0e-4]
+[fluid]
+density = 1000.0
+viscosity = 1.0e-3
+[field]
+b0 = [0.4, 0.0, 0.0]
+[[species]]
+name = "p"
+diameter = 11.0e-6
+density = 1087.0
+youngs_modulus = 1.0e9
+poisson_ratio = 0.5
+friction = 0.5
+restitution = 0.5
+relative_permeability = 12.3
+[[particles]]
+species = "p"
+count = 20
+[forces.contact]
+[forces.dipole]
+induction = "paper"
+cutoff_diameters = 4.0
+[forces.drag]
+[integration]
+dt = 1.0e-8
+end_time = 2.0e-5
+[output]
+interval = 2.0e-6
+"#;
+
+fn setup(name: &str, sweep: &str) -> (PathBuf, PathBuf) {
+    let dir = std::env::temp_dir().join(format!("magdem-exp-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("base.toml"), BASE).unwrap();
+    let out = dir.join("runs");
+    let file = dir.join("experiment.toml");
+    std::fs::write(&file, format!("name = \"{name}\"\nbases = [\"base.toml\"]\noutput = \"{}\"\n[sweep]\n{sweep}", out.display())).unwrap();
+    (file, out)
+}
+
+#[test]
+fn sweeps_run_once_skip_when_done_and_never_overwrite_changed_runs_silently() {
+    let (file, out) = setup("sweep", "seed = [1, 2]\n\"integration.dt\" = [1.0e-8, 2.0e-8]\n\"particles.0.count\" = [12]\n");
+    let exp = Experiment::from_file(&file).unwrap();
+    assert_eq!(exp.points.len(), 4);
+    let ids: Vec<&str> = exp.points.iter().map(|p| p.id.as_str()).collect();
+    assert!(ids.contains(&"base__dt-2e-8__count-12__seed-2"), "{ids:?}");
+    assert_eq!(exp.points[0].scene.initial.len(), 12);
+    let options = ExperimentOptions { jobs: Some(2), ..Default::default() };
+    let first = run_experiment(&exp, &options).unwrap();
+    assert!(first.iter().all(|r| r.outcome == Outcome::Completed), "{:?}", first.iter().map(|r| r.outcome.label()).collect::<Vec<_>>());
+    let manifest = std::fs::read_to_string(out.join("manifest.csv")).unwrap();
+    assert_eq!(manifest.lines().count(), 5, "{manifest}");
+    // The two seeds place particles differently.
+    let t1 = magdem::io::trajectory::Trajectory::open(&first[0].file).unwrap().frame_vectors("position", 0).unwrap();
+    let t2 = magdem::io::trajectory::Trajectory::open(&first[1].file).unwrap().frame_vectors("position", 0).unwrap();
+    assert_ne!(t1, t2);
+
+    let again = run_experiment(&exp, &options).unwrap();
+    assert!(again.iter().all(|r| r.outcome == Outcome::Skipped));
+
+    // The base scene changes: finished runs are kept and reported, unless overwriting is asked for.
+    std::fs::write(file.parent().unwrap().join("base.toml"), BASE.replace("restitution = 0.5", "restitution = 0.6")).unwrap();
+    let changed = Experiment::from_file(&file).unwrap();
+    let kept = run_experiment(&changed, &options).unwrap();
+    assert!(kept.iter().all(|r| matches!(r.outcome, Outcome::KeptChanged { .. })));
+    let replaced = run_experiment(&changed, &ExperimentOptions { overwrite_changed: true, ..options }).unwrap();
+    assert!(replaced.iter().all(|r| r.outcome == Outcome::Completed));
+}
+
+#[test]
+fn an_interrupted_point_is_resumed() {
+    let (file, out) = setup("resume", "seed = [3]\n");
+    let exp = Experiment::from_file(&file).unwrap();
+    let point = &exp.points[0];
+    // Produce the point's file as a killed run would leave it.
+    std::fs::create_dir_all(&out).unwrap();
+    let scene_file = out.join("point.toml");
+    std::fs::write(&scene_file, &point.scene.text).unwrap();
+    let target = out.join(format!("{}.h5", point.id));
+    let status = Command::new(env!("CARGO_BIN_EXE_magdem"))
+        .args(["run", scene_file.to_str().unwrap(), "-q", "-o", target.to_str().unwrap(), "--abort-after-frame", "3"])
+        .status()
+        .unwrap();
+    assert!(!status.success());
+    let results = run_experiment(&exp, &ExperimentOptions::default()).unwrap();
+    assert_eq!(results[0].outcome, Outcome::Resumed);
+    let t = magdem::io::trajectory::Trajectory::open(&target).unwrap();
+    assert_eq!(t.attr_string("status").unwrap(), "completed");
+    assert_eq!(t.frames().unwrap(), 11);
+}
+
+#[test]
+fn bad_sweeps_name_the_key() {
+    for (sweep, fragment) in [
+        ("\"particles.3.count\" = [5]\n", "sweep.particles.3.count"),
+        ("seed = 4\n", "must be a non-empty list"),
+        ("engine = [\"gromacs\"]\n", "sweep.engine"),
+        ("\"integration.dt\" = [-1.0]\n", "integration.dt"),
+    ] {
+        let (file, _) = setup("bad", sweep);
+        let err = Experiment::from_file(&file).err().expect(sweep).to_string();
+        assert!(err.contains(fragment), "{sweep}: {err}");
+    }
+}
