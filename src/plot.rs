@@ -17,6 +17,15 @@ fn register_font() -> Result<(), String> {
     .clone()
 }
 
+/// The same colour for an engine in every figure: magdem red, LIGGGHTS blue, LAMMPS green.
+pub fn engine_colour(engine: &str) -> RGBColor {
+    match engine {
+        "liggghts" => RGBColor(20, 90, 200),
+        "lammps" => RGBColor(30, 150, 60),
+        _ => RGBColor(200, 30, 30),
+    }
+}
+
 /// One data series: a line, or circles of radius `markers` (px) when set. An empty label keeps
 /// the series out of the legend.
 pub struct Series {

@@ -1,23 +1,11 @@
 //! Writes `contact-verification.md` and its figures from the outcomes of `verify contacts`.
 
 use super::contacts::{relative, Case, Geometry, Outcome, Report, DT, FRAME_STEPS};
-use crate::plot::{line_chart, Series};
+use crate::plot::{engine_colour, line_chart, Series};
 use crate::reference::Engine;
-use plotters::style::RGBColor;
 use std::fmt::Write as _;
 use std::path::Path;
 
-const MAGDEM: RGBColor = RGBColor(200, 30, 30);
-const LIGGGHTS: RGBColor = RGBColor(20, 90, 200);
-const LAMMPS: RGBColor = RGBColor(30, 150, 60);
-
-fn colour(engine: &str) -> RGBColor {
-    match engine {
-        "liggghts" => LIGGGHTS,
-        "lammps" => LAMMPS,
-        _ => MAGDEM,
-    }
-}
 
 /// magdem draws lines; LIGGGHTS large circles, LAMMPS small ones, so coinciding points stay visible.
 fn marker_size(engine: &str) -> Option<u32> {
@@ -167,7 +155,7 @@ scale). Target: 0.5% on normal quantities, 1% on tangential ones against LIGGGHT
         let points = if markers.is_some() { points.iter().step_by(12).copied().collect() } else { points };
         let label = if labelled.contains(&o.engine) { String::new() } else { o.engine.to_string() };
         labelled.push(o.engine);
-        series.push(Series { label, points, color: colour(o.engine), markers });
+        series.push(Series { label, points, color: engine_colour(o.engine), markers });
     }
     let fig1 = dir.join("contact-force-overlap.png");
     line_chart(&fig1, "Normal force against overlap, sphere–sphere, e = 0.3, 0.5, 0.7, 0.9", "overlap δ (nm)", "normal force (µN)", &series)?;
@@ -180,7 +168,7 @@ scale). Target: 0.5% on normal quantities, 1% on tangential ones against LIGGGHT
             .filter(|o| o.engine == engine && o.case.group.starts_with('4'))
             .map(|o| (o.case.incident_angle(), o.metrics.rebound_angle))
             .collect();
-        series.push(Series { label: engine.to_string(), points, color: colour(engine), markers: marker_size(engine) });
+        series.push(Series { label: engine.to_string(), points, color: engine_colour(engine), markers: marker_size(engine) });
     }
     let fig2 = dir.join("contact-oblique.png");
     line_chart(&fig2, "Oblique sphere–wall impact, 0.1 m/s, e = 0.5, μ = 0.5", "incident angle (°)", "rebound angle (°)", &series)?;

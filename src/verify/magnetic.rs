@@ -7,11 +7,10 @@
 //! rotational drag in all three engines; everything else is the shipped scene.
 
 use crate::io::trajectory::Trajectory;
-use crate::plot::{line_chart, Series};
+use crate::plot::{engine_colour, line_chart, Series};
 use crate::reference::{self, Engine};
 use crate::run::{run, RunOptions};
 use crate::scene::Scene;
-use plotters::style::RGBColor;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -135,9 +134,6 @@ pub fn files_route_lag(engine: Engine, text: &str, work: &Path, magdem: &Path, k
     Ok(rows)
 }
 
-fn colour(engine: &str) -> RGBColor {
-    if engine == "liggghts" { RGBColor(20, 90, 200) } else { RGBColor(30, 150, 60) }
-}
 
 /// Runs both scenes and writes `dir/magnetic-verification.md` with one figure per scene.
 pub fn verify(dir: &Path, work: &Path, engines: &[Engine], case1_end: f64, magdem: &Path) -> Result<String, Box<dyn std::error::Error>> {
@@ -182,8 +178,8 @@ pub fn verify(dir: &Path, work: &Path, engines: &[Engine], case1_end: f64, magde
             .iter()
             .flat_map(|d| {
                 [
-                    Series { label: format!("{} max", d.engine), points: d.times.iter().zip(&d.max).map(|(t, v)| (t * 1e3, floor(*v))).collect(), color: colour(d.engine), markers: None },
-                    Series { label: format!("{} median", d.engine), points: d.times.iter().zip(&d.median).map(|(t, v)| (t * 1e3, floor(*v))).collect(), color: colour(d.engine), markers: Some(3) },
+                    Series { label: format!("{} max", d.engine), points: d.times.iter().zip(&d.max).map(|(t, v)| (t * 1e3, floor(*v))).collect(), color: engine_colour(d.engine), markers: None },
+                    Series { label: format!("{} median", d.engine), points: d.times.iter().zip(&d.median).map(|(t, v)| (t * 1e3, floor(*v))).collect(), color: engine_colour(d.engine), markers: Some(3) },
                 ]
             })
             .collect();
@@ -219,7 +215,7 @@ pub fn verify(dir: &Path, work: &Path, engines: &[Engine], case1_end: f64, magde
         let series = vec![Series {
             label: format!("{} files route", engine.name()),
             points: rows.iter().map(|r| ((r.0 as f64).log10(), r.1.log10())).collect(),
-            color: colour(engine.name()),
+            color: engine_colour(engine.name()),
             markers: Some(5),
         }];
         line_chart(&dir.join("magnetic-files-route.png"), "Files route: lag error against exchange interval", "log10 K (steps)", "log10 max |x_files − x_callback| (m)", &series)?;
