@@ -77,6 +77,16 @@ impl Magnetisation {
         }
     }
 
+    /// The pairs the last update summed over and their range (`None` = all pairs); `None` for
+    /// induction `none`, which needs no pairs.
+    pub fn pairs(&self) -> Option<(Option<f64>, &[Pair])> {
+        match self.induction {
+            Induction::None => None,
+            Induction::Paper { radius } => Some((Some(radius), &self.pairs)),
+            Induction::Exact { .. } => Some((None, &self.pairs)),
+        }
+    }
+
     /// Applied field H_ext(x) = (B0 + G x)/μ0.
     pub fn external_field(&self, x: &Vec3) -> Vec3 {
         (self.b0 + self.gradient * x) / MU0

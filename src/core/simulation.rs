@@ -64,7 +64,12 @@ impl ForceField {
                 self.induction_error.get_or_insert(e);
             }
         }
-        let ctx = ForceContext { domain: &self.domain, near_pairs: &self.near_pairs, dt };
+        let ctx = ForceContext {
+            domain: &self.domain,
+            near_pairs: &self.near_pairs,
+            dt,
+            magnetic_pairs: self.magnetisation.as_ref().and_then(|m| m.pairs()),
+        };
         for term in self.terms.iter_mut() {
             let t0 = Instant::now();
             term.apply(&ctx, state);

@@ -43,9 +43,16 @@ impl ForceTerm for DipoleForce {
     }
     fn apply(&mut self, ctx: &ForceContext, state: &mut State) {
         let p = &mut state.particles;
-        self.cells.pairs_within(&p.position, ctx.domain, self.cutoff, &mut self.pairs);
+        // The moments phase already found the pairs when its range is this cut-off.
+        let pairs: &[Pair] = match ctx.magnetic_pairs {
+            Some((range, pairs)) if range == self.cutoff => pairs,
+            _ => {
+                self.cells.pairs_within(&p.position, ctx.domain, self.cutoff, &mut self.pairs);
+                &self.pairs
+            }
+        };
         let torques = p.permanent_moment.iter().any(|m| *m != Vec3::zeros());
-        for pair in &self.pairs {
+        for pair in pairs {
             let (i, j) = (pair.i as usize, pair.j as usize);
             let f = dipole_pair_force(&p.moment[i], &p.moment[j], &pair.r, pair.dist);
             p.force[i] += f;
@@ -53,7 +60,7 @@ impl ForceTerm for DipoleForce {
         }
         if torques {
             let mut b_loc: Vec<Vec3> = p.position.iter().map(|x| self.b0 + self.gradient * x).collect();
-            for pair in &self.pairs {
+            for pair in pairs {
                 let (i, j) = (pair.i as usize, pair.j as usize);
                 b_loc[i] += MU0 * dipole_field(&p.moment[j], &pair.r, pair.dist);
                 b_loc[j] += MU0 * dipole_field(&p.moment[i], &(-pair.r), pair.dist);

@@ -19,6 +19,9 @@ pub struct ForceContext<'a> {
     pub near_pairs: &'a [Pair],
     /// Time step, for history-dependent terms (tangential spring).
     pub dt: f64,
+    /// Pairs the moments phase found this evaluation, with their range (`None` = all pairs),
+    /// for terms that sum over the same pairs.
+    pub magnetic_pairs: Option<(Option<f64>, &'a [Pair])>,
 }
 
 /// One physical contribution to the force and torque on every particle.
