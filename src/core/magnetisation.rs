@@ -14,7 +14,7 @@
 //!   sweeps warm-started from the previous moments until max|Δm| ≤ tolerance · max|m|.
 
 use super::domain::Domain;
-use super::neighbours::{CellList, Pair};
+use super::neighbours::{CellList, Pair, VerletList};
 use super::state::{Particles, Species, Vec3};
 use nalgebra::Matrix3;
 use std::f64::consts::PI;
@@ -56,6 +56,7 @@ pub struct Magnetisation {
     susceptibility: Vec<f64>,
     saturation: Vec<Option<f64>>,
     cells: CellList,
+    verlet: VerletList,
     pairs: Vec<Pair>,
     field: Vec<Vec3>,
     /// Sweeps used by the last `Exact` update (diagnostic).
@@ -71,6 +72,7 @@ impl Magnetisation {
             susceptibility: species.iter().map(|s| s.susceptibility).collect(),
             saturation: species.iter().map(|s| s.saturation_magnetisation).collect(),
             cells: CellList::default(),
+            verlet: VerletList::default(),
             pairs: vec![],
             field: vec![],
             last_iterations: 0,
@@ -130,7 +132,8 @@ impl Magnetisation {
                 }
             }
             Induction::Paper { radius } => {
-                self.cells.pairs_within(&p.position, domain, Some(radius), &mut self.pairs);
+                // Skin radius/15: one diameter at the paper's 15-diameter neighbourhood.
+                self.verlet.pairs_within(&p.position, domain, radius, radius / 15.0, &mut self.pairs);
                 self.sweep_fields(p);
                 for i in 0..p.len() {
                     p.moment[i] = self.moment_in(p, i, &self.field[i]);

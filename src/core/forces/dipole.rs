@@ -8,7 +8,7 @@
 
 use super::{ForceContext, ForceTerm};
 use crate::core::magnetisation::{dipole_field, MU0};
-use crate::core::neighbours::{CellList, Pair};
+use crate::core::neighbours::{CellList, Pair, VerletList};
 use crate::core::state::{State, Vec3};
 use nalgebra::Matrix3;
 use std::f64::consts::PI;
@@ -28,12 +28,13 @@ pub struct DipoleForce {
     pub b0: Vec3,
     pub gradient: Matrix3<f64>,
     cells: CellList,
+    verlet: VerletList,
     pairs: Vec<Pair>,
 }
 
 impl DipoleForce {
     pub fn new(cutoff: Option<f64>, b0: Vec3, gradient: Matrix3<f64>) -> Self {
-        Self { cutoff, b0, gradient, cells: CellList::default(), pairs: vec![] }
+        Self { cutoff, b0, gradient, cells: CellList::default(), verlet: VerletList::default(), pairs: vec![] }
     }
 }
 
@@ -47,7 +48,10 @@ impl ForceTerm for DipoleForce {
         let pairs: &[Pair] = match ctx.magnetic_pairs {
             Some((range, pairs)) if range == self.cutoff => pairs,
             _ => {
-                self.cells.pairs_within(&p.position, ctx.domain, self.cutoff, &mut self.pairs);
+                match self.cutoff {
+                    Some(c) => self.verlet.pairs_within(&p.position, ctx.domain, c, c / 15.0, &mut self.pairs),
+                    None => self.cells.pairs_within(&p.position, ctx.domain, None, &mut self.pairs),
+                }
                 &self.pairs
             }
         };
