@@ -107,6 +107,11 @@ enum Command {
         /// Largest gap, as a fraction of the smaller radius, at which two particles count as touching.
         #[arg(long, default_value_t = 1e-3)]
         gap: f64,
+        /// One CSV line (with `--header`, the column names first) instead of the report.
+        #[arg(long)]
+        csv: bool,
+        #[arg(long, requires = "csv")]
+        header: bool,
     },
     /// Run every point of an experiment file (sweeps over scene parameters), in parallel.
     Experiment {
@@ -354,7 +359,7 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Command::Analyse { file, frame, gap } => match analyse(&file, frame, gap) {
+        Command::Analyse { file, frame, gap, csv, header } => match analyse(&file, frame, gap, csv, header) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
                 eprintln!("error: {}: {e}", file.display());
@@ -371,12 +376,33 @@ fn main() -> ExitCode {
     }
 }
 
-fn analyse(path: &Path, frame: isize, gap: f64) -> Result<(), Box<dyn std::error::Error>> {
+fn analyse(path: &Path, frame: isize, gap: f64, csv: bool, header: bool) -> Result<(), Box<dyn std::error::Error>> {
     use magdem::analysis::{stats::summary, trajectory::frame_aggregates};
     let t = Trajectory::open(path)?;
     let (time, aggs) = frame_aggregates(&t, frame, gap)?;
     let lengths: Vec<f64> = aggs.iter().map(|a| a.length * 1e6).collect();
     let s = summary(&lengths);
+    if csv {
+        let sizes = summary(&aggs.iter().map(|a| a.size() as f64).collect::<Vec<_>>());
+        let vx = summary(&aggs.iter().map(|a| a.com_velocity.x * 1e6).collect::<Vec<_>>());
+        if header {
+            println!("file,time_s,aggregates,particles,mean_length_um,pop_std_length_um,sample_std_length_um,mean_size,pop_std_size,mean_vx_um_s,pop_std_vx_um_s");
+        }
+        println!(
+            "{},{time:e},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3}",
+            path.display(),
+            aggs.len(),
+            aggs.iter().map(|a| a.size()).sum::<usize>(),
+            s.mean,
+            s.population_std,
+            s.sample_std,
+            sizes.mean,
+            sizes.population_std,
+            vx.mean,
+            vx.population_std
+        );
+        return Ok(());
+    }
     println!("t = {time:e} s: {} aggregates of {} particles (gap tolerance {gap:e} of the smaller radius)", aggs.len(), aggs.iter().map(|a| a.size()).sum::<usize>());
     println!("length (µm): mean {:.2}, population std {:.2}, sample std {:.2}", s.mean, s.population_std, s.sample_std);
     let chains: Vec<f64> = aggs.iter().filter(|a| a.size() > 1).map(|a| a.orientation_deg).collect();
