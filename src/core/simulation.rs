@@ -6,7 +6,7 @@ use super::domain::Domain;
 use super::forces::{ForceContext, ForceTerm};
 use super::integrators::Integrator;
 use super::magnetisation::{InductionError, Magnetisation};
-use super::neighbours::{CellList, Pair};
+use super::neighbours::{Pair, VerletList};
 use super::stability::{Instability, Monitor, StepEstimate};
 use super::state::{State, Vec3};
 use super::timers::PhaseTimers;
@@ -19,7 +19,7 @@ pub struct ForceField {
     pub terms: Vec<Box<dyn ForceTerm>>,
     /// Range of the near-pair search (contact and shielding), if a term needs it.
     near_range: Option<f64>,
-    cells: CellList,
+    near: VerletList,
     near_pairs: Vec<Pair>,
     pub timers: PhaseTimers,
     /// Time spent in evaluations, to separate integration time from force time.
@@ -37,7 +37,7 @@ impl ForceField {
             magnetisation,
             terms,
             near_range: needs.then_some(near_range),
-            cells: CellList::default(),
+            near: VerletList::default(),
             near_pairs: vec![],
             timers: PhaseTimers::default(),
             evaluation_time: Duration::ZERO,
@@ -53,8 +53,9 @@ impl ForceField {
             self.domain.wrap(x);
         }
         if let Some(range) = self.near_range {
-            let (cells, pairs) = (&mut self.cells, &mut self.near_pairs);
-            self.timers.time("neighbours", || cells.pairs_within(&p.position, &self.domain, Some(range), pairs));
+            // Skin 0.2 of the contact range (0.2 diameters), as in the reference decks.
+            let (near, pairs) = (&mut self.near, &mut self.near_pairs);
+            self.timers.time("neighbours", || near.pairs_within(&p.position, &self.domain, range, 0.2 * range, pairs));
         }
         p.force.iter_mut().for_each(|f| *f = Vec3::zeros());
         p.torque.iter_mut().for_each(|t| *t = Vec3::zeros());

@@ -167,34 +167,36 @@ impl Default for Monitor {
 impl Monitor {
     pub fn check(&self, state: &State, domain: &super::domain::Domain, dt: f64) -> Result<(), Instability> {
         let p: &Particles = &state.particles;
-        for i in 0..p.len() {
-            for (q, v) in [("position", &p.position[i]), ("velocity", &p.velocity[i]), ("force", &p.force[i])] {
-                if !v.iter().all(|c| c.is_finite()) {
-                    return Err(Instability::NotFinite { quantity: q, particle: i });
-                }
-            }
-        }
         let d = state.diagnostics;
         if d.max_overlap_ratio > self.max_overlap {
             let j = d.max_overlap_pair.1.map_or("the wall".to_string(), |j| j.to_string());
             return Err(Instability::Overlap { i: d.max_overlap_pair.0, j, ratio: d.max_overlap_ratio, limit: self.max_overlap });
         }
+        let walls: Vec<(usize, bool)> = domain.walls().map(|(_, k, upper)| (k, upper)).collect();
         for i in 0..p.len() {
-            let speed = p.velocity[i].norm();
-            let fraction = speed * dt / p.radius[i];
-            if fraction > self.max_step_fraction {
+            // One sum is finite exactly when all its terms are (short of overflow, itself a blow-up).
+            let sum = p.position[i].sum() + p.velocity[i].sum() + p.force[i].sum();
+            if !sum.is_finite() {
+                for (q, v) in [("position", &p.position[i]), ("velocity", &p.velocity[i]), ("force", &p.force[i])] {
+                    if !v.iter().all(|c| c.is_finite()) {
+                        return Err(Instability::NotFinite { quantity: q, particle: i });
+                    }
+                }
+            }
+            let speed2 = p.velocity[i].norm_squared();
+            let limit = self.max_step_fraction * p.radius[i] / dt;
+            if speed2 > limit * limit {
+                let speed = speed2.sqrt();
                 return Err(Instability::Runaway {
                     particle: i,
                     speed,
-                    fraction,
+                    fraction: speed * dt / p.radius[i],
                     limit: self.max_step_fraction,
                     kinetic_energy: p.kinetic_energy(),
                 });
             }
-        }
-        for i in 0..p.len() {
             let x: Vec3 = p.position[i];
-            for (_, k, upper) in domain.walls() {
+            for &(k, upper) in &walls {
                 let outside = if upper { x[k] - domain.hi[k] } else { domain.lo[k] - x[k] };
                 if outside > p.radius[i] {
                     let face = format!("{}-{}", ["x", "y", "z"][k], if upper { "hi" } else { "lo" });
