@@ -86,7 +86,7 @@ pub fn run(scene: &Scene, output: &Path, options: &RunOptions) -> Result<RunSumm
                 std::process::abort();
             }
         }
-        if step % 256 == 0 {
+        if step / 256 != (step - sim.integrator.steps_per_call()) / 256 {
             bar.set_position(step);
             bar.set_message(format!("{:.4e} / {:.4e} s", sim.state.time, end_time));
         }

@@ -82,7 +82,18 @@ fn assert_identical(a: &Path, b: &Path) {
 
 #[test]
 fn resume_after_kill_is_bitwise_equal_to_an_uninterrupted_run() {
-    let dir = workdir("resume");
+    resume_after_kill("resume", SCENE);
+}
+
+/// Multiple time stepping carries the slow forces between steps: they are in the checkpoint.
+#[test]
+fn resume_after_kill_is_bitwise_equal_with_multiple_time_stepping() {
+    resume_after_kill("resume-respa", &SCENE.replace("dt = 1.0e-8", "scheme = \"respa\"\ndt = 1.0e-8\nslow_every = 10"));
+}
+
+fn resume_after_kill(name: &str, text: &str) {
+    let dir = workdir(name);
+    std::fs::write(dir.join("scene.toml"), text).unwrap();
     let scene = dir.join("scene.toml");
     let (full, killed) = (dir.join("full.h5"), dir.join("killed.h5"));
     let out = magdem(&["run", path(&scene), "-q", "-o", path(&full)]);
@@ -105,7 +116,7 @@ fn resume_after_kill_is_bitwise_equal_to_an_uninterrupted_run() {
     let out = magdem(&["run", path(&scene), "-q", "-o", path(&killed), "--resume"]);
     assert!(String::from_utf8_lossy(&out.stdout).contains("already complete"));
     let other = dir.join("other.toml");
-    std::fs::write(&other, SCENE.replace("seed = 7", "seed = 8")).unwrap();
+    std::fs::write(&other, text.replace("seed = 7", "seed = 8")).unwrap();
     let out = magdem(&["run", path(&other), "-q", "-o", path(&killed), "--resume"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("different scene"));

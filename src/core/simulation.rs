@@ -12,6 +12,17 @@ use super::state::{State, Vec3};
 use super::timers::PhaseTimers;
 use std::time::{Duration, Instant};
 
+/// Which forces an evaluation computes (multiple time stepping splits them).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ForceGroup {
+    /// Everything, into `force`/`torque`.
+    All,
+    /// Every term that is not slow, into `force`/`torque`.
+    Fast,
+    /// Moments and the slow (magnetic) terms, into `slow_force`/`slow_torque`.
+    Slow,
+}
+
 /// Everything that turns a state into forces and torques.
 pub struct ForceField {
     pub domain: Domain,
@@ -47,19 +58,29 @@ impl ForceField {
 
     /// Computes `force`, `torque` and `moment` for the current state.
     pub fn evaluate(&mut self, state: &mut State, dt: f64) {
+        self.evaluate_group(state, dt, ForceGroup::All);
+    }
+
+    /// Computes one group of forces (see [`ForceGroup`]).
+    pub fn evaluate_group(&mut self, state: &mut State, dt: f64, group: ForceGroup) {
         let start = Instant::now();
         let p = &mut state.particles;
         for x in p.position.iter_mut() {
             self.domain.wrap(x);
         }
-        if let Some(range) = self.near_range {
+        if group == ForceGroup::Slow {
+            // Slow terms add into force/torque: point those at the slow arrays for this pass.
+            std::mem::swap(&mut p.force, &mut p.slow_force);
+            std::mem::swap(&mut p.torque, &mut p.slow_torque);
+        }
+        if let Some(range) = self.near_range.filter(|_| group != ForceGroup::Slow) {
             // Skin 0.2 of the contact range (0.2 diameters), as in the reference decks.
             let (near, pairs) = (&mut self.near, &mut self.near_pairs);
             self.timers.time("neighbours", || near.pairs_within(&p.position, &self.domain, range, 0.2 * range, pairs));
         }
         p.force.iter_mut().for_each(|f| *f = Vec3::zeros());
         p.torque.iter_mut().for_each(|t| *t = Vec3::zeros());
-        if let Some(mag) = self.magnetisation.as_mut() {
+        if let Some(mag) = self.magnetisation.as_mut().filter(|_| group != ForceGroup::Fast) {
             let result = self.timers.time("moments", || mag.update(p, &self.domain));
             if let Err(e) = result {
                 self.induction_error.get_or_insert(e);
@@ -72,9 +93,21 @@ impl ForceField {
             magnetic_pairs: self.magnetisation.as_ref().and_then(|m| m.pairs()),
         };
         for term in self.terms.iter_mut() {
-            let t0 = Instant::now();
-            term.apply(&ctx, state);
-            self.timers.add(term.name(), t0.elapsed());
+            let wanted = match group {
+                ForceGroup::All => true,
+                ForceGroup::Fast => !term.is_slow(),
+                ForceGroup::Slow => term.is_slow(),
+            };
+            if wanted {
+                let t0 = Instant::now();
+                term.apply(&ctx, state);
+                self.timers.add(term.name(), t0.elapsed());
+            }
+        }
+        if group == ForceGroup::Slow {
+            let p = &mut state.particles;
+            std::mem::swap(&mut p.force, &mut p.slow_force);
+            std::mem::swap(&mut p.torque, &mut p.slow_torque);
         }
         self.evaluation_time += start.elapsed();
     }
@@ -107,7 +140,12 @@ pub struct Simulation {
 impl Simulation {
     /// Evaluates the forces of a fresh state (not needed after a checkpoint restore).
     pub fn initialise(&mut self) -> Result<(), RunError> {
-        self.field.evaluate(&mut self.state, self.dt);
+        if self.integrator.splits_forces() {
+            self.field.evaluate_group(&mut self.state, self.dt, ForceGroup::Fast);
+            self.field.evaluate_group(&mut self.state, self.dt, ForceGroup::Slow);
+        } else {
+            self.field.evaluate(&mut self.state, self.dt);
+        }
         self.check()
     }
 
@@ -116,7 +154,7 @@ impl Simulation {
         let start = Instant::now();
         let eval_before = self.field.evaluation_time;
         let (field, dt) = (&mut self.field, self.dt);
-        self.integrator.step(&mut self.state, dt, &mut |s| field.evaluate(s, dt));
+        self.integrator.step(&mut self.state, dt, &mut |s, group| field.evaluate_group(s, dt, group));
         let integrate = start.elapsed().saturating_sub(self.field.evaluation_time - eval_before);
         self.field.timers.add("integrate", integrate);
         let t0 = Instant::now();

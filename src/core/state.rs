@@ -58,9 +58,12 @@ pub struct Particles {
     pub position: Vec<Vec3>,
     pub velocity: Vec<Vec3>,
     pub angular_velocity: Vec<Vec3>,
-    /// Force and torque at the current state (the integrators keep this invariant).
+    /// Force and torque at the current state (the integrators keep this invariant). With
+    /// multiple time stepping these hold the fast part and `slow_*` the slow (magnetic) part.
     pub force: Vec<Vec3>,
     pub torque: Vec<Vec3>,
+    pub slow_force: Vec<Vec3>,
+    pub slow_torque: Vec<Vec3>,
     /// Total magnetic moment m_i (A·m²): induced plus permanent.
     pub moment: Vec<Vec3>,
     /// Permanent moment, rotated with the particle (zero for purely induced particles).
@@ -86,6 +89,8 @@ impl Particles {
         self.angular_velocity.push(Vec3::zeros());
         self.force.push(Vec3::zeros());
         self.torque.push(Vec3::zeros());
+        self.slow_force.push(Vec3::zeros());
+        self.slow_torque.push(Vec3::zeros());
         self.moment.push(Vec3::zeros());
         self.permanent_moment.push(species.permanent_moment.unwrap_or_else(Vec3::zeros));
     }

@@ -104,8 +104,17 @@ const FRAME_VECTORS: [(&str, &str); 4] = [
 ];
 const FORCE_VECTORS: [(&str, &str); 2] = [("force", "N"), ("torque", "N m")];
 /// Checkpoint per-particle vectors.
-const STATE_VECTORS: [&str; 7] =
-    ["position", "velocity", "angular_velocity", "force", "torque", "moment", "permanent_moment"];
+const STATE_VECTORS: [&str; 9] = [
+    "position",
+    "velocity",
+    "angular_velocity",
+    "force",
+    "torque",
+    "slow_force",
+    "slow_torque",
+    "moment",
+    "permanent_moment",
+];
 
 fn state_vector<'a>(p: &'a Particles, name: &str) -> &'a [Vec3] {
     match name {
@@ -114,6 +123,8 @@ fn state_vector<'a>(p: &'a Particles, name: &str) -> &'a [Vec3] {
         "angular_velocity" => &p.angular_velocity,
         "force" => &p.force,
         "torque" => &p.torque,
+        "slow_force" => &p.slow_force,
+        "slow_torque" => &p.slow_torque,
         "moment" => &p.moment,
         "permanent_moment" => &p.permanent_moment,
         _ => unreachable!("unknown state vector {name}"),
@@ -127,6 +138,8 @@ fn state_vector_mut<'a>(p: &'a mut Particles, name: &str) -> &'a mut Vec<Vec3> {
         "angular_velocity" => &mut p.angular_velocity,
         "force" => &mut p.force,
         "torque" => &mut p.torque,
+        "slow_force" => &mut p.slow_force,
+        "slow_torque" => &mut p.slow_torque,
         "moment" => &mut p.moment,
         "permanent_moment" => &mut p.permanent_moment,
         _ => unreachable!("unknown state vector {name}"),
@@ -284,10 +297,16 @@ impl TrajectoryWriter {
         step.resize(f + 1)?;
         step.write_slice(&[state.step], s![f..f + 1])?;
         let vectors = FRAME_VECTORS.iter().chain(if self.forces { &FORCE_VECTORS[..] } else { &[] });
+        let p = &state.particles;
         for (name, _) in vectors {
             let ds = g.dataset(name)?;
             ds.resize((f + 1, self.n, 3))?;
-            let data = vec3_rows(state_vector(&state.particles, name));
+            // Frames hold total force and torque (fast plus slow under multiple time stepping).
+            let data = match *name {
+                "force" => Array2::from_shape_fn((self.n, 3), |(i, k)| p.force[i][k] + p.slow_force[i][k]),
+                "torque" => Array2::from_shape_fn((self.n, 3), |(i, k)| p.torque[i][k] + p.slow_torque[i][k]),
+                _ => vec3_rows(state_vector(p, name)),
+            };
             ds.write_slice(&data, s![f, .., ..])?;
         }
         if self.contacts {

@@ -125,7 +125,16 @@ impl Scene {
                 OnUnstable::Warn => warnings.push(format!("integration.dt = {dt:e} {why}")),
             }
         }
-        Ok(Self { spec, text, hash, domain, species, initial, estimate, warnings })
+        let scene = Self { spec, text, hash, domain, species, initial, estimate, warnings };
+        let k = scene.spec.integration.slow_every;
+        if scene.steps_per_frame() % k != 0 || scene.total_steps() % k != 0 {
+            return Err(invalid(
+                "integration.slow_every",
+                k,
+                format!("must divide the steps per frame ({}) and the run ({})", scene.steps_per_frame(), scene.total_steps()),
+            ));
+        }
+        Ok(scene)
     }
 
     pub fn dt(&self) -> f64 {
@@ -224,7 +233,7 @@ impl Scene {
         Simulation {
             state: state.unwrap_or_else(|| self.initial_state()),
             field,
-            integrator: integrators::by_name(&spec.integration.scheme).expect("scheme checked at load"),
+            integrator: integrators::by_name(&spec.integration.scheme, spec.integration.slow_every).expect("scheme checked at load"),
             dt: spec.integration.dt,
             monitor: Monitor { max_overlap: spec.stability.max_overlap, max_step_fraction: spec.stability.max_step_fraction },
             estimate: self.estimate.clone(),
@@ -374,8 +383,11 @@ fn check_forces(spec: &SceneSpec, domain: &Domain, species: &[Species], warnings
 
 fn check_integration(spec: &SceneSpec) -> Result<(), SceneError> {
     let i = &spec.integration;
-    if integrators::by_name(&i.scheme).is_none() {
+    if integrators::by_name(&i.scheme, i.slow_every).is_none() {
         return Err(invalid("integration.scheme", &i.scheme, format!("unknown scheme; one of {}", integrators::NAMES.join(", "))));
+    }
+    if i.slow_every == 0 || (i.slow_every > 1 && i.scheme != "respa") {
+        return Err(invalid("integration.slow_every", i.slow_every, "must be 1, or larger with scheme = \"respa\""));
     }
     positive("integration.dt", i.dt)?;
     positive("integration.end_time", i.end_time)?;

@@ -273,13 +273,22 @@ fn default_g() -> [f64; 3] {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct IntegrationSpec {
-    /// `explicit-euler` | `semi-implicit-euler` | `velocity-verlet` (default).
+    /// `explicit-euler` | `semi-implicit-euler` | `velocity-verlet` (default) | `respa`
+    /// (multiple time stepping: magnetic forces every `slow_every` steps).
     #[serde(default = "default_scheme")]
     pub scheme: String,
+    /// `respa`: fast steps per evaluation of the moments and magnetic forces (default 1). Must
+    /// divide the steps per output frame and the run.
+    #[serde(default = "default_slow_every")]
+    pub slow_every: u64,
     /// s
     pub dt: f64,
     /// s
     pub end_time: f64,
+}
+
+fn default_slow_every() -> u64 {
+    1
 }
 
 fn default_scheme() -> String {

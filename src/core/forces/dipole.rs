@@ -42,6 +42,9 @@ impl ForceTerm for DipoleForce {
     fn name(&self) -> &'static str {
         "dipole"
     }
+    fn is_slow(&self) -> bool {
+        true
+    }
     fn apply(&mut self, ctx: &ForceContext, state: &mut State) {
         let p = &mut state.particles;
         // The moments phase already found the pairs when its range is this cut-off.

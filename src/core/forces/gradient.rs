@@ -15,6 +15,9 @@ impl ForceTerm for GradientForce {
     fn name(&self) -> &'static str {
         "gradient"
     }
+    fn is_slow(&self) -> bool {
+        true
+    }
     fn apply(&mut self, _ctx: &ForceContext, state: &mut State) {
         let p = &mut state.particles;
         for i in 0..p.len() {

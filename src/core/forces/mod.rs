@@ -28,6 +28,11 @@ pub struct ForceContext<'a> {
 pub trait ForceTerm: Send {
     /// Name used in timers and messages.
     fn name(&self) -> &'static str;
+    /// Whether the term varies slowly and may be evaluated less often (multiple time stepping):
+    /// the magnetic terms.
+    fn is_slow(&self) -> bool {
+        false
+    }
     /// Whether the term needs `ForceContext::near_pairs`.
     fn needs_near_pairs(&self) -> bool {
         false

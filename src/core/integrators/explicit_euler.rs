@@ -2,6 +2,7 @@
 //! First order; unconditionally unstable for an undamped oscillator.
 
 use super::{drift, kick, tick, Evaluate, Integrator};
+use crate::core::simulation::ForceGroup;
 use crate::core::state::State;
 
 pub struct ExplicitEuler;
@@ -17,6 +18,6 @@ impl Integrator for ExplicitEuler {
         drift(&mut state.particles, dt);
         kick(&mut state.particles, dt);
         tick(state, dt);
-        evaluate(state);
+        evaluate(state, ForceGroup::All);
     }
 }

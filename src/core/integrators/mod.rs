@@ -3,33 +3,46 @@
 //! current state, so each step costs one force evaluation.
 
 mod explicit_euler;
+mod respa;
 mod semi_implicit_euler;
 mod velocity_verlet;
 
 pub use explicit_euler::ExplicitEuler;
+pub use respa::Respa;
 pub use semi_implicit_euler::SemiImplicitEuler;
 pub use velocity_verlet::VelocityVerlet;
 
+use super::simulation::ForceGroup;
 use super::state::{Particles, State, Vec3};
 
-/// Re-evaluates forces and torques for the state as it stands.
-pub type Evaluate<'a> = dyn FnMut(&mut State) + 'a;
+/// Re-evaluates one group of forces and torques for the state as it stands.
+pub type Evaluate<'a> = dyn FnMut(&mut State, ForceGroup) + 'a;
 
 pub trait Integrator: Send {
     fn name(&self) -> &'static str;
     /// Global order of accuracy for smooth forces.
     fn order(&self) -> u32;
+    /// Steps of `dt` one call of `step` advances (more than one for multiple time stepping).
+    fn steps_per_call(&self) -> u64 {
+        1
+    }
+    /// Whether the integrator keeps slow forces apart (in `slow_force`/`slow_torque`).
+    fn splits_forces(&self) -> bool {
+        false
+    }
     fn step(&mut self, state: &mut State, dt: f64, evaluate: &mut Evaluate);
 }
 
 /// Scheme names accepted by [`by_name`].
-pub const NAMES: [&str; 3] = ["explicit-euler", "semi-implicit-euler", "velocity-verlet"];
+pub const NAMES: [&str; 4] = ["explicit-euler", "semi-implicit-euler", "velocity-verlet", "respa"];
 
-pub fn by_name(name: &str) -> Option<Box<dyn Integrator>> {
+/// The integrator `name`; `slow_every` is the multiple-time-stepping ratio (RESPA only).
+pub fn by_name(name: &str, slow_every: u64) -> Option<Box<dyn Integrator>> {
     match name {
         "explicit-euler" => Some(Box::new(ExplicitEuler)),
         "semi-implicit-euler" => Some(Box::new(SemiImplicitEuler)),
         "velocity-verlet" => Some(Box::new(VelocityVerlet)),
+        "respa" => Some(Box::new(Respa { slow_every })),
         _ => None,
     }
 }
@@ -39,6 +52,14 @@ fn kick(p: &mut Particles, h: f64) {
     for i in 0..p.len() {
         p.velocity[i] += p.force[i] * (h / p.mass[i]);
         p.angular_velocity[i] += p.torque[i] * (h / p.inertia[i]);
+    }
+}
+
+/// v += F_slow/m h, ω += T_slow/I h.
+fn slow_kick(p: &mut Particles, h: f64) {
+    for i in 0..p.len() {
+        p.velocity[i] += p.slow_force[i] * (h / p.mass[i]);
+        p.angular_velocity[i] += p.slow_torque[i] * (h / p.inertia[i]);
     }
 }
 

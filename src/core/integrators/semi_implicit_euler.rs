@@ -2,6 +2,7 @@
 //! stable for an oscillator while ω dt < 2.
 
 use super::{drift, kick, tick, Evaluate, Integrator};
+use crate::core::simulation::ForceGroup;
 use crate::core::state::State;
 
 pub struct SemiImplicitEuler;
@@ -17,6 +18,6 @@ impl Integrator for SemiImplicitEuler {
         kick(&mut state.particles, dt);
         drift(&mut state.particles, dt);
         tick(state, dt);
-        evaluate(state);
+        evaluate(state, ForceGroup::All);
     }
 }

@@ -3,6 +3,7 @@
 //! forces; stable for an oscillator while ω dt < 2.
 
 use super::{drift, kick, tick, Evaluate, Integrator};
+use crate::core::simulation::ForceGroup;
 use crate::core::state::State;
 
 pub struct VelocityVerlet;
@@ -18,7 +19,7 @@ impl Integrator for VelocityVerlet {
         kick(&mut state.particles, 0.5 * dt);
         drift(&mut state.particles, dt);
         tick(state, dt);
-        evaluate(state);
+        evaluate(state, ForceGroup::All);
         kick(&mut state.particles, 0.5 * dt);
     }
 }
