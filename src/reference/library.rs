@@ -31,13 +31,9 @@ fn library_name(engine: Engine) -> &'static str {
     }
 }
 
-/// Whether the in-process route can run for `engine` here.
+/// Whether the in-process route can run for `engine` here (loads the library once).
 pub fn available(engine: Engine) -> Result<(), String> {
-    if engine == Engine::Liggghts && option_env!("MAGDEM_LIGGGHTS_SHIM").is_none() {
-        return Err("this magdem was built without the liggghts-shim feature (make build enables it when libliggghts-dev is installed)".into());
-    }
-    // SAFETY: loading a system library runs its initialisers, which set up nothing of ours.
-    unsafe { Library::new(library_name(engine)) }.map(|_| ()).map_err(|e| format!("cannot load {}: {e}", library_name(engine)))
+    load(engine).map(|_| ())
 }
 
 /// Magdem's side of the lock step: the magnetic force field and a state to evaluate it on.
@@ -96,9 +92,12 @@ fn load(engine: Engine) -> Result<&'static (Library, Option<Library>), String> {
     static LAMMPS: std::sync::OnceLock<Result<(Library, Option<Library>), String>> = std::sync::OnceLock::new();
     let cell = if engine == Engine::Liggghts { &LIGGGHTS } else { &LAMMPS };
     cell.get_or_init(|| {
-        available(engine)?;
-        // SAFETY: see `available`; the symbols are used with their C signatures from library.h.
-        let library = unsafe { Library::new(library_name(engine)) }.map_err(|e| e.to_string())?;
+        if engine == Engine::Liggghts && option_env!("MAGDEM_LIGGGHTS_SHIM").is_none() {
+            return Err("this magdem was built without the liggghts-shim feature (make build enables it when libliggghts-dev is installed)".into());
+        }
+        // SAFETY: loading a system library runs its initialisers, which touch nothing of ours; the
+        // symbols are used with their C signatures from library.h.
+        let library = unsafe { Library::new(library_name(engine)) }.map_err(|e| format!("cannot load {}: {e}", library_name(engine)))?;
         let shim = match engine {
             Engine::Liggghts => Some(unsafe { Library::new(option_env!("MAGDEM_LIGGGHTS_SHIM").unwrap_or_default()) }.map_err(|e| e.to_string())?),
             Engine::Lammps => None,
