@@ -9,6 +9,7 @@
 //!   it is n·d, the paper's "major axis length" (assumption: the paper does not define it);
 //! - orientation: the angle between the principal axis and the field (0° = along it);
 //! - centre-of-mass velocity.
+//!
 //! Periodic boxes are handled by unwrapping each aggregate through its contacts.
 
 use crate::core::domain::Domain;

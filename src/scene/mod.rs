@@ -266,7 +266,7 @@ fn non_negative(key: &str, v: f64) -> Result<(), SceneError> {
 
 fn check_domain(d: &DomainSpec) -> Result<Domain, SceneError> {
     for k in 0..3 {
-        if !(d.hi[k] > d.lo[k]) || !d.lo[k].is_finite() || !d.hi[k].is_finite() {
+        if d.hi[k].partial_cmp(&d.lo[k]) != Some(std::cmp::Ordering::Greater) || !d.lo[k].is_finite() || !d.hi[k].is_finite() {
             return Err(invalid("domain.hi", fmt3(&d.hi), format!("must exceed domain.lo = {} on every axis", fmt3(&d.lo))));
         }
     }
@@ -331,7 +331,7 @@ fn check_forces(spec: &SceneSpec, domain: &Domain, species: &[Species], warnings
     let largest_diameter = species.iter().map(|s| 2.0 * s.radius).fold(0.0, f64::max);
     if let Some(d) = &f.dipole {
         let tol = d.tolerance;
-        if !(tol >= 1e-15 && tol < 1.0) {
+        if !(1e-15..1.0).contains(&tol) {
             return Err(invalid(
                 "forces.dipole.tolerance",
                 tol,
@@ -479,7 +479,7 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
         let (lo, hi) = match &group.region {
             Some(r) => {
                 for k in 0..3 {
-                    if !(r.hi[k] > r.lo[k]) || r.lo[k] < domain.lo[k] || r.hi[k] > domain.hi[k] {
+                    if r.hi[k].partial_cmp(&r.lo[k]) != Some(std::cmp::Ordering::Greater) || r.lo[k] < domain.lo[k] || r.hi[k] > domain.hi[k] {
                         return Err(invalid(key("region"), format!("{} .. {}", fmt3(&r.lo), fmt3(&r.hi)), "must be a non-empty box inside the domain"));
                     }
                 }

@@ -3,6 +3,10 @@
 use crate::core::domain::Domain;
 use crate::core::state::Vec3;
 use rand::{RngExt, SeedableRng};
+use std::collections::HashMap;
+
+/// Placed spheres (centre, radius) by hash-grid cell.
+type Grid = HashMap<(i64, i64, i64), Vec<(Vec3, f64)>>;
 
 /// Attempts per particle before placement gives up.
 pub const MAX_ATTEMPTS: usize = 100_000;
@@ -34,11 +38,11 @@ pub fn place_random(
     let key = |x: &Vec3| -> (i64, i64, i64) {
         ((x.x / cell).floor() as i64, (x.y / cell).floor() as i64, (x.z / cell).floor() as i64)
     };
-    let mut grid: std::collections::HashMap<(i64, i64, i64), Vec<(Vec3, f64)>> = Default::default();
+    let mut grid: Grid = Default::default();
     for e in existing {
         grid.entry(key(&e.0)).or_default().push(*e);
     }
-    let overlaps = |x: &Vec3, grid: &std::collections::HashMap<(i64, i64, i64), Vec<(Vec3, f64)>>| {
+    let overlaps = |x: &Vec3, grid: &Grid| {
         let (cx, cy, cz) = key(x);
         for dz in -1..=1 {
             for dy in -1..=1 {

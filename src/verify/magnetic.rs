@@ -91,8 +91,11 @@ fn difference(engine: &'static str, native: &Path, other: &Path) -> hdf5::Result
     Ok(Difference { engine, times, max, median })
 }
 
-/// Runs one scene in magdem and the engines; returns the differences and magdem's wall time.
-pub fn compare(text: &str, name: &str, work: &Path, engines: &[Engine]) -> Result<(Vec<Difference>, Vec<(String, f64)>), Box<dyn std::error::Error>> {
+/// Position differences per engine and wall time per engine (magdem first).
+pub type Comparison = (Vec<Difference>, Vec<(String, f64)>);
+
+/// Runs one scene in magdem and the engines; returns the differences and the wall times.
+pub fn compare(text: &str, name: &str, work: &Path, engines: &[Engine]) -> Result<Comparison, Box<dyn std::error::Error>> {
     let scene = Scene::parse(text, name)?;
     std::fs::create_dir_all(work)?;
     let native = work.join(format!("{name}.magdem.h5"));
@@ -114,9 +117,11 @@ pub fn files_route_scene() -> String {
     PAIR.replace("dt = 1.0e-9", "dt = 1.0e-8").replace("end_time = 2.0e-4", "end_time = 9.0e-5").replace("interval = 2.0e-6", "interval = 1.0e-6")
 }
 
-/// The files route against the in-process route for exchange intervals `ks`: the largest
-/// position difference over the run, and the wall time, per K.
-pub fn files_route_lag(engine: Engine, text: &str, work: &Path, magdem: &Path, ks: &[u64]) -> Result<Vec<(u64, f64, f64)>, Box<dyn std::error::Error>> {
+/// One exchange interval K: (K, largest position difference to the in-process route (m), wall time (s)).
+pub type LagRow = (u64, f64, f64);
+
+/// The files route against the in-process route for exchange intervals `ks`.
+pub fn files_route_lag(engine: Engine, text: &str, work: &Path, magdem: &Path, ks: &[u64]) -> Result<Vec<LagRow>, Box<dyn std::error::Error>> {
     let scene = Scene::parse(text, "files-route")?;
     std::fs::create_dir_all(work)?;
     let callback = work.join(format!("callback.{}.h5", engine.name()));

@@ -72,8 +72,8 @@ impl ForceTerm for DipoleForce {
                 b_loc[i] += MU0 * dipole_field(&p.moment[j], &pair.r, pair.dist);
                 b_loc[j] += MU0 * dipole_field(&p.moment[i], &(-pair.r), pair.dist);
             }
-            for i in 0..p.len() {
-                p.torque[i] += p.permanent_moment[i].cross(&b_loc[i]);
+            for ((torque, m), b) in p.torque.iter_mut().zip(&p.permanent_moment).zip(&b_loc) {
+                *torque += m.cross(b);
             }
         }
     }
