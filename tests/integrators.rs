@@ -55,3 +55,83 @@ fn slow_every_must_divide_the_frames() {
     let err = Scene::parse(&text, "pair").unwrap_err().to_string();
     assert!(err.contains("respa"), "{err}");
 }
+
+/// One saturated particle under a gradient (terminal velocity V Ms G/(6π μ a)) at dt = 5 drag
+/// relaxation times: the exponential integrator is exact for the linear drag and lands on the
+/// terminal velocity; velocity Verlet is beyond its bound 2τ and blows up.
+fn gradient_particle(scheme: &str, dt: f64) -> Scene {
+    let text = format!(
+        r#"version = 1
+[domain]
+lo = [-1e-3, -1e-3, -1e-3]
+hi = [1e-3, 1e-3, 1e-3]
+[fluid]
+density = 1000.0
+viscosity = 1.0e-3
+[field]
+b0 = [0.5, 0.0, 0.0]
+gradient = [[1.4, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]
+[[species]]
+name = "p"
+diameter = 11.0e-6
+density = 1087.0
+youngs_modulus = 1.0e9
+poisson_ratio = 0.5
+friction = 0.5
+restitution = 0.5
+relative_permeability = 12.3
+saturation_magnetisation = 1.0e4
+[[particles]]
+species = "p"
+positions = [[0.0, 0.0, 0.0]]
+[forces.gradient]
+[forces.drag]
+law = "stokes"
+shielding = "none"
+[integration]
+scheme = "{scheme}"
+dt = {dt:e}
+end_time = {end:e}
+[output]
+interval = {end:e}
+"#,
+        end = 200.0 * dt
+    );
+    Scene::parse(&text, "gradient").unwrap()
+}
+
+#[test]
+fn exponential_verlet_is_exact_for_linear_drag_far_beyond_the_drag_time() {
+    let tau = 1087.0 * 4.0 / 3.0 * std::f64::consts::PI * 5.5e-6_f64.powi(3) / (6.0 * std::f64::consts::PI * 1.0e-3 * 5.5e-6);
+    let dt = 5.0 * tau;
+    let expected = 4.0 / 3.0 * std::f64::consts::PI * 5.5e-6_f64.powi(3) * 1.0e4 * 1.4 / (6.0 * std::f64::consts::PI * 1.0e-3 * 5.5e-6);
+    let scene = gradient_particle("exponential-verlet", dt);
+    assert!(scene.estimate.stable_dt > dt, "{}", scene.estimate.summary(dt));
+    let mut sim = scene.simulation(None);
+    sim.initialise().unwrap();
+    for _ in 0..scene.total_steps() {
+        sim.step().unwrap();
+    }
+    let v = sim.state.particles.velocity[0].x;
+    println!("dt = {dt:.3e} s (5 tau): exponential-verlet {v:.9e} m/s, expected {expected:.9e}");
+    assert!((v / expected - 1.0).abs() < 1e-9);
+
+    let verlet = gradient_particle("velocity-verlet", dt);
+    assert!(verlet.estimate.stable_dt < dt);
+    let mut sim = verlet.simulation(None);
+    sim.initialise().unwrap();
+    let blew_up = (0..verlet.total_steps()).any(|_| sim.step().is_err());
+    assert!(blew_up, "Verlet at 5 tau should go unstable");
+}
+
+#[test]
+fn exponential_verlet_converges_at_second_order() {
+    let run = |scheme: &str, dt: f64| final_separation(&pair(scheme, dt, 1));
+    let reference = run("exponential-verlet", 2.5e-10);
+    let errors: Vec<(f64, f64)> = [4e-9, 8e-9, 16e-9].iter().map(|&dt| (dt, (run("exponential-verlet", dt) - reference).abs())).collect();
+    println!("|error| by dt: {errors:?}");
+    for w in errors.windows(2) {
+        let ratio = w[1].1 / w[0].1;
+        assert!((3.0..5.5).contains(&ratio), "halving dt should divide the error by ~4: {errors:?}");
+    }
+}

@@ -100,7 +100,7 @@ impl StepEstimate {
             stable_dt = b;
             limited_by = "contact oscillator";
         }
-        if let Some(tau) = drag_relaxation_time {
+        if let Some(tau) = drag_relaxation_time.filter(|_| input.integrator != "exponential-verlet") {
             if 2.0 * tau < stable_dt {
                 stable_dt = 2.0 * tau;
                 limited_by = "drag relaxation";

@@ -188,6 +188,24 @@ impl Scene {
         (Some(Magnetisation::new(induction, b0, gradient, &self.species)), terms)
     }
 
+    /// The scene's integrator; the exponential one gets each particle's Stokes coefficients.
+    fn integrator(&self) -> Box<dyn integrators::Integrator> {
+        let i = &self.spec.integration;
+        if i.scheme != "exponential-verlet" {
+            return integrators::by_name(&i.scheme, i.slow_every).expect("scheme checked at load");
+        }
+        let drag = self.spec.forces.drag.as_ref();
+        let fluid = self.spec.fluid.as_ref();
+        let mu = drag.and(fluid).map_or(0.0, |f| f.viscosity);
+        let rotational = drag.is_some_and(|d| d.rotational);
+        let p = &self.initial;
+        Box::new(integrators::ExponentialVerlet {
+            gamma: p.radius.iter().map(|&a| Drag::stokes_coefficient(mu, a)).collect(),
+            gamma_rotational: p.radius.iter().map(|&a| if rotational { 8.0 * std::f64::consts::PI * mu * a.powi(3) } else { 0.0 }).collect(),
+            fluid_velocity: fluid.map_or(Vec3::zeros(), |f| Vec3::from(f.velocity)),
+        })
+    }
+
     /// Only the magnetic forces (moments, dipole and gradient terms): what magdem supplies to a
     /// reference code in lock step. `None` when the scene has no magnetic term.
     pub fn magnetic_force_field(&self) -> Option<ForceField> {
@@ -212,15 +230,9 @@ impl Scene {
                 ShieldingSpec::None => Shielding::None,
                 ShieldingSpec::Paper => Shielding::Paper,
             };
-            terms.push(Box::new(Drag::new(
-                law,
-                shielding,
-                d.rotational,
-                fluid.density,
-                fluid.viscosity,
-                Vec3::from(fluid.velocity),
-                d.touch_tolerance,
-            )));
+            let mut drag = Drag::new(law, shielding, d.rotational, fluid.density, fluid.viscosity, Vec3::from(fluid.velocity), d.touch_tolerance);
+            drag.exclude_linear = spec.integration.scheme == "exponential-verlet";
+            terms.push(Box::new(drag));
         }
         if let Some(g) = &f.gravity {
             terms.push(Box::new(GravityBuoyancy { gravity: Vec3::from(g.g), fluid_density: fluid.density }));
@@ -233,7 +245,7 @@ impl Scene {
         Simulation {
             state: state.unwrap_or_else(|| self.initial_state()),
             field,
-            integrator: integrators::by_name(&spec.integration.scheme, spec.integration.slow_every).expect("scheme checked at load"),
+            integrator: self.integrator(),
             dt: spec.integration.dt,
             monitor: Monitor { max_overlap: spec.stability.max_overlap, max_step_fraction: spec.stability.max_step_fraction },
             estimate: self.estimate.clone(),
@@ -383,7 +395,7 @@ fn check_forces(spec: &SceneSpec, domain: &Domain, species: &[Species], warnings
 
 fn check_integration(spec: &SceneSpec) -> Result<(), SceneError> {
     let i = &spec.integration;
-    if integrators::by_name(&i.scheme, i.slow_every).is_none() {
+    if !integrators::NAMES.contains(&i.scheme.as_str()) {
         return Err(invalid("integration.scheme", &i.scheme, format!("unknown scheme; one of {}", integrators::NAMES.join(", "))));
     }
     if i.slow_every == 0 || (i.slow_every > 1 && i.scheme != "respa") {

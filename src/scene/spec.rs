@@ -274,7 +274,8 @@ fn default_g() -> [f64; 3] {
 #[serde(deny_unknown_fields)]
 pub struct IntegrationSpec {
     /// `explicit-euler` | `semi-implicit-euler` | `velocity-verlet` (default) | `respa`
-    /// (multiple time stepping: magnetic forces every `slow_every` steps).
+    /// (multiple time stepping: magnetic forces every `slow_every` steps) | `exponential-verlet`
+    /// (linear drag integrated exactly).
     #[serde(default = "default_scheme")]
     pub scheme: String,
     /// `respa`: fast steps per evaluation of the moments and magnetic forces (default 1). Must

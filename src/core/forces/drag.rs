@@ -33,6 +33,9 @@ pub struct Drag {
     pub fluid_velocity: Vec3,
     /// Pairs count as touching when their gap is below this fraction of the smaller radius.
     pub touch_tolerance: f64,
+    /// Leave out the linear Stokes parts −6π μ a (v − u_f) and −8π μ a³ ω, which an exponential
+    /// integrator applies exactly; only the shielding and Schiller–Naumann corrections remain.
+    pub exclude_linear: bool,
     shadow: Vec<f64>,
 }
 
@@ -46,7 +49,7 @@ impl Drag {
         fluid_velocity: Vec3,
         touch_tolerance: f64,
     ) -> Self {
-        Self { law, shielding, rotational, fluid_density, viscosity, fluid_velocity, touch_tolerance, shadow: vec![] }
+        Self { law, shielding, rotational, fluid_density, viscosity, fluid_velocity, touch_tolerance, exclude_linear: false, shadow: vec![] }
     }
 
     /// Linear drag coefficient 6π μ a (kg/s) of an unshielded sphere in Stokes flow.
@@ -108,8 +111,9 @@ impl ForceTerm for Drag {
                     1.0 + 0.15 * re.powf(0.687)
                 }
             };
-            p.force[i] -= 12.0 * self.viscosity * area / (2.0 * a) * correction * u;
-            if self.rotational {
+            let linear = if self.exclude_linear { Self::stokes_coefficient(self.viscosity, a) } else { 0.0 };
+            p.force[i] -= (12.0 * self.viscosity * area / (2.0 * a) * correction - linear) * u;
+            if self.rotational && !self.exclude_linear {
                 p.torque[i] -= 8.0 * PI * self.viscosity * a.powi(3) * p.angular_velocity[i];
             }
         }

@@ -3,11 +3,13 @@
 //! current state, so each step costs one force evaluation.
 
 mod explicit_euler;
+mod exponential_verlet;
 mod respa;
 mod semi_implicit_euler;
 mod velocity_verlet;
 
 pub use explicit_euler::ExplicitEuler;
+pub use exponential_verlet::ExponentialVerlet;
 pub use respa::Respa;
 pub use semi_implicit_euler::SemiImplicitEuler;
 pub use velocity_verlet::VelocityVerlet;
@@ -33,8 +35,9 @@ pub trait Integrator: Send {
     fn step(&mut self, state: &mut State, dt: f64, evaluate: &mut Evaluate);
 }
 
-/// Scheme names accepted by [`by_name`].
-pub const NAMES: [&str; 4] = ["explicit-euler", "semi-implicit-euler", "velocity-verlet", "respa"];
+/// Scheme names a scene may give (`exponential-verlet` is built by the scene layer, which knows
+/// the drag coefficients).
+pub const NAMES: [&str; 5] = ["explicit-euler", "semi-implicit-euler", "velocity-verlet", "respa", "exponential-verlet"];
 
 /// The integrator `name`; `slow_every` is the multiple-time-stepping ratio (RESPA only).
 pub fn by_name(name: &str, slow_every: u64) -> Option<Box<dyn Integrator>> {
