@@ -11,4 +11,5 @@ pub mod plot;
 pub mod reference;
 pub mod run;
 pub mod scene;
+pub mod study;
 pub mod verify;

@@ -24,6 +24,15 @@ enum EngineChoice {
 }
 
 #[derive(Subcommand)]
+enum SolverStudy {
+    /// Error against dt per integrator on problems with known answers; writes reports/accuracy/.
+    Accuracy {
+        #[arg(long, default_value = "reports/accuracy")]
+        report: PathBuf,
+    },
+}
+
+#[derive(Subcommand)]
 enum Study {
     /// Chung & Ooi single-contact benchmarks in magdem, LIGGGHTS and LAMMPS; writes the report.
     Contacts {
@@ -84,6 +93,11 @@ enum Command {
         /// Directory for the deck.
         #[arg(short, long)]
         output: PathBuf,
+    },
+    /// Numerical studies of the solver (accuracy against time step).
+    Study {
+        #[command(subcommand)]
+        study: SolverStudy,
     },
     /// Cross-verification studies against the reference codes.
     Verify {
@@ -364,6 +378,16 @@ fn main() -> ExitCode {
             Err(e) => {
                 eprintln!("error: {}: {e}", file.display());
                 ExitCode::from(2)
+            }
+        },
+        Command::Study { study: SolverStudy::Accuracy { report } } => match magdem::study::accuracy::study(&report) {
+            Ok(_) => {
+                println!("wrote {}", report.join("README.md").display());
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(1)
             }
         },
         Command::Info { file } => match info(&file) {

@@ -51,8 +51,20 @@ fn tick(v: &f64) -> String {
     }
 }
 
-/// A labelled x–y chart written to `path` (PNG).
+/// A labelled x–y chart written to `path` (PNG), legend in the upper left.
 pub fn line_chart(path: &Path, title: &str, x_label: &str, y_label: &str, series: &[Series]) -> Result<(), Box<dyn std::error::Error>> {
+    line_chart_with_legend(path, title, x_label, y_label, series, SeriesLabelPosition::UpperLeft)
+}
+
+/// [`line_chart`] with the legend where the data leave room.
+pub fn line_chart_with_legend(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+    legend: SeriesLabelPosition,
+) -> Result<(), Box<dyn std::error::Error>> {
     register_font()?;
     let all = series.iter().flat_map(|s| s.points.iter());
     let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
@@ -107,7 +119,7 @@ pub fn line_chart(path: &Path, title: &str, x_label: &str, y_label: &str, series
         .label_font(("sans-serif", 16))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperLeft)
+        .position(legend)
         .draw()?;
     root.present()?;
     Ok(())

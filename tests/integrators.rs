@@ -135,3 +135,23 @@ fn exponential_verlet_converges_at_second_order() {
         assert!((3.0..5.5).contains(&ratio), "halving dt should divide the error by ~4: {errors:?}");
     }
 }
+
+/// The accuracy study's observed orders: with drag, velocity Verlet (half-step velocity in the
+/// drag, as LAMMPS/LIGGGHTS) is first order and exponential Verlet second; explicit Euler first.
+#[test]
+fn accuracy_study_observes_the_orders() {
+    let dir = std::env::temp_dir().join(format!("magdem-accuracy-{}", std::process::id()));
+    let md = magdem::study::accuracy::study(&dir).unwrap();
+    let order = |section: &str, scheme: &str| -> String {
+        let part = md.split("## ").find(|s| s.starts_with(section)).unwrap();
+        let row = part.lines().find(|l| l.starts_with(&format!("| {scheme} |"))).unwrap();
+        row.split('|').nth(2).unwrap().trim().to_string()
+    };
+    let num = |s: String| s.parse::<f64>().unwrap();
+    assert!((num(order("dipoles", "velocity-verlet")) - 1.0).abs() < 0.1);
+    assert!((num(order("dipoles", "exponential-verlet")) - 2.0).abs() < 0.1);
+    assert!((num(order("dipoles", "explicit-euler")) - 1.0).abs() < 0.1);
+    assert_eq!(order("terminal", "exponential-verlet"), "exact");
+    assert!(num(order("hertz", "velocity-verlet")) > 1.8);
+    assert!(dir.join("convergence-dipoles.png").exists());
+}

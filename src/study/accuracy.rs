@@ -1,0 +1,227 @@
+//! `magdem study accuracy`: error against time step, per integrator, on problems with a known
+//! answer, with the observed order fitted on log–log axes.
+//!
+//! Problems (all with the paper's 11 µm Fe3O4 particles in water):
+//! - terminal: one saturated particle set moving by a gradient force against Stokes drag from
+//!   rest; exact v(t) = v_T (1 − e^{−t/τ}); error |v(2τ) − v_exact| / v_T.
+//! - hertz: elastic head-on impact at 0.1 m/s; error of the largest overlap seen against the
+//!   Hertz closed form (15 m* v²/(16 E* √R*))^(2/5), relative.
+//! - dipoles: two dipoles closing with exact induction under Stokes drag (no contact) for
+//!   96 µs; error of the final separation against the same scene with exponential Verlet at
+//!   dt = 1e-10 s (second order, checked in tests/integrators.rs), relative to the distance
+//!   travelled.
+
+use crate::plot::{line_chart_with_legend, Series};
+use plotters::prelude::SeriesLabelPosition;
+use crate::scene::Scene;
+use plotters::style::RGBColor;
+use std::fmt::Write as _;
+use std::path::Path;
+
+pub const SCHEMES: [&str; 5] = ["explicit-euler", "semi-implicit-euler", "velocity-verlet", "exponential-verlet", "respa"];
+
+fn colour(scheme: &str) -> RGBColor {
+    match scheme {
+        "explicit-euler" => RGBColor(200, 30, 30),
+        "semi-implicit-euler" => RGBColor(230, 140, 20),
+        "velocity-verlet" => RGBColor(20, 90, 200),
+        "exponential-verlet" => RGBColor(30, 150, 60),
+        _ => RGBColor(130, 60, 170),
+    }
+}
+
+const MATERIAL: &str = r#"[[species]]
+name = "p"
+diameter = 11.0e-6
+density = 1087.0
+youngs_modulus = 1.0e9
+poisson_ratio = 0.5
+friction = 0.5
+restitution = 1.0
+relative_permeability = 12.3
+"#;
+
+const TAU: f64 = 1087.0 * 4.0 / 3.0 * std::f64::consts::PI * 5.5e-6 * 5.5e-6 / (6.0 * std::f64::consts::PI * 1.0e-3);
+
+/// One problem: its scene for a scheme and dt, and the error of a finished simulation.
+pub struct Problem {
+    pub name: &'static str,
+    pub description: &'static str,
+    pub dts: Vec<f64>,
+    scene: fn(&str, f64) -> String,
+}
+
+fn integration(scheme: &str, dt: f64, end: f64) -> String {
+    let k = if scheme == "respa" { "slow_every = 4\n" } else { "" };
+    format!("[integration]\nscheme = \"{scheme}\"\ndt = {dt:e}\nend_time = {end:e}\n{k}[output]\ninterval = {end:e}\n[stability]\nmax_step_fraction = 1.0\nmax_overlap = 0.5\n")
+}
+
+fn terminal_scene(scheme: &str, dt: f64) -> String {
+    let material = MATERIAL.replace("relative_permeability = 12.3\n", "relative_permeability = 12.3\nsaturation_magnetisation = 1.0e4\n");
+    format!(
+        "version = 1\n[domain]\nlo = [-1e-3, -1e-3, -1e-3]\nhi = [1e-3, 1e-3, 1e-3]\n[fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n\
+         [field]\nb0 = [0.5, 0.0, 0.0]\ngradient = [[1.4, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]\n{material}\
+         [[particles]]\nspecies = \"p\"\npositions = [[0.0, 0.0, 0.0]]\n[forces.gradient]\n[forces.drag]\nlaw = \"stokes\"\nshielding = \"none\"\n{}",
+        integration(scheme, dt, 2.0 * TAU)
+    )
+}
+
+fn terminal_error(sim: &crate::core::simulation::Simulation) -> f64 {
+    let vt = 4.0 / 3.0 * std::f64::consts::PI * 5.5e-6_f64.powi(3) * 1.0e4 * 1.4 / (6.0 * std::f64::consts::PI * 1.0e-3 * 5.5e-6);
+    let exact = vt * (1.0 - (-sim.state.time / TAU).exp());
+    (sim.state.particles.velocity[0].x - exact).abs() / vt
+}
+
+fn hertz_scene(scheme: &str, dt: f64) -> String {
+    format!(
+        "version = 1\n[domain]\nlo = [-1e-4, -1e-4, -1e-4]\nhi = [1e-4, 1e-4, 1e-4]\n{MATERIAL}\
+         [[particles]]\nspecies = \"p\"\npositions = [[-5.5005e-6, 0.0, 0.0], [5.5005e-6, 0.0, 0.0]]\nvelocities = [[0.05, 0.0, 0.0], [-0.05, 0.0, 0.0]]\n\
+         [forces.contact]\n{}",
+        integration(scheme, dt, 1.28e-7)
+    )
+}
+
+fn dipoles_scene(scheme: &str, dt: f64) -> String {
+    let text = crate::verify::magnetic::PAIR
+        .replace("[forces.contact]\n", "")
+        .replace("dt = 1.0e-9", &format!("scheme = \"{scheme}\"\ndt = {dt:e}{}", if scheme == "respa" { "\nslow_every = 4" } else { "" }))
+        .replace("end_time = 2.0e-4", "end_time = 9.6e-5")
+        .replace("interval = 2.0e-6", "interval = 9.6e-5");
+    text + "[stability]\nmax_step_fraction = 1.0\n"
+}
+
+fn separation(sim: &crate::core::simulation::Simulation) -> f64 {
+    let p = &sim.state.particles;
+    (p.position[1] - p.position[0]).norm()
+}
+
+pub fn problems() -> Vec<Problem> {
+    vec![
+        Problem {
+            name: "terminal",
+            description: "gradient-driven particle from rest, |v(2τ) − v_exact| / v_T",
+            dts: (2..=8).map(|k| TAU / f64::powi(2.0, k)).collect(),
+            scene: terminal_scene,
+        },
+        Problem {
+            name: "hertz",
+            description: "elastic head-on impact at 0.1 m/s, relative error of the largest overlap",
+            dts: (0..7).map(|k| 1.6e-8 / f64::powi(2.0, k)).collect(),
+            scene: hertz_scene,
+        },
+        Problem {
+            name: "dipoles",
+            description: "two dipoles closing (exact induction) for 96 µs, error of the separation / distance travelled",
+            dts: (0..6).map(|k| 6.4e-8 / f64::powi(2.0, k)).collect(),
+            scene: dipoles_scene,
+        },
+    ]
+}
+
+/// Runs a problem's scene to its end; returns the error (the Hertz problem tracks the overlap
+/// during the run; `Err` if the run went unstable).
+fn run_problem(problem: &Problem, scheme: &str, dt: f64, reference: Option<f64>) -> Result<f64, String> {
+    let scene = Scene::parse(&(problem.scene)(scheme, dt), problem.name).map_err(|e| e.to_string())?;
+    let mut sim = scene.simulation(None);
+    sim.initialise().map_err(|e| e.to_string())?;
+    let mut max_overlap = 0.0_f64;
+    while sim.state.step < scene.total_steps() {
+        sim.step().map_err(|e| e.to_string())?;
+        if problem.name == "hertz" {
+            let p = &sim.state.particles;
+            max_overlap = max_overlap.max(1.1e-5 - (p.position[1] - p.position[0]).norm());
+        }
+    }
+    Ok(match problem.name {
+        "hertz" => {
+            let s = &scene.species[0];
+            let (m_eff, r_eff, e_star, v) = (s.mass() / 2.0, s.radius / 2.0, s.youngs_modulus / (2.0 * (1.0 - s.poisson_ratio.powi(2))), 0.1);
+            let delta = (15.0 * m_eff * v * v / (16.0 * e_star * r_eff.sqrt())).powf(0.4);
+            (max_overlap - delta).abs() / delta
+        }
+        "dipoles" => {
+            let reference = reference.expect("the dipole problem has a reference");
+            (separation(&sim) - reference).abs() / (6.6e-5 - reference)
+        }
+        _ => terminal_error(&sim),
+    })
+}
+
+/// Least-squares slope of log error on log dt.
+pub fn fitted_order(points: &[(f64, f64)]) -> f64 {
+    let pts: Vec<(f64, f64)> = points.iter().filter(|p| p.1 > 0.0).map(|p| (p.0.ln(), p.1.ln())).collect();
+    let n = pts.len() as f64;
+    let (mx, my) = (pts.iter().map(|p| p.0).sum::<f64>() / n, pts.iter().map(|p| p.1).sum::<f64>() / n);
+    pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum::<f64>() / pts.iter().map(|p| (p.0 - mx).powi(2)).sum::<f64>()
+}
+
+/// Every problem × scheme × dt; writes `dir/README.md` and one figure per problem.
+pub fn study(dir: &Path) -> Result<String, Box<dyn std::error::Error>> {
+    std::fs::create_dir_all(dir)?;
+    let mut md = String::from("# Accuracy against time step\n\n");
+    let _ = writeln!(
+        md,
+        "Generated by `magdem study accuracy` (magdem {}, commit {}). Each problem runs at a range of time steps with \
+         each integrator; the error is plotted on log–log axes and the observed order is the least-squares slope over \
+         the stable points. `respa` uses K = 4 (magnetic forces every 4 steps); where a problem has no magnetic force it \
+         is velocity Verlet, so it is left out of the Hertz problem. Missing points: the run went unstable (the solver stopped it).\n",
+        env!("CARGO_PKG_VERSION"),
+        env!("MAGDEM_GIT_COMMIT")
+    );
+    for problem in problems() {
+        let reference = if problem.name == "dipoles" {
+            let scene = Scene::parse(&dipoles_scene("exponential-verlet", 1e-10), "reference")?;
+            let mut sim = scene.simulation(None);
+            sim.initialise()?;
+            while sim.state.step < scene.total_steps() {
+                sim.step()?;
+            }
+            Some(separation(&sim))
+        } else {
+            None
+        };
+        let _ = writeln!(md, "## {}: {}\n\n| scheme | observed order | errors (dt: error) |\n|---|---|---|", problem.name, problem.description);
+        let mut series = vec![];
+        for scheme in SCHEMES {
+            // Without a magnetic force respa is velocity Verlet (and would sample the overlap only
+            // every K steps).
+            if scheme == "respa" && problem.name == "hertz" {
+                continue;
+            }
+            let points: Vec<(f64, f64)> = problem.dts.iter().filter_map(|&dt| run_problem(&problem, scheme, dt, reference).ok().map(|e| (dt, e))).collect();
+            // Errors at round-off level (the scheme is exact for the problem) carry no order.
+            let fit: Vec<(f64, f64)> = points.iter().copied().filter(|p| p.1 > 1e-12).collect();
+            let order = if fit.len() >= 3 { format!("{:.2}", fitted_order(&fit)) } else { "exact".into() };
+            let _ = writeln!(md, "| {scheme} | {order} | {} |", points.iter().map(|(dt, e)| format!("{dt:.2e}: {e:.2e}")).collect::<Vec<_>>().join(", "));
+            series.push(Series {
+                label: format!("{scheme} ({order})"),
+                points: points.iter().filter(|p| p.1 > 0.0).map(|(dt, e)| (dt.log10(), e.log10())).collect(),
+                color: colour(scheme),
+                markers: if scheme == "exponential-verlet" || scheme == "respa" { Some(4) } else { None },
+            });
+        }
+        let figure = format!("convergence-{}.png", problem.name);
+        line_chart_with_legend(
+            &dir.join(&figure),
+            &format!("Error against time step: {}", problem.name),
+            "log10 dt (s)",
+            "log10 error",
+            &series,
+            SeriesLabelPosition::LowerRight,
+        )?;
+        let _ = writeln!(md, "\n![{}]({figure})\n", problem.name);
+    }
+    md += "## Reading it\n\n\
+- **Velocity Verlet is first order here**, not second: the drag is evaluated with the half-step velocity (as \
+LAMMPS' and LIGGGHTS' `nve/sphere` do with `fix viscous`), which is O(dt) off, and wherever drag matters — every \
+scene of the paper — that error dominates. Without velocity-dependent forces (the Hertz impact) it is second order. \
+`respa` inherits this.\n\
+- **Exponential Verlet** solves the linear drag exactly: exact for the terminal velocity at any dt and second order \
+on the magnetic approach, with errors 500× smaller than Verlet's at the same dt.\n\
+- **Explicit Euler** (the paper's) is first order everywhere and, on the Hertz impact, 20 to 500 times less accurate \
+than the symplectic schemes at the same dt; semi-implicit Euler equals Verlet on the Hertz overlap (without \
+velocity-dependent forces they produce the same positions).\n\
+- The Hertz orders are noisy because the largest overlap is sampled at the steps.\n";
+    std::fs::write(dir.join("README.md"), &md)?;
+    Ok(md)
+}
