@@ -1,28 +1,19 @@
 //! Invalid scenes are refused with a one-line message naming the key, the value and why; the CLI
 //! exits with code 2.
 
+mod common;
+
 use magdem::scene::Scene;
 use std::process::Command;
 
-const GOOD: &str = r#"version = 1
+fn good() -> String {
+    common::scene(
+        r#"version = 1
 [domain]
 lo = [0.0, 0.0, 0.0]
 hi = [1.0e-4, 1.0e-4, 1.0e-4]
-[fluid]
-density = 1000.0
-viscosity = 1.0e-3
-[field]
-b0 = [0.4, 0.0, 0.0]
-[[species]]
-name = "p"
-diameter = 11.0e-6
-density = 1087.0
-youngs_modulus = 1.0e9
-poisson_ratio = 0.5
-friction = 0.5
-restitution = 0.5
-relative_permeability = 12.3
-[[particles]]
+"#,
+        r#"[[particles]]
 species = "p"
 positions = [[2.0e-5, 5.0e-5, 5.0e-5], [8.0e-5, 5.0e-5, 5.0e-5]]
 [forces.contact]
@@ -32,16 +23,18 @@ induction = "exact"
 [integration]
 dt = 1.0e-8
 end_time = 1.0e-6
-"#;
+"#,
+    )
+}
 
 fn edit(from: &str, to: &str) -> String {
-    assert!(GOOD.contains(from), "fixture lacks {from:?}");
-    GOOD.replacen(from, to, 1)
+    assert!(good().contains(from), "fixture lacks {from:?}");
+    good().replacen(from, to, 1)
 }
 
 #[test]
 fn the_fixture_itself_is_valid() {
-    Scene::parse(GOOD, "good.toml").unwrap();
+    Scene::parse(&good(), "good.toml").unwrap();
 }
 
 #[test]

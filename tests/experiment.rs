@@ -2,32 +2,23 @@
 //! skipped, interrupted ones resumed, and a finished run whose scene changed is never silently
 //! overwritten.
 
+mod common;
+
 use magdem::experiment::{run_experiment, ExperimentOptions, Outcome};
 use magdem::scene::experiment::Experiment;
 use std::path::PathBuf;
 use std::process::Command;
 
-const BASE: &str = r#"version = 1
+fn base() -> String {
+    common::scene(
+        r#"version = 1
 name = "tiny"
 seed = 1
 [domain]
 lo = [0.0, 0.0, 0.0]
 hi = [1.0e-4, 1.0e-4, 1.0e-4]
-[fluid]
-density = 1000.0
-viscosity = 1.0e-3
-[field]
-b0 = [0.4, 0.0, 0.0]
-[[species]]
-name = "p"
-diameter = 11.0e-6
-density = 1087.0
-youngs_modulus = 1.0e9
-poisson_ratio = 0.5
-friction = 0.5
-restitution = 0.5
-relative_permeability = 12.3
-[[particles]]
+"#,
+        r#"[[particles]]
 species = "p"
 count = 20
 [forces.contact]
@@ -40,12 +31,14 @@ dt = 1.0e-8
 end_time = 2.0e-5
 [output]
 interval = 2.0e-6
-"#;
+"#,
+    )
+}
 
 fn setup(name: &str, sweep: &str) -> (PathBuf, PathBuf) {
     let dir = std::env::temp_dir().join(format!("magdem-exp-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join("base.toml"), BASE).unwrap();
+    std::fs::write(dir.join("base.toml"), base()).unwrap();
     let out = dir.join("runs");
     let file = dir.join("experiment.toml");
     std::fs::write(&file, format!("name = \"{name}\"\nbases = [\"base.toml\"]\noutput = \"{}\"\n[sweep]\n{sweep}", out.display())).unwrap();
@@ -74,7 +67,7 @@ fn sweeps_run_once_skip_when_done_and_never_overwrite_changed_runs_silently() {
     assert!(again.iter().all(|r| r.outcome == Outcome::Skipped));
 
     // The base scene changes: finished runs are kept and reported, unless overwriting is asked for.
-    std::fs::write(file.parent().unwrap().join("base.toml"), BASE.replace("restitution = 0.5", "restitution = 0.6")).unwrap();
+    std::fs::write(file.parent().unwrap().join("base.toml"), base().replace("restitution = 0.5", "restitution = 0.6")).unwrap();
     let changed = Experiment::from_file(&file).unwrap();
     let kept = run_experiment(&changed, &options).unwrap();
     assert!(kept.iter().all(|r| matches!(r.outcome, Outcome::KeptChanged { .. })));

@@ -1,34 +1,25 @@
 //! Trajectory files: readable by h5py (or h5dump) after a kill, and a resumed run ends bitwise
 //! equal to an uninterrupted one.
 
+mod common;
+
 use magdem::io::trajectory::Trajectory;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// 60 magnetic particles at high concentration with contacts, walls, drag and gravity: contact
 /// history, stored moments and forces all matter for the continuation.
-const SCENE: &str = r#"version = 1
+fn scene_text() -> String {
+    common::scene(
+        r#"version = 1
 name = "resume-test"
 seed = 7
 [domain]
 lo = [0.0, 0.0, 0.0]
 hi = [1.2e-4, 1.2e-4, 1.2e-4]
-[fluid]
-density = 1000.0
-viscosity = 1.0e-3
-[field]
-b0 = [0.4, 0.0, 0.0]
-[[species]]
-name = "fe3o4"
-diameter = 11.0e-6
-density = 1087.0
-youngs_modulus = 1.0e9
-poisson_ratio = 0.5
-friction = 0.5
-restitution = 0.5
-relative_permeability = 12.3
-[[particles]]
-species = "fe3o4"
+"#,
+        r#"[[particles]]
+species = "p"
 count = 60
 [forces.contact]
 [forces.dipole]
@@ -42,12 +33,14 @@ end_time = 3.0e-4
 [output]
 interval = 2.0e-5
 forces = true
-"#;
+"#,
+    )
+}
 
 fn workdir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("magdem-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
+    std::fs::write(dir.join("scene.toml"), scene_text()).unwrap();
     dir
 }
 
@@ -82,13 +75,13 @@ fn assert_identical(a: &Path, b: &Path) {
 
 #[test]
 fn resume_after_kill_is_bitwise_equal_to_an_uninterrupted_run() {
-    resume_after_kill("resume", SCENE);
+    resume_after_kill("resume", &scene_text());
 }
 
 /// Multiple time stepping carries the slow forces between steps: they are in the checkpoint.
 #[test]
 fn resume_after_kill_is_bitwise_equal_with_multiple_time_stepping() {
-    resume_after_kill("resume-respa", &SCENE.replace("dt = 1.0e-8", "scheme = \"respa\"\ndt = 1.0e-8\nslow_every = 10"));
+    resume_after_kill("resume-respa", &scene_text().replace("dt = 1.0e-8", "scheme = \"respa\"\ndt = 1.0e-8\nslow_every = 10"));
 }
 
 fn resume_after_kill(name: &str, text: &str) {
@@ -127,7 +120,7 @@ fn ctrl_c_checkpoints_and_the_run_resumes_to_the_same_end() {
     let dir = workdir("sigint");
     let scene = dir.join("scene.toml");
     let (full, interrupted) = (dir.join("full.h5"), dir.join("interrupted.h5"));
-    let long = SCENE.replace("end_time = 3.0e-4", "end_time = 1.5e-3");
+    let long = scene_text().replace("end_time = 3.0e-4", "end_time = 1.5e-3");
     std::fs::write(&scene, &long).unwrap();
     let mut child = Command::new(env!("CARGO_BIN_EXE_magdem"))
         .args(["run", path(&scene), "-q", "-o", path(&interrupted)])
@@ -162,7 +155,7 @@ fn trajectory_is_readable_from_python() {
     let dir = workdir("h5py");
     let scene = dir.join("scene.toml");
     let file = dir.join("run.h5");
-    std::fs::write(&scene, SCENE.replace("end_time = 3.0e-4", "end_time = 4.0e-5")).unwrap();
+    std::fs::write(&scene, scene_text().replace("end_time = 3.0e-4", "end_time = 4.0e-5")).unwrap();
     assert!(magdem(&["run", path(&scene), "-q", "-o", path(&file)]).status.success());
     let script = r#"
 import sys, h5py, numpy as np
