@@ -6,12 +6,7 @@ use magdem::scene::Scene;
 /// Two dipoles 6 diameters apart closing under Stokes drag with exact induction, stopped before
 /// they touch (contact at ~0.1 ms).
 fn pair(scheme: &str, dt: f64, slow_every: u64) -> Scene {
-    let text = magdem::verify::magnetic::PAIR
-        .replace("[forces.contact]\n", "")
-        .replace("dt = 1.0e-9", &format!("scheme = \"{scheme}\"\ndt = {dt:e}\nslow_every = {slow_every}"))
-        .replace("end_time = 2.0e-4", "end_time = 9.6e-5")
-        .replace("interval = 2.0e-6", "interval = 9.6e-5");
-    Scene::parse(&text, "pair").unwrap()
+    Scene::parse(&magdem::verify::magnetic::pair_before_contact(scheme, dt, slow_every), "pair").unwrap()
 }
 
 fn final_separation(scene: &Scene) -> f64 {

@@ -7,7 +7,6 @@
 use super::{deck, dump, Engine, ReferenceError, ReferenceRun};
 use crate::core::simulation::ForceField;
 use crate::core::state::{State, Vec3};
-use crate::io::trajectory::{status, RunInfo, TrajectoryWriter};
 use crate::scene::Scene;
 use libloading::Library;
 use std::ffi::{c_char, c_int, c_void, CString};
@@ -248,11 +247,6 @@ pub fn run_coupled(engine: Engine, scene: &Scene, dir: &Path, output: &Path) -> 
     for (state, moments) in frames.iter_mut().zip(&coupler.frame_moments) {
         state.particles.moment.clone_from(moments);
     }
-    let info = RunInfo { engine: engine.name(), integrator: "velocity-verlet (nve/sphere), magnetic forces from magdem every step" };
-    let mut writer = TrajectoryWriter::create(output, scene, &info)?;
-    for state in &frames {
-        writer.write_frame(state)?;
-    }
-    writer.finish(status::COMPLETED, "")?;
+    super::store(engine, "velocity-verlet (nve/sphere), magnetic forces from magdem every step", scene, output, &frames)?;
     Ok(ReferenceRun { frames: frames.len(), log, wall_time: start.elapsed() })
 }

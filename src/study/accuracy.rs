@@ -82,12 +82,8 @@ fn hertz_scene(scheme: &str, dt: f64) -> String {
 }
 
 fn dipoles_scene(scheme: &str, dt: f64) -> String {
-    let text = crate::verify::magnetic::PAIR
-        .replace("[forces.contact]\n", "")
-        .replace("dt = 1.0e-9", &format!("scheme = \"{scheme}\"\ndt = {dt:e}{}", if scheme == "respa" { "\nslow_every = 4" } else { "" }))
-        .replace("end_time = 2.0e-4", "end_time = 9.6e-5")
-        .replace("interval = 2.0e-6", "interval = 9.6e-5");
-    text + "[stability]\nmax_step_fraction = 1.0\n"
+    let slow_every = if scheme == "respa" { 4 } else { 1 };
+    crate::verify::magnetic::pair_before_contact(scheme, dt, slow_every) + "[stability]\nmax_step_fraction = 1.0\n"
 }
 
 fn separation(sim: &crate::core::simulation::Simulation) -> f64 {

@@ -112,6 +112,15 @@ pub fn compare(text: &str, name: &str, work: &Path, engines: &[Engine]) -> Resul
     Ok((diffs, times))
 }
 
+/// The pair approach without contact, stopped at 96 µs (before the spheres would touch), with
+/// the given scheme, dt and multiple-time-stepping ratio: the integrator convergence problem.
+pub fn pair_before_contact(scheme: &str, dt: f64, slow_every: u64) -> String {
+    PAIR.replace("[forces.contact]\n", "")
+        .replace("dt = 1.0e-9", &format!("scheme = \"{scheme}\"\ndt = {dt:e}\nslow_every = {slow_every}"))
+        .replace("end_time = 2.0e-4", "end_time = 9.6e-5")
+        .replace("interval = 2.0e-6", "interval = 9.6e-5")
+}
+
 /// The pair approach run for 9e-5 s at dt = 1e-8 s (before contact), for the files-route study.
 pub fn files_route_scene() -> String {
     PAIR.replace("dt = 1.0e-9", "dt = 1.0e-8").replace("end_time = 2.0e-4", "end_time = 9.0e-5").replace("interval = 2.0e-6", "interval = 1.0e-6")
