@@ -1,16 +1,17 @@
-//! `magdem experiment FILE`: runs every point of an experiment (in parallel, one HDF5 file per
-//! run, a manifest beside them), skipping runs already complete, resuming interrupted ones, and
-//! refusing to overwrite a finished run whose scene changed unless told to.
+//! `magdem experiment FILE…`: runs every point of one or more experiments (in parallel, longest
+//! first, one HDF5 file per run, a manifest beside each experiment's runs), skipping runs already
+//! complete, resuming interrupted ones, and refusing to overwrite a finished run whose scene
+//! changed unless told to. A run that goes unstable is a result, recorded as such, not retried.
 
 use crate::io::trajectory::{status, Trajectory};
 use crate::reference::{self, Engine};
 use crate::run::{run, RunFailure, RunOptions, INTERRUPTED};
 use crate::scene::experiment::{Experiment, Point};
 use indicatif::{ProgressBar, ProgressStyle};
-use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::Ordering;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 use std::time::Instant;
 
 #[derive(Debug, Clone, Default)]
@@ -31,6 +32,11 @@ pub enum Outcome {
     Skipped,
     /// Finished earlier with a different scene; kept.
     KeptChanged { old_hash: String },
+    /// The solver stopped the run (instability monitor); the message says why.
+    Unstable(String),
+    /// A reference engine the point asks for is not installed (not a failure: the report shows
+    /// the point as missing).
+    EngineMissing(&'static str),
     Failed(String),
     Interrupted,
 }
@@ -42,6 +48,8 @@ impl Outcome {
             Outcome::Resumed => "resumed".into(),
             Outcome::Skipped => "skipped (complete)".into(),
             Outcome::KeptChanged { old_hash } => format!("kept: finished with another scene ({})", &old_hash[..12.min(old_hash.len())]),
+            Outcome::Unstable(why) => format!("unstable: {why}"),
+            Outcome::EngineMissing(engine) => format!("not run: {engine} is not installed"),
             Outcome::Failed(why) => format!("failed: {why}"),
             Outcome::Interrupted => "interrupted".into(),
         }
@@ -55,9 +63,10 @@ pub struct PointResult {
     pub wall_time: f64,
 }
 
-fn existing(file: &Path) -> Option<(String, String)> {
+/// Status, scene hash and status message of an existing run file.
+fn existing(file: &Path) -> Option<(String, String, String)> {
     let t = Trajectory::open(file).ok()?;
-    Some((t.attr_string("status").ok()?, t.attr_string("scene_sha256").ok()?))
+    Some((t.attr_string("status").ok()?, t.attr_string("scene_sha256").ok()?, t.attr_string("status_message").unwrap_or_default()))
 }
 
 fn run_point(point: &Point, file: &Path, options: &ExperimentOptions) -> Outcome {
@@ -66,7 +75,10 @@ fn run_point(point: &Point, file: &Path, options: &ExperimentOptions) -> Outcome
     }
     let hash = &point.scene.hash;
     let mut resume = false;
-    if let Some((state, old_hash)) = existing(file) {
+    if let Some((state, old_hash, message)) = existing(file) {
+        if state == status::UNSTABLE && &old_hash == hash {
+            return Outcome::Unstable(message);
+        }
         match (state == status::COMPLETED, &old_hash == hash) {
             (true, true) => return Outcome::Skipped,
             (true, false) if !options.overwrite_changed => return Outcome::KeptChanged { old_hash },
@@ -75,12 +87,18 @@ fn run_point(point: &Point, file: &Path, options: &ExperimentOptions) -> Outcome
         }
     }
     let result = match point.engine.as_str() {
-        "magdem" => run(&point.scene, file, &RunOptions { resume, ..Default::default() }).map(|_| ()).map_err(|e| match e {
-            RunFailure::Interrupted { .. } => None,
-            other => Some(other.to_string()),
-        }),
+        "magdem" => match run(&point.scene, file, &RunOptions { resume, ..Default::default() }) {
+            Err(RunFailure::Unstable(e)) => return Outcome::Unstable(e.to_string().replace('\n', " ")),
+            other => other.map(|_| ()).map_err(|e| match e {
+                RunFailure::Interrupted { .. } => None,
+                other => Some(other.to_string()),
+            }),
+        },
         name => {
             let engine = if name == "liggghts" { Engine::Liggghts } else { Engine::Lammps };
+            if !engine.available() {
+                return Outcome::EngineMissing(engine.name());
+            }
             reference::run(engine, &point.scene, &file.with_extension(format!("{name}.deck")), file).map(|_| ()).map_err(|e| Some(e.to_string()))
         }
     };
@@ -92,29 +110,54 @@ fn run_point(point: &Point, file: &Path, options: &ExperimentOptions) -> Outcome
     }
 }
 
-/// Runs the experiment and writes `manifest.csv` in its output directory.
-pub fn run_experiment(experiment: &Experiment, options: &ExperimentOptions) -> Result<Vec<PointResult>, Box<dyn std::error::Error>> {
-    std::fs::create_dir_all(&experiment.output)?;
-    let bar = if options.progress { ProgressBar::new(experiment.points.len() as u64) } else { ProgressBar::hidden() };
+/// Rough cost of a point for scheduling: steps × particles (reference engines count double).
+fn cost(point: &Point) -> f64 {
+    let factor = if point.engine == "magdem" { 1.0 } else { 2.0 };
+    factor * point.scene.total_steps() as f64 * point.scene.initial.len() as f64
+}
+
+/// Runs every point of `experiments` on `jobs` workers, the most expensive first, and writes each
+/// experiment's `manifest.csv`. Results come back per experiment, in point order.
+pub fn run_experiments(experiments: &[Experiment], options: &ExperimentOptions) -> Result<Vec<Vec<PointResult>>, Box<dyn std::error::Error>> {
+    let mut queue: Vec<(usize, usize)> = vec![];
+    for (e, experiment) in experiments.iter().enumerate() {
+        std::fs::create_dir_all(&experiment.output)?;
+        queue.extend((0..experiment.points.len()).map(|p| (e, p)));
+    }
+    queue.sort_by(|a, b| cost(&experiments[b.0].points[b.1]).total_cmp(&cost(&experiments[a.0].points[a.1])));
+    let bar = if options.progress { ProgressBar::new(queue.len() as u64) } else { ProgressBar::hidden() };
     bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} runs | {elapsed} | ETA {eta} | {msg}")?);
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(options.jobs.unwrap_or_else(rayon::current_num_threads).max(1)).build()?;
-    let results: Vec<PointResult> = pool.install(|| {
-        experiment
-            .points
-            .par_iter()
-            .map(|point| {
-                let file = experiment.output.join(format!("{}.h5", point.id));
-                let start = Instant::now();
-                let outcome = run_point(point, &file, options);
-                bar.inc(1);
-                bar.set_message(format!("{}: {}", point.id, outcome.label()));
-                PointResult { id: point.id.clone(), file, outcome, wall_time: start.elapsed().as_secs_f64() }
-            })
-            .collect()
+    let next = AtomicUsize::new(0);
+    let done: Mutex<Vec<Vec<Option<PointResult>>>> = Mutex::new(experiments.iter().map(|e| e.points.iter().map(|_| None).collect()).collect());
+    let workers = options.jobs.unwrap_or_else(rayon::current_num_threads).max(1).min(queue.len().max(1));
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|| {
+                while let Some(&(e, p)) = queue.get(next.fetch_add(1, Ordering::Relaxed)) {
+                    let point = &experiments[e].points[p];
+                    let file = experiments[e].output.join(format!("{}.h5", point.id));
+                    let start = Instant::now();
+                    let outcome = run_point(point, &file, options);
+                    bar.inc(1);
+                    bar.set_message(format!("{}: {}", point.id, outcome.label()));
+                    let result = PointResult { id: point.id.clone(), file, outcome, wall_time: start.elapsed().as_secs_f64() };
+                    done.lock().expect("no worker panicked")[e][p] = Some(result);
+                }
+            });
+        }
     });
     bar.finish_and_clear();
-    write_manifest(experiment, &results)?;
+    let results: Vec<Vec<PointResult>> =
+        done.into_inner().expect("no worker panicked").into_iter().map(|r| r.into_iter().map(|x| x.expect("every point ran")).collect()).collect();
+    for (experiment, results) in experiments.iter().zip(&results) {
+        write_manifest(experiment, results)?;
+    }
     Ok(results)
+}
+
+/// [`run_experiments`] for one experiment.
+pub fn run_experiment(experiment: &Experiment, options: &ExperimentOptions) -> Result<Vec<PointResult>, Box<dyn std::error::Error>> {
+    Ok(run_experiments(std::slice::from_ref(experiment), options)?.pop().unwrap_or_default())
 }
 
 fn csv_field(text: &str) -> String {
@@ -122,14 +165,15 @@ fn csv_field(text: &str) -> String {
 }
 
 fn write_manifest(experiment: &Experiment, results: &[PointResult]) -> std::io::Result<()> {
-    let mut csv = String::from("id,base,overrides,engine,scene_sha256,outcome,wall_time_s,file\n");
+    let mut csv = String::from("id,base,variant,overrides,engine,scene_sha256,outcome,wall_time_s,file\n");
     for (point, r) in experiment.points.iter().zip(results) {
         let overrides = point.overrides.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join("; ");
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{},{:.3},{}",
+            "{},{},{},{},{},{},{},{:.3},{}",
             csv_field(&point.id),
             csv_field(&point.base.display().to_string()),
+            point.variant.as_deref().unwrap_or(""),
             csv_field(&overrides),
             point.engine,
             point.scene.hash,

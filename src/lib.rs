@@ -9,6 +9,7 @@ pub mod experiment;
 pub mod io;
 pub mod plot;
 pub mod reference;
+pub mod report;
 pub mod run;
 pub mod scene;
 pub mod study;

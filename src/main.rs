@@ -56,6 +56,29 @@ enum Study {
 }
 
 #[derive(Subcommand)]
+enum Report {
+    /// The paper-reproduction report (Tables 2–4, box plots, approach, sensitivity, walls and
+    /// particle count, reference engines) from the runs of experiments/paper/*.toml.
+    Paper {
+        /// Directory of the experiment files (its opt-in/ folder is read too).
+        #[arg(long, default_value = "experiments/paper")]
+        experiments: PathBuf,
+        /// Directory of the paper's tables (CSV).
+        #[arg(long, default_value = "reference/paper")]
+        reference: PathBuf,
+        /// Report directory.
+        #[arg(long, default_value = "reports/paper")]
+        out: PathBuf,
+        /// Aggregate gap tolerance, as a fraction of the smaller radius.
+        #[arg(long, default_value_t = 1e-3)]
+        gap: f64,
+        /// Wall time of the run that produced the trajectories (s), quoted in the report.
+        #[arg(long)]
+        wall_time: Option<f64>,
+    },
+}
+
+#[derive(Subcommand)]
 enum Command {
     /// Run a scene and write its trajectory (HDF5).
     Run {
@@ -127,18 +150,26 @@ enum Command {
         #[arg(long, requires = "csv")]
         header: bool,
     },
-    /// Run every point of an experiment file (sweeps over scene parameters), in parallel.
+    /// Run every point of one or more experiment files (sweeps over scene parameters), in
+    /// parallel, the longest runs first.
     Experiment {
-        file: PathBuf,
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
         /// Runs at once (default: the number of cores).
         #[arg(short, long)]
         jobs: Option<usize>,
         /// Replace finished runs whose scene changed (otherwise they are kept and reported).
         #[arg(long)]
         overwrite_changed: bool,
+        /// List the points (id, particles, steps, engine) and check their scenes; run nothing.
+        #[arg(long)]
+        dry_run: bool,
         #[arg(short, long)]
         quiet: bool,
     },
+    /// Write a report from experiment runs.
+    #[command(subcommand)]
+    Report(Report),
     /// Describe a trajectory file.
     Info {
         file: PathBuf,
@@ -344,27 +375,47 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Command::Experiment { file, jobs, overwrite_changed, quiet } => {
-            let experiment = match magdem::scene::experiment::Experiment::from_file(&file) {
-                Ok(e) => e,
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    return ExitCode::from(2);
+        Command::Experiment { files, jobs, overwrite_changed, dry_run, quiet } => {
+            let mut experiments = vec![];
+            for file in &files {
+                match magdem::scene::experiment::Experiment::from_file(file) {
+                    Ok(e) => experiments.push(e),
+                    Err(e) => {
+                        eprintln!("error: {}: {e}", file.display());
+                        return ExitCode::from(2);
+                    }
                 }
-            };
-            let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed));
-            let options = magdem::experiment::ExperimentOptions { jobs, overwrite_changed, progress: !quiet };
-            match magdem::experiment::run_experiment(&experiment, &options) {
-                Ok(results) => {
-                    use magdem::experiment::Outcome;
-                    let mut failed = false;
-                    for r in &results {
-                        if matches!(r.outcome, Outcome::Failed(_) | Outcome::KeptChanged { .. } | Outcome::Interrupted) {
-                            failed = true;
-                            eprintln!("{}: {}", r.id, r.outcome.label());
+            }
+            if dry_run {
+                for e in &experiments {
+                    for p in &e.points {
+                        println!("{}/{}.h5  {} particles  {} steps  {}", e.output.display(), p.id, p.scene.initial.len(), p.scene.total_steps(), p.engine);
+                        for w in &p.scene.warnings {
+                            println!("  warning: {w}");
                         }
                     }
-                    println!("{} runs in {} (manifest.csv)", results.len(), experiment.output.display());
+                }
+                return ExitCode::SUCCESS;
+            }
+            let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed));
+            let options = magdem::experiment::ExperimentOptions { jobs, overwrite_changed, progress: !quiet };
+            match magdem::experiment::run_experiments(&experiments, &options) {
+                Ok(all) => {
+                    use magdem::experiment::Outcome;
+                    let mut failed = false;
+                    for (experiment, results) in experiments.iter().zip(&all) {
+                        for r in results {
+                            match &r.outcome {
+                                Outcome::Failed(_) | Outcome::KeptChanged { .. } | Outcome::Interrupted => {
+                                    failed = true;
+                                    eprintln!("{}: {}", r.id, r.outcome.label());
+                                }
+                                Outcome::Unstable(_) => eprintln!("{}: {}", r.id, r.outcome.label()),
+                                _ => {}
+                            }
+                        }
+                        println!("{}: {} runs in {} (manifest.csv)", experiment.spec.name, results.len(), experiment.output.display());
+                    }
                     if failed { ExitCode::from(1) } else { ExitCode::SUCCESS }
                 }
                 Err(e) => {
@@ -390,6 +441,19 @@ fn main() -> ExitCode {
                 ExitCode::from(1)
             }
         },
+        Command::Report(Report::Paper { experiments, reference, out, gap, wall_time }) => {
+            let options = magdem::report::paper::PaperReportOptions { experiments, reference, out, gap, wall_time };
+            match magdem::report::paper::write_report(&options) {
+                Ok(path) => {
+                    println!("wrote {}", path.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(1)
+                }
+            }
+        }
         Command::Info { file } => match info(&file) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {

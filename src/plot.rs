@@ -1,6 +1,8 @@
-//! Figure helpers on plotters: PNG line/marker charts with DejaVu Sans loaded at run time.
+//! Figure helpers on plotters: PNG line/marker charts (with error bars), grouped bar panels and
+//! box-plot panels, with DejaVu Sans loaded at run time.
 
 use plotters::prelude::*;
+pub use plotters::prelude::{RGBColor, SeriesLabelPosition};
 use std::path::Path;
 use std::sync::OnceLock;
 
@@ -26,13 +28,42 @@ pub fn engine_colour(engine: &str) -> RGBColor {
     }
 }
 
-/// One data series: a line, or circles of radius `markers` (px) when set. An empty label keeps
-/// the series out of the legend.
+/// One data series: a line, or circles of radius `markers` (px) when set, with vertical error
+/// bars of half-height `errors[k]` at point k when given. An empty label keeps the series out of
+/// the legend.
 pub struct Series {
     pub label: String,
     pub points: Vec<(f64, f64)>,
     pub color: RGBColor,
     pub markers: Option<u32>,
+    pub errors: Vec<f64>,
+}
+
+impl Series {
+    pub fn line(label: impl Into<String>, points: Vec<(f64, f64)>, color: RGBColor) -> Self {
+        Self { label: label.into(), points, color, markers: None, errors: vec![] }
+    }
+    pub fn markers(label: impl Into<String>, points: Vec<(f64, f64)>, color: RGBColor, radius: u32) -> Self {
+        Self { label: label.into(), points, color, markers: Some(radius), errors: vec![] }
+    }
+    pub fn with_errors(self, errors: Vec<f64>) -> Self {
+        Self { errors, ..self }
+    }
+}
+
+/// The colour of the k-th of several categories (variants, concentrations).
+pub fn palette(k: usize) -> RGBColor {
+    const COLOURS: [RGBColor; 8] = [
+        RGBColor(200, 30, 30),
+        RGBColor(20, 90, 200),
+        RGBColor(30, 150, 60),
+        RGBColor(230, 140, 0),
+        RGBColor(130, 60, 170),
+        RGBColor(0, 160, 170),
+        RGBColor(120, 120, 120),
+        RGBColor(170, 110, 60),
+    ];
+    COLOURS[k % COLOURS.len()]
 }
 
 /// Axis tick text with as many decimals as the magnitude needs.
@@ -66,13 +97,15 @@ pub fn line_chart_with_legend(
     legend: SeriesLabelPosition,
 ) -> Result<(), Box<dyn std::error::Error>> {
     register_font()?;
-    let all = series.iter().flat_map(|s| s.points.iter());
     let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
-    for &(x, y) in all {
-        x0 = x0.min(x);
-        x1 = x1.max(x);
-        y0 = y0.min(y);
-        y1 = y1.max(y);
+    for s in series {
+        for (k, &(x, y)) in s.points.iter().enumerate() {
+            let e = s.errors.get(k).copied().filter(|e| e.is_finite()).unwrap_or(0.0);
+            x0 = x0.min(x);
+            x1 = x1.max(x);
+            y0 = y0.min(y - e);
+            y1 = y1.max(y + e);
+        }
     }
     let pad = |lo: f64, hi: f64| {
         let d = (hi - lo).abs().max(hi.abs() * 1e-6).max(1e-300);
@@ -99,6 +132,9 @@ pub fn line_chart_with_legend(
         .draw()?;
     for s in series {
         let color = s.color;
+        chart.draw_series(s.points.iter().zip(&s.errors).filter(|(_, e)| e.is_finite()).map(move |(&(x, y), &e)| {
+            PathElement::new(vec![(x, y - e), (x, y + e)], color.stroke_width(2))
+        }))?;
         match s.markers {
             Some(r) => {
                 let drawn = chart.draw_series(s.points.iter().map(move |&p| Circle::new(p, r, color.stroke_width(2))))?;
@@ -121,6 +157,186 @@ pub fn line_chart_with_legend(
         .border_style(BLACK)
         .position(legend)
         .draw()?;
+    root.present()?;
+    Ok(())
+}
+
+/// One group of bars (one colour) over a panel's categories, with optional error half-heights.
+pub struct BarGroup {
+    pub label: String,
+    pub color: RGBColor,
+    pub values: Vec<f64>,
+    pub errors: Vec<f64>,
+}
+
+/// A bar chart: one slot per category, the groups side by side within it.
+pub struct BarPanel {
+    pub title: String,
+    pub y_label: String,
+    pub categories: Vec<String>,
+    pub groups: Vec<BarGroup>,
+}
+
+/// Bar panels on a grid of `columns`, written to `path` (PNG). Category labels are thinned to
+/// at most 20 per axis.
+pub fn bar_panels(path: &Path, title: &str, panels: &[BarPanel], columns: usize, panel_size: (u32, u32)) -> Result<(), Box<dyn std::error::Error>> {
+    register_font()?;
+    let rows = panels.len().div_ceil(columns.max(1));
+    let root = BitMapBackend::new(path, (panel_size.0 * columns as u32, panel_size.1 * rows as u32 + 50)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let (head, body) = root.split_vertically(50);
+    head.titled(title, ("sans-serif", 26))?;
+    for (panel, area) in panels.iter().zip(body.split_evenly((rows, columns))) {
+        let n = panel.categories.len();
+        let top = panel
+            .groups
+            .iter()
+            .flat_map(|g| g.values.iter().enumerate().map(move |(k, v)| v + g.errors.get(k).copied().filter(|e| e.is_finite()).unwrap_or(0.0)))
+            .filter(|v| v.is_finite())
+            .fold(0.0_f64, f64::max);
+        let mut chart = ChartBuilder::on(&area)
+            .caption(&panel.title, ("sans-serif", 20))
+            .margin(15)
+            .x_label_area_size(if panel.categories.iter().any(|c| c.len() > 6) { 70 } else { 40 })
+            .y_label_area_size(70)
+            .build_cartesian_2d(-0.5..n as f64 - 0.5, 0.0..top * 1.1 + 1e-300)?;
+        let step = n.div_ceil(20).max(1);
+        let names = panel.categories.clone();
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .y_desc(panel.y_label.as_str())
+            .x_labels(n.min(40))
+            .x_label_formatter(&|x| {
+                let k = x.round();
+                if (x - k).abs() < 1e-6 && k >= 0.0 && (k as usize) < names.len() && (k as usize) % step == 0 { names[k as usize].clone() } else { String::new() }
+            })
+            .y_label_formatter(&tick)
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 16))
+            .draw()?;
+        let width = 0.8 / panel.groups.len().max(1) as f64;
+        for (g, group) in panel.groups.iter().enumerate() {
+            let color = group.color;
+            let left = |k: usize| k as f64 - 0.4 + g as f64 * width;
+            let drawn = chart.draw_series(
+                group.values.iter().enumerate().filter(|(_, v)| v.is_finite()).map(|(k, &v)| Rectangle::new([(left(k), 0.0), (left(k) + width * 0.9, v)], color.filled())),
+            )?;
+            if !group.label.is_empty() {
+                drawn.label(group.label.as_str()).legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 14, y + 6)], color.filled()));
+            }
+            chart.draw_series(group.values.iter().zip(&group.errors).enumerate().filter(|(_, (v, e))| v.is_finite() && e.is_finite()).map(|(k, (&v, &e))| {
+                let x = left(k) + width * 0.45;
+                PathElement::new(vec![(x, v - e), (x, v + e)], BLACK.stroke_width(2))
+            }))?;
+        }
+        if panel.groups.iter().any(|g| !g.label.is_empty()) {
+            chart.configure_series_labels().label_font(("sans-serif", 14)).background_style(WHITE.mix(0.85)).border_style(BLACK).position(SeriesLabelPosition::UpperRight).draw()?;
+        }
+    }
+    root.present()?;
+    Ok(())
+}
+
+/// Quartiles, Tukey fences (the most extreme data within 1.5 IQR of the box) and mean of a
+/// sample, for a box plot.
+#[derive(Debug, Clone)]
+pub struct BoxStats {
+    pub label: String,
+    pub color: RGBColor,
+    pub lower_fence: f64,
+    pub q1: f64,
+    pub median: f64,
+    pub q3: f64,
+    pub upper_fence: f64,
+    pub mean: f64,
+}
+
+impl BoxStats {
+    /// `None` for an empty sample. Quartiles by linear interpolation between order statistics.
+    pub fn of(label: impl Into<String>, color: RGBColor, values: &[f64]) -> Option<Self> {
+        let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+        if v.is_empty() {
+            return None;
+        }
+        v.sort_by(f64::total_cmp);
+        let q = |p: f64| {
+            let h = p * (v.len() - 1) as f64;
+            let (lo, hi) = (h.floor() as usize, h.ceil() as usize);
+            v[lo] + (h - lo as f64) * (v[hi] - v[lo])
+        };
+        let (q1, median, q3) = (q(0.25), q(0.5), q(0.75));
+        let iqr = q3 - q1;
+        let lower_fence = v.iter().copied().find(|&x| x >= q1 - 1.5 * iqr).unwrap_or(q1);
+        let upper_fence = v.iter().rev().copied().find(|&x| x <= q3 + 1.5 * iqr).unwrap_or(q3);
+        let mean = v.iter().sum::<f64>() / v.len() as f64;
+        Some(Self { label: label.into(), color, lower_fence, q1, median, q3, upper_fence, mean })
+    }
+}
+
+/// A box-plot panel; `markers` are (label, mean, std) drawn as a dot with a ±std bar, for
+/// sources that give only those.
+pub struct BoxPanel {
+    pub title: String,
+    pub y_label: String,
+    pub boxes: Vec<BoxStats>,
+    pub markers: Vec<(String, f64, f64)>,
+}
+
+/// Box-plot panels on a grid of `columns` (box: quartiles, red median line, whiskers to the
+/// fences, blue dot at the mean, as in the paper's figure), written to `path` (PNG).
+pub fn box_panels(path: &Path, title: &str, panels: &[BoxPanel], columns: usize) -> Result<(), Box<dyn std::error::Error>> {
+    register_font()?;
+    let rows = panels.len().div_ceil(columns.max(1));
+    let root = BitMapBackend::new(path, (560 * columns as u32, 460 * rows as u32 + 50)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let (head, body) = root.split_vertically(50);
+    head.titled(title, ("sans-serif", 26))?;
+    let blue = RGBColor(20, 90, 200);
+    for (panel, area) in panels.iter().zip(body.split_evenly((rows, columns))) {
+        let labels: Vec<String> = panel.boxes.iter().map(|b| b.label.clone()).chain(panel.markers.iter().map(|m| m.0.clone())).collect();
+        let top = panel.boxes.iter().map(|b| b.upper_fence.max(b.mean)).chain(panel.markers.iter().map(|m| m.1 + m.2)).fold(0.0_f64, f64::max);
+        let n = labels.len();
+        let mut chart = ChartBuilder::on(&area)
+            .caption(&panel.title, ("sans-serif", 20))
+            .margin(15)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d(-0.5..n as f64 - 0.5, 0.0..top * 1.08 + 1e-300)?;
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .y_desc(panel.y_label.as_str())
+            .x_labels(n)
+            .x_label_formatter(&|x| {
+                let k = x.round();
+                if (x - k).abs() < 1e-6 && k >= 0.0 && (k as usize) < labels.len() { labels[k as usize].clone() } else { String::new() }
+            })
+            .y_label_formatter(&tick)
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 16))
+            .draw()?;
+        for (k, b) in panel.boxes.iter().enumerate() {
+            let x = k as f64;
+            let color = b.color;
+            chart.draw_series([
+                Rectangle::new([(x - 0.25, b.q1), (x + 0.25, b.q3)], color.stroke_width(2)),
+                Rectangle::new([(x - 0.25, b.median), (x + 0.25, b.median)], RGBColor(220, 0, 0).stroke_width(3)),
+            ])?;
+            chart.draw_series([
+                PathElement::new(vec![(x, b.q3), (x, b.upper_fence)], BLACK.stroke_width(1)),
+                PathElement::new(vec![(x, b.q1), (x, b.lower_fence)], BLACK.stroke_width(1)),
+                PathElement::new(vec![(x - 0.1, b.upper_fence), (x + 0.1, b.upper_fence)], BLACK.stroke_width(1)),
+                PathElement::new(vec![(x - 0.1, b.lower_fence), (x + 0.1, b.lower_fence)], BLACK.stroke_width(1)),
+            ])?;
+            chart.draw_series([Circle::new((x, b.mean), 5, blue.filled())])?;
+        }
+        for (k, (_, mean, std)) in panel.markers.iter().enumerate() {
+            let x = (panel.boxes.len() + k) as f64;
+            chart.draw_series([PathElement::new(vec![(x, (mean - std).max(0.0)), (x, mean + std)], BLACK.stroke_width(2))])?;
+            chart.draw_series([Circle::new((x, *mean), 5, blue.filled())])?;
+        }
+    }
     root.present()?;
     Ok(())
 }

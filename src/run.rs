@@ -53,7 +53,7 @@ pub fn run(scene: &Scene, output: &Path, options: &RunOptions) -> Result<RunSumm
         let writer = TrajectoryWriter::create(output, scene, &info)?;
         let mut sim = scene.simulation(None);
         if let Err(e) = sim.initialise() {
-            writer.finish(status::UNSTABLE, &e.to_string())?;
+            writer.finish(status::UNSTABLE, &e.to_string(), start.elapsed())?;
             return Err(e.into());
         }
         let mut writer = writer;
@@ -76,7 +76,7 @@ pub fn run(scene: &Scene, output: &Path, options: &RunOptions) -> Result<RunSumm
     while sim.state.step < total {
         if let Err(e) = sim.step() {
             bar.abandon();
-            writer.finish(status::UNSTABLE, &e.to_string())?;
+            writer.finish(status::UNSTABLE, &e.to_string(), start.elapsed())?;
             return Err(e.into());
         }
         let step = sim.state.step;
@@ -93,12 +93,12 @@ pub fn run(scene: &Scene, output: &Path, options: &RunOptions) -> Result<RunSumm
         if INTERRUPTED.load(Ordering::Relaxed) {
             bar.abandon();
             writer.write_checkpoint(&sim.state)?;
-            writer.finish(status::INTERRUPTED, "interrupted by the user")?;
+            writer.finish(status::INTERRUPTED, "interrupted by the user", start.elapsed())?;
             return Err(RunFailure::Interrupted { step, time: sim.state.time });
         }
     }
     bar.finish_and_clear();
-    writer.finish(status::COMPLETED, "")?;
+    writer.finish(status::COMPLETED, "", start.elapsed())?;
     Ok(RunSummary {
         steps: sim.state.step,
         frames: writer.frames(),

@@ -110,3 +110,54 @@ fn bad_sweeps_name_the_key() {
         assert!(err.contains(fragment), "{sweep}: {err}");
     }
 }
+
+#[test]
+fn variants_cross_the_sweep_and_an_unstable_run_is_a_recorded_result() {
+    let (file, out) = setup("variants", "seed = [1, 2]\n");
+    let text = std::fs::read_to_string(&file).unwrap();
+    // `fast` overrides two keys; `blows-up` uses explicit Euler at a step far above its bound
+    // (1e-6 s against ~7e-9 s in contact), which the solver must stop with its message.
+    std::fs::write(
+        &file,
+        format!(
+            "{text}\n[variants.fast]\n\"integration.dt\" = 2.0e-8\n\"particles.0.count\" = 8\n\
+             [variants.blows-up]\n\"integration.scheme\" = \"explicit-euler\"\n\"integration.dt\" = 1.0e-6\n\"integration.end_time\" = 2.0e-3\n\
+             \"field.b0\" = [1.5, 0.0, 0.0]\n\"particles.0.count\" = 40\n"
+        ),
+    )
+    .unwrap();
+    let exp = Experiment::from_file(&file).unwrap();
+    assert_eq!(exp.points.len(), 4);
+    let fast = exp.points.iter().find(|p| p.id == "base__fast__seed-2").expect("variant name in the id");
+    assert_eq!(fast.variant.as_deref(), Some("fast"));
+    assert_eq!(fast.scene.initial.len(), 8);
+    assert_eq!(fast.scene.dt(), 2.0e-8);
+    let results = run_experiment(&exp, &ExperimentOptions { jobs: Some(2), ..Default::default() }).unwrap();
+    for (point, result) in exp.points.iter().zip(&results) {
+        match point.variant.as_deref() {
+            Some("fast") => assert_eq!(result.outcome, Outcome::Completed),
+            _ => assert!(matches!(&result.outcome, Outcome::Unstable(why) if why.contains("stable dt")), "{}", result.outcome.label()),
+        }
+    }
+    // Rerunning does not retry the unstable runs: same scene, same outcome, from the file.
+    let again = run_experiment(&exp, &ExperimentOptions::default()).unwrap();
+    assert!(again.iter().all(|r| matches!(r.outcome, Outcome::Skipped | Outcome::Unstable(_))));
+    let manifest = std::fs::read_to_string(out.join("manifest.csv")).unwrap();
+    assert!(manifest.contains(",blows-up,") && manifest.contains("unstable:"), "{manifest}");
+}
+
+#[test]
+fn bad_variants_name_the_key() {
+    for (variant, fragment) in [
+        ("[variants.x]\n\"integration.dt\" = -1.0\n", "integration.dt"),
+        ("[variants.x]\nengine = \"lammps\"\n", "variants.x.engine"),
+        ("[variants]\nx = 3\n", "variants.x"),
+        ("[variants.\"a b\"]\nseed = 2\n", "names use letters"),
+    ] {
+        let (file, _) = setup("badvariant", "seed = [1]\n");
+        let text = std::fs::read_to_string(&file).unwrap();
+        std::fs::write(&file, format!("{text}\n{variant}")).unwrap();
+        let err = Experiment::from_file(&file).err().expect(variant).to_string();
+        assert!(err.contains(fragment), "{variant}: {err}");
+    }
+}

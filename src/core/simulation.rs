@@ -154,7 +154,7 @@ impl Simulation {
         let start = Instant::now();
         let eval_before = self.field.evaluation_time;
         let (field, dt) = (&mut self.field, self.dt);
-        self.integrator.step(&mut self.state, dt, &mut |s, group| field.evaluate_group(s, dt, group));
+        self.integrator.step(&mut self.state, dt, &mut |s, group, h| field.evaluate_group(s, h, group));
         let integrate = start.elapsed().saturating_sub(self.field.evaluation_time - eval_before);
         self.field.timers.add("integrate", integrate);
         let t0 = Instant::now();

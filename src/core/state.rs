@@ -146,6 +146,9 @@ pub struct State {
     pub diagnostics: ContactDiagnostics,
     /// Number of steps taken since t = 0.
     pub step: u64,
-    /// Simulated time (s); always `step × dt`.
+    /// Simulated time (s); `step × dt` between steps.
     pub time: f64,
+    /// The substep an adaptive integrator proposes to try next (its controller's memory, kept
+    /// here so that a checkpoint carries it and a resumed run repeats the uninterrupted one).
+    pub next_substep: Option<f64>,
 }

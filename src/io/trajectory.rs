@@ -364,6 +364,7 @@ impl TrajectoryWriter {
             }
             write_scalar_attr(&ck, "step", state.step)?;
             write_scalar_attr(&ck, "time", state.time)?;
+            write_scalar_attr(&ck, "next_substep", state.next_substep.unwrap_or(f64::NAN))?;
             write_scalar_attr(&ck, "frames", self.frames as u64)?;
             let rows = if self.contacts { self.file.dataset("contacts/pair")?.shape()[0] } else { 0 };
             write_scalar_attr(&ck, "contact_rows", rows as u64)?;
@@ -372,11 +373,14 @@ impl TrajectoryWriter {
         .map_err(self.err())
     }
 
-    /// Records how the run ended.
-    pub fn finish(&self, run_status: &str, message: &str) -> Result<(), TrajectoryError> {
+    /// Records how the run ended and adds `wall_time` to the file's `wall_time_s` (summed over
+    /// resumed pieces).
+    pub fn finish(&self, run_status: &str, message: &str, wall_time: std::time::Duration) -> Result<(), TrajectoryError> {
         (|| -> H5Result<()> {
             write_str_attr(&self.file, "status", run_status)?;
             write_str_attr(&self.file, "status_message", message)?;
+            let before: f64 = self.file.attr("wall_time_s").and_then(|a| a.read_scalar()).unwrap_or(0.0);
+            write_scalar_attr(&self.file, "wall_time_s", before + wall_time.as_secs_f64())?;
             self.file.flush()
         })()
         .map_err(self.err())
@@ -455,7 +459,8 @@ impl Trajectory {
         let step: u64 = ck.attr("step")?.read_scalar()?;
         let time: f64 = ck.attr("time")?.read_scalar()?;
         let frames: u64 = ck.attr("frames")?.read_scalar()?;
-        let state = State { particles, contacts, diagnostics: Default::default(), step, time };
+        let next_substep = ck.attr("next_substep").and_then(|a| a.read_scalar::<f64>()).ok().filter(|h| h.is_finite());
+        let state = State { particles, contacts, diagnostics: Default::default(), step, time, next_substep };
         Ok((state, frames as usize))
     }
 }

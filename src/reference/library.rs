@@ -247,6 +247,6 @@ pub fn run_coupled(engine: Engine, scene: &Scene, dir: &Path, output: &Path) -> 
     for (state, moments) in frames.iter_mut().zip(&coupler.frame_moments) {
         state.particles.moment.clone_from(moments);
     }
-    super::store(engine, "velocity-verlet (nve/sphere), magnetic forces from magdem every step", scene, output, &frames)?;
+    super::store(engine, "velocity-verlet (nve/sphere), magnetic forces from magdem every step", scene, output, &frames, start.elapsed())?;
     Ok(ReferenceRun { frames: frames.len(), log, wall_time: start.elapsed() })
 }

@@ -112,16 +112,16 @@ pub fn run_binary(engine: Engine, scene: &Scene, dir: &Path, output: &Path, coup
         }
         _ => "velocity-verlet (nve/sphere)".to_string(),
     };
-    store(engine, &integrator, scene, output, &frames)?;
+    store(engine, &integrator, scene, output, &frames, start.elapsed())?;
     Ok(ReferenceRun { frames: frames.len(), log, wall_time: start.elapsed() })
 }
 
 /// Writes a finished reference run's frames as a completed trajectory in magdem's schema.
-fn store(engine: Engine, integrator: &str, scene: &Scene, output: &Path, frames: &[crate::core::state::State]) -> Result<(), ReferenceError> {
+fn store(engine: Engine, integrator: &str, scene: &Scene, output: &Path, frames: &[crate::core::state::State], wall_time: std::time::Duration) -> Result<(), ReferenceError> {
     let mut writer = TrajectoryWriter::create(output, scene, &RunInfo { engine: engine.name(), integrator })?;
     for state in frames {
         writer.write_frame(state)?;
     }
-    writer.finish(status::COMPLETED, "")?;
+    writer.finish(status::COMPLETED, "", wall_time)?;
     Ok(())
 }

@@ -9,6 +9,10 @@
 //! "integration.dt" = [1e-8, 5e-9]       # any scene key by dotted path; array items by index,
 //! "particles.0.count" = [100, 200]      # e.g. the first [[particles]] group
 //! engine = ["magdem", "liggghts"]       # not a scene key: which solver runs the point
+//!
+//! [variants.no-induction]               # optional named override sets, one at a time: every
+//! "forces.dipole.induction" = "none"    # point runs once per variant (plus the unchanged base
+//!                                       # when `variants.base = {}` is listed)
 //! ```
 //!
 //! Each point is its base scene with the overrides applied, written back as TOML: that text is
@@ -30,6 +34,9 @@ pub struct ExperimentSpec {
     /// Dotted scene key (or `engine`) → values.
     #[serde(default)]
     pub sweep: toml::Table,
+    /// Variant name → dotted scene key → value; crossed with the sweep.
+    #[serde(default)]
+    pub variants: toml::Table,
 }
 
 /// One run of an experiment.
@@ -38,6 +45,8 @@ pub struct Point {
     /// File-name-safe identifier: base stem plus the overrides.
     pub id: String,
     pub base: PathBuf,
+    /// The variant's name, when the experiment lists variants.
+    pub variant: Option<String>,
     pub overrides: Vec<(String, toml::Value)>,
     pub engine: String,
     pub scene: Scene,
@@ -127,6 +136,19 @@ impl Experiment {
             }
             axes.push((key.clone(), list));
         }
+        let mut variants: Vec<(Option<String>, Vec<(String, toml::Value)>)> = vec![];
+        for (name, table) in &spec.variants {
+            let toml::Value::Table(table) = table else {
+                return Err(invalid(&format!("variants.{name}"), table, "must be a table of dotted scene keys"));
+            };
+            if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '.') {
+                return Err(invalid(&format!("variants.{name}"), name, "names use letters, digits, '-' and '.'"));
+            }
+            variants.push((Some(name.clone()), table.iter().map(|(k, v)| (k.clone(), v.clone())).collect()));
+        }
+        if variants.is_empty() {
+            variants.push((None, vec![]));
+        }
         let mut combos: Vec<Vec<(String, toml::Value)>> = vec![vec![]];
         for (key, values) in &axes {
             combos = combos
@@ -145,10 +167,20 @@ impl Experiment {
                 message: e.message().trim().replace('\n', " "),
             })?;
             let stem = base_path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().to_string());
-            for combo in &combos {
+            for ((variant, fixed), combo) in variants.iter().flat_map(|v| combos.iter().map(move |c| (v, c))) {
                 let mut table = base_table.clone();
                 let mut engine = "magdem".to_string();
                 let mut id = stem.clone();
+                if let Some(name) = variant {
+                    id += &format!("__{name}");
+                }
+                for (key, value) in fixed {
+                    if key == "engine" {
+                        return Err(invalid(&format!("variants.{}.engine", variant.as_deref().unwrap_or("")), value, "sweep engines with `sweep.engine`"));
+                    }
+                    set_path(&mut table, key, value.clone())
+                        .map_err(|why| invalid(&format!("variants.{}.{key}", variant.as_deref().unwrap_or("")), value, why))?;
+                }
                 for (key, value) in combo {
                     id += &format!("__{}-{}", key.rsplit('.').next().unwrap_or(key), slug(value));
                     if key == "engine" {
@@ -157,15 +189,16 @@ impl Experiment {
                     }
                     set_path(&mut table, key, value.clone()).map_err(|why| invalid(&format!("sweep.{key}"), value, why))?;
                 }
+                let overrides: Vec<(String, toml::Value)> = fixed.iter().chain(combo).cloned().collect();
                 let text = format!(
                     "# Experiment {} point {id}: {} with {}\n{}",
                     spec.name,
                     base.display(),
-                    if combo.is_empty() { "no overrides".to_string() } else { combo.iter().map(|(k, v)| format!("{k} = {v}")).collect::<Vec<_>>().join(", ") },
+                    if overrides.is_empty() { "no overrides".to_string() } else { overrides.iter().map(|(k, v)| format!("{k} = {v}")).collect::<Vec<_>>().join(", ") },
                     toml::to_string(&table).map_err(|e| invalid("sweep", "…", e.to_string()))?
                 );
                 let scene = Scene::parse(&text, &format!("{} ({id})", path.display()))?;
-                points.push(Point { id, base: base.clone(), overrides: combo.clone(), engine, scene });
+                points.push(Point { id, base: base.clone(), variant: variant.clone(), overrides, engine, scene });
             }
         }
         let output = spec.output.clone().unwrap_or_else(|| PathBuf::from("runs").join(&spec.name));

@@ -112,7 +112,8 @@ impl Scene {
             max_initial_speed: initial.velocity.iter().map(|v| v.norm()).fold(0.0, f64::max),
         });
         let dt = spec.integration.dt;
-        if dt > estimate.stable_dt {
+        // The adaptive integrator's dt is only its largest step.
+        if dt > estimate.stable_dt && spec.integration.scheme != "adaptive-verlet" {
             let why = format!("exceeds the estimated stable step: {}", estimate.summary(dt));
             match spec.stability.on_unstable_dt {
                 OnUnstable::Refuse => {
@@ -192,7 +193,7 @@ impl Scene {
     fn integrator(&self) -> Box<dyn integrators::Integrator> {
         let i = &self.spec.integration;
         if i.scheme != "exponential-verlet" {
-            return integrators::by_name(&i.scheme, i.slow_every).expect("scheme checked at load");
+            return integrators::by_name(&i.scheme, i.slow_every, i.tolerance).expect("scheme checked at load");
         }
         let drag = self.spec.forces.drag.as_ref();
         let fluid = self.spec.fluid.as_ref();
@@ -403,6 +404,9 @@ fn check_integration(spec: &SceneSpec) -> Result<(), SceneError> {
     }
     positive("integration.dt", i.dt)?;
     positive("integration.end_time", i.end_time)?;
+    if !(i.tolerance > 0.0 && i.tolerance < 1.0) {
+        return Err(invalid("integration.tolerance", i.tolerance, "must lie in (0, 1): a fraction of a particle radius"));
+    }
     if i.dt > i.end_time {
         return Err(invalid("integration.dt", i.dt, format!("is longer than integration.end_time = {:e}", i.end_time)));
     }

@@ -275,13 +275,18 @@ fn default_g() -> [f64; 3] {
 pub struct IntegrationSpec {
     /// `explicit-euler` | `semi-implicit-euler` | `velocity-verlet` (default) | `respa`
     /// (multiple time stepping: magnetic forces every `slow_every` steps) | `exponential-verlet`
-    /// (linear drag integrated exactly).
+    /// (linear drag integrated exactly) | `adaptive-verlet` (substeps under error control; dt is
+    /// the largest step).
     #[serde(default = "default_scheme")]
     pub scheme: String,
     /// `respa`: fast steps per evaluation of the moments and magnetic forces (default 1). Must
     /// divide the steps per output frame and the run.
     #[serde(default = "default_slow_every")]
     pub slow_every: u64,
+    /// `adaptive-verlet`: local error allowed per substep as a fraction of each particle's
+    /// radius (default 1e-6).
+    #[serde(default = "default_substep_tolerance")]
+    pub tolerance: f64,
     /// s
     pub dt: f64,
     /// s
@@ -290,6 +295,10 @@ pub struct IntegrationSpec {
 
 fn default_slow_every() -> u64 {
     1
+}
+
+fn default_substep_tolerance() -> f64 {
+    1e-6
 }
 
 fn default_scheme() -> String {

@@ -194,6 +194,7 @@ pub fn study(dir: &Path) -> Result<String, Box<dyn std::error::Error>> {
                 points: points.iter().filter(|p| p.1 > 0.0).map(|(dt, e)| (dt.log10(), e.log10())).collect(),
                 color: colour(scheme),
                 markers: if scheme == "exponential-verlet" || scheme == "respa" { Some(4) } else { None },
+                errors: vec![],
             });
         }
         let figure = format!("convergence-{}.png", problem.name);

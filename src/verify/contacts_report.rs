@@ -155,7 +155,7 @@ scale). Target: 0.5% on normal quantities, 1% on tangential ones against LIGGGHT
         let points = if markers.is_some() { points.iter().step_by(12).copied().collect() } else { points };
         let label = if labelled.contains(&o.engine) { String::new() } else { o.engine.to_string() };
         labelled.push(o.engine);
-        series.push(Series { label, points, color: engine_colour(o.engine), markers });
+        series.push(Series { label, points, color: engine_colour(o.engine), markers, errors: vec![] });
     }
     let fig1 = dir.join("contact-force-overlap.png");
     line_chart(&fig1, "Normal force against overlap, sphere–sphere, e = 0.3, 0.5, 0.7, 0.9", "overlap δ (nm)", "normal force (µN)", &series)?;
@@ -168,7 +168,7 @@ scale). Target: 0.5% on normal quantities, 1% on tangential ones against LIGGGHT
             .filter(|o| o.engine == engine && o.case.group.starts_with('4'))
             .map(|o| (o.case.incident_angle(), o.metrics.rebound_angle))
             .collect();
-        series.push(Series { label: engine.to_string(), points, color: engine_colour(engine), markers: marker_size(engine) });
+        series.push(Series { label: engine.to_string(), points, color: engine_colour(engine), markers: marker_size(engine), errors: vec![] });
     }
     let fig2 = dir.join("contact-oblique.png");
     line_chart(&fig2, "Oblique sphere–wall impact, 0.1 m/s, e = 0.5, μ = 0.5", "incident angle (°)", "rebound angle (°)", &series)?;

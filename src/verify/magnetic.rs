@@ -192,8 +192,8 @@ pub fn verify(dir: &Path, work: &Path, engines: &[Engine], case1_end: f64, magde
             .iter()
             .flat_map(|d| {
                 [
-                    Series { label: format!("{} max", d.engine), points: d.times.iter().zip(&d.max).map(|(t, v)| (t * 1e3, floor(*v))).collect(), color: engine_colour(d.engine), markers: None },
-                    Series { label: format!("{} median", d.engine), points: d.times.iter().zip(&d.median).map(|(t, v)| (t * 1e3, floor(*v))).collect(), color: engine_colour(d.engine), markers: Some(3) },
+                    Series { label: format!("{} max", d.engine), points: d.times.iter().zip(&d.max).map(|(t, v)| (t * 1e3, floor(*v))).collect(), color: engine_colour(d.engine), markers: None, errors: vec![] },
+                    Series { label: format!("{} median", d.engine), points: d.times.iter().zip(&d.median).map(|(t, v)| (t * 1e3, floor(*v))).collect(), color: engine_colour(d.engine), markers: Some(3), errors: vec![] },
                 ]
             })
             .collect();
@@ -231,6 +231,7 @@ pub fn verify(dir: &Path, work: &Path, engines: &[Engine], case1_end: f64, magde
             points: rows.iter().map(|r| ((r.0 as f64).log10(), r.1.log10())).collect(),
             color: engine_colour(engine.name()),
             markers: Some(5),
+            errors: vec![],
         }];
         line_chart(&dir.join("magnetic-files-route.png"), "Files route: lag error against exchange interval", "log10 K (steps)", "log10 max |x_files − x_callback| (m)", &series)?;
         md += "![Files route lag error](magnetic-files-route.png)\n\n";

@@ -52,7 +52,7 @@ impl Integrator for ExponentialVerlet {
         self.half_kick(&mut state.particles, 0.5 * dt);
         drift(&mut state.particles, dt);
         tick(state, dt);
-        evaluate(state, ForceGroup::All);
+        evaluate(state, ForceGroup::All, dt);
         self.half_kick(&mut state.particles, 0.5 * dt);
     }
 }

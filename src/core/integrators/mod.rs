@@ -2,12 +2,14 @@
 //! calling back into the force pipeline. On entry and on exit `force`/`torque` belong to the
 //! current state, so each step costs one force evaluation.
 
+mod adaptive_verlet;
 mod explicit_euler;
 mod exponential_verlet;
 mod respa;
 mod semi_implicit_euler;
 mod velocity_verlet;
 
+pub use adaptive_verlet::AdaptiveVerlet;
 pub use explicit_euler::ExplicitEuler;
 pub use exponential_verlet::ExponentialVerlet;
 pub use respa::Respa;
@@ -17,8 +19,9 @@ pub use velocity_verlet::VelocityVerlet;
 use super::simulation::ForceGroup;
 use super::state::{Particles, State, Vec3};
 
-/// Re-evaluates one group of forces and torques for the state as it stands.
-pub type Evaluate<'a> = dyn FnMut(&mut State, ForceGroup) + 'a;
+/// Re-evaluates one group of forces and torques for the state as it stands, at the end of a
+/// step of the given length (the contact model integrates its tangential history over it).
+pub type Evaluate<'a> = dyn FnMut(&mut State, ForceGroup, f64) + 'a;
 
 pub trait Integrator: Send {
     fn name(&self) -> &'static str;
@@ -37,11 +40,13 @@ pub trait Integrator: Send {
 
 /// Scheme names a scene may give (`exponential-verlet` is built by the scene layer, which knows
 /// the drag coefficients).
-pub const NAMES: [&str; 5] = ["explicit-euler", "semi-implicit-euler", "velocity-verlet", "respa", "exponential-verlet"];
+pub const NAMES: [&str; 6] = ["explicit-euler", "semi-implicit-euler", "velocity-verlet", "respa", "exponential-verlet", "adaptive-verlet"];
 
-/// The integrator `name`; `slow_every` is the multiple-time-stepping ratio (RESPA only).
-pub fn by_name(name: &str, slow_every: u64) -> Option<Box<dyn Integrator>> {
+/// The integrator `name`; `slow_every` is the multiple-time-stepping ratio (RESPA only),
+/// `tolerance` the adaptive integrator's local error per substep (fraction of a radius).
+pub fn by_name(name: &str, slow_every: u64, tolerance: f64) -> Option<Box<dyn Integrator>> {
     match name {
+        "adaptive-verlet" => Some(Box::new(AdaptiveVerlet::new(tolerance))),
         "explicit-euler" => Some(Box::new(ExplicitEuler)),
         "semi-implicit-euler" => Some(Box::new(SemiImplicitEuler)),
         "velocity-verlet" => Some(Box::new(VelocityVerlet)),

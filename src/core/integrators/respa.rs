@@ -34,10 +34,10 @@ impl Integrator for Respa {
             kick(&mut state.particles, 0.5 * dt);
             drift(&mut state.particles, dt);
             tick(state, dt);
-            evaluate(state, ForceGroup::Fast);
+            evaluate(state, ForceGroup::Fast, dt);
             kick(&mut state.particles, 0.5 * dt);
         }
-        evaluate(state, ForceGroup::Slow);
+        evaluate(state, ForceGroup::Slow, dt);
         slow_kick(&mut state.particles, 0.5 * outer);
     }
 }

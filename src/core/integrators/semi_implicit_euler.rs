@@ -18,6 +18,6 @@ impl Integrator for SemiImplicitEuler {
         kick(&mut state.particles, dt);
         drift(&mut state.particles, dt);
         tick(state, dt);
-        evaluate(state, ForceGroup::All);
+        evaluate(state, ForceGroup::All, dt);
     }
 }

@@ -19,7 +19,7 @@ impl Integrator for VelocityVerlet {
         kick(&mut state.particles, 0.5 * dt);
         drift(&mut state.particles, dt);
         tick(state, dt);
-        evaluate(state, ForceGroup::All);
+        evaluate(state, ForceGroup::All, dt);
         kick(&mut state.particles, 0.5 * dt);
     }
 }

@@ -1,0 +1,5 @@
+//! Reports built from experiment runs (outside the physics core): the paper reproduction.
+
+pub mod paper;
+pub mod runs;
+pub mod tables;

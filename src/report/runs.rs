@@ -1,0 +1,154 @@
+//! The runs behind a report: every point of a set of experiment files, with the aggregates of
+//! its last frame and the mean aggregate length at every frame.
+
+use crate::analysis::aggregates::Aggregate;
+use crate::analysis::stats::summary;
+use crate::analysis::trajectory::frame_aggregates;
+use crate::io::trajectory::{status, Trajectory};
+use crate::scene::experiment::Experiment;
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// One point of an experiment and what its trajectory holds.
+pub struct Run {
+    pub experiment: String,
+    pub id: String,
+    /// The base scene's name (e.g. `case1-c2.25`).
+    pub scene: String,
+    pub variant: String,
+    /// The variant's own overrides (`key = value`), without the sweep's.
+    pub variant_overrides: Vec<String>,
+    pub seed: u64,
+    pub engine: String,
+    /// Mass concentration of the first particle group (mg/ml), NaN when placed otherwise.
+    pub concentration: f64,
+    pub particles: usize,
+    pub overrides: String,
+    /// `completed`, `unstable`, `running`, `interrupted` or `missing`.
+    pub status: String,
+    pub message: String,
+    pub wall_time: f64,
+    pub file: PathBuf,
+    pub times: Vec<f64>,
+    /// Mean aggregate length at each frame (m).
+    pub mean_length: Vec<f64>,
+    /// Aggregates of the last frame.
+    pub last: Vec<Aggregate>,
+    /// x velocity of each of `last`'s aggregates as its members' mean displacement over the last
+    /// tenth of the run divided by that time (m/s): what tracking an aggregate measures, free of
+    /// the instantaneous velocity of collisions.
+    pub tracked_vx: Vec<f64>,
+    /// Whether each of `last`'s aggregates has a member within one diameter of an x wall (the
+    /// gradient's direction in case 2): such aggregates are held by the wall, not moving freely.
+    pub at_x_wall: Vec<bool>,
+}
+
+impl Run {
+    pub fn completed(&self) -> bool {
+        self.status == status::COMPLETED
+    }
+
+    /// Lengths of the last frame's aggregates (µm).
+    pub fn lengths_um(&self) -> Vec<f64> {
+        self.last.iter().map(|a| a.length * 1e6).collect()
+    }
+
+    pub fn mean_length_um(&self) -> f64 {
+        summary(&self.lengths_um()).mean
+    }
+}
+
+/// Experiment files in `dir` (sorted), and in `dir/opt-in` when `opt_in`.
+pub fn experiment_files(dir: &Path, opt_in: bool) -> std::io::Result<Vec<PathBuf>> {
+    let mut files = vec![];
+    for d in [dir.to_path_buf(), dir.join("opt-in")].iter().take(if opt_in { 2 } else { 1 }) {
+        if !d.is_dir() {
+            continue;
+        }
+        let mut here: Vec<PathBuf> = std::fs::read_dir(d)?.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|x| x == "toml")).collect();
+        here.sort();
+        files.extend(here);
+    }
+    Ok(files)
+}
+
+fn load(experiment: &Experiment, point: &crate::scene::experiment::Point, gap: f64) -> Result<Run, Box<dyn std::error::Error + Send + Sync>> {
+    let spec = &point.scene.spec;
+    let file = experiment.output.join(format!("{}.h5", point.id));
+    let mut run = Run {
+        experiment: experiment.spec.name.clone(),
+        id: point.id.clone(),
+        scene: point.base.file_stem().map_or(String::new(), |s| s.to_string_lossy().to_string()),
+        variant: point.variant.clone().unwrap_or_default(),
+        variant_overrides: point.overrides.iter().take(point.overrides.len().saturating_sub(sweep_keys(experiment))).map(|(k, v)| format!("{k} = {v}")).collect(),
+        seed: spec.seed,
+        engine: point.engine.clone(),
+        concentration: spec.particles.first().and_then(|g| g.concentration).unwrap_or(f64::NAN),
+        particles: point.scene.initial.len(),
+        overrides: point.overrides.iter().map(|(k, v)| format!("{k} = {v}")).collect::<Vec<_>>().join(", "),
+        status: "missing".into(),
+        message: String::new(),
+        wall_time: f64::NAN,
+        file: file.clone(),
+        times: vec![],
+        mean_length: vec![],
+        last: vec![],
+        tracked_vx: vec![],
+        at_x_wall: vec![],
+    };
+    let Ok(t) = Trajectory::open(&file) else {
+        return Ok(run);
+    };
+    if t.attr_string("scene_sha256").ok().as_deref() != Some(point.scene.hash.as_str()) {
+        run.status = "stale (another scene)".into();
+        return Ok(run);
+    }
+    run.status = t.attr_string("status").map_err(|e| e.to_string())?;
+    run.message = t.attr_string("status_message").unwrap_or_default();
+    run.wall_time = t.attr::<f64>("wall_time_s").unwrap_or(f64::NAN);
+    if run.completed() {
+        let frames = t.frames().map_err(|e| e.to_string())?;
+        for k in 0..frames {
+            let (time, aggs) = frame_aggregates(&t, k as isize, gap).map_err(|e| e.to_string())?;
+            run.times.push(time);
+            run.mean_length.push(summary(&aggs.iter().map(|a| a.length).collect::<Vec<_>>()).mean);
+            if k + 1 == frames {
+                run.last = aggs;
+            }
+        }
+        let times = t.times().map_err(|e| e.to_string())?;
+        let end = frames - 1;
+        let start = times.iter().position(|&x| x >= 0.9 * times[end]).unwrap_or(0).min(end.saturating_sub(1));
+        let (now, then) = (t.frame_vectors("position", end).map_err(|e| e.to_string())?, t.frame_vectors("position", start).map_err(|e| e.to_string())?);
+        let span = times[end] - times[start];
+        let domain = &point.scene.domain;
+        run.tracked_vx = run
+            .last
+            .iter()
+            .map(|a| a.members.iter().map(|&i| domain.displacement(&now[i], &then[i]).x).sum::<f64>() / (a.members.len() as f64 * span))
+            .collect();
+        let radius = &point.scene.initial.radius;
+        run.at_x_wall = run
+            .last
+            .iter()
+            .map(|a| !domain.periodic[0] && a.members.iter().any(|&i| now[i].x - domain.lo.x < 3.0 * radius[i] || domain.hi.x - now[i].x < 3.0 * radius[i]))
+            .collect();
+    }
+    Ok(run)
+}
+
+/// Number of sweep axes (the last overrides of every point).
+fn sweep_keys(experiment: &Experiment) -> usize {
+    experiment.spec.sweep.len()
+}
+
+/// Every point of the experiments in `files`, analysed at aggregate gap tolerance `gap`.
+pub fn load_runs(files: &[PathBuf], gap: f64) -> Result<Vec<Run>, Box<dyn std::error::Error>> {
+    let mut jobs = vec![];
+    let experiments: Vec<Experiment> = files.iter().map(|f| Experiment::from_file(f).map_err(|e| format!("{}: {e}", f.display()))).collect::<Result<_, _>>()?;
+    for e in &experiments {
+        jobs.extend(e.points.iter().map(move |p| (e, p)));
+    }
+    let runs: Result<Vec<Run>, _> = jobs.par_iter().map(|(e, p)| load(e, p, gap)).collect();
+    runs.map_err(|e| e.to_string().into())
+}

@@ -1,0 +1,133 @@
+//! The paper report is computed from the runs: its tables equal what the analysis gives for the
+//! trajectories, the Parquet and CSV copies agree, and missing studies are said to be missing.
+
+mod common;
+
+use magdem::analysis::stats::summary;
+use magdem::analysis::trajectory::frame_aggregates;
+use magdem::experiment::{run_experiment, ExperimentOptions};
+use magdem::io::trajectory::Trajectory;
+use magdem::plot::{BoxStats, RGBColor};
+use magdem::report::paper::{write_report, PaperReportOptions};
+use magdem::scene::experiment::Experiment;
+use polars::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// A case-1-like scene at 0.563 mg/ml in a 300 µm box (20 particles, about 10 diameters apart)
+/// at the paper's 0.4 T, integrated as the Table 3 ensemble is; some chains form within 2 ms.
+fn scene() -> String {
+    common::scene(
+        r#"version = 1
+name = "case1-c0.563"
+seed = 1
+[domain]
+lo = [0.0, 0.0, 0.0]
+hi = [3.0e-4, 3.0e-4, 3.0e-4]
+"#,
+        r#"[[particles]]
+species = "p"
+concentration = 0.563
+[forces.contact]
+walls = true
+[forces.dipole]
+induction = "paper"
+cutoff_diameters = 15.0
+[forces.drag]
+[integration]
+scheme = "respa"
+slow_every = 10
+dt = 1.0e-8
+end_time = 2.0e-3
+[output]
+interval = 2.0e-4
+"#,
+    )
+}
+
+fn read_csv(path: &Path) -> DataFrame {
+    CsvReadOptions::default().with_has_header(true).try_into_reader_with_file_path(Some(path.to_path_buf())).unwrap().finish().unwrap()
+}
+
+#[test]
+fn report_tables_are_the_analysis_of_the_runs() {
+    let dir = std::env::temp_dir().join(format!("magdem-report-{}", std::process::id()));
+    let experiments = dir.join("experiments");
+    std::fs::create_dir_all(&experiments).unwrap();
+    std::fs::write(dir.join("case1-c0.563.toml"), scene()).unwrap();
+    let runs = dir.join("runs");
+    let file = experiments.join("table3.toml");
+    std::fs::write(
+        &file,
+        format!("name = \"paper-table3\"\nbases = [\"../case1-c0.563.toml\"]\noutput = \"{}\"\n[sweep]\nseed = [1, 2, 3]\n", runs.display()),
+    )
+    .unwrap();
+    let experiment = Experiment::from_file(&file).unwrap();
+    run_experiment(&experiment, &ExperimentOptions { jobs: Some(2), ..Default::default() }).unwrap();
+
+    let out = dir.join("report");
+    let reference = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("reference/paper");
+    let readme = write_report(&PaperReportOptions { experiments: experiments.clone(), reference, out: out.clone(), gap: 1e-3, wall_time: Some(12.0) }).unwrap();
+    let text = std::fs::read_to_string(&readme).unwrap();
+
+    // Independent analysis of the three runs' last frames.
+    let means: Vec<f64> = (1..=3)
+        .map(|seed| {
+            let t = Trajectory::open(&runs.join(format!("case1-c0.563__seed-{seed}.h5"))).unwrap();
+            let (_, aggs) = frame_aggregates(&t, -1, 1e-3).unwrap();
+            summary(&aggs.iter().map(|a| a.length * 1e6).collect::<Vec<_>>()).mean
+        })
+        .collect();
+    let expected = summary(&means).mean;
+    assert!(expected > 11.0, "some chains formed: {means:?}");
+    let table3 = read_csv(&out.join("tables/table3.csv"));
+    let row = table3.column("concentration_mg_per_ml").unwrap().f64().unwrap().into_iter().position(|c| c == Some(0.563)).unwrap();
+    let reported = table3.column("magdem_mean_length_um").unwrap().f64().unwrap().get(row).unwrap();
+    assert!((reported - expected).abs() <= 1e-9 * expected, "report {reported} vs analysis {expected}");
+    assert_eq!(table3.column("runs").unwrap().cast(&DataType::UInt64).unwrap().u64().unwrap().get(row), Some(3));
+    // The paper's columns come from reference/paper/table3_case1_lengths.csv.
+    assert_eq!(table3.column("paper_sim_mean_um").unwrap().f64().unwrap().get(row), Some(34.02));
+    // Concentrations without runs are empty, not invented.
+    assert!(table3.column("magdem_mean_length_um").unwrap().f64().unwrap().get((row + 1) % 4).is_none_or(f64::is_nan));
+
+    // Parquet holds the same table as the CSV.
+    let parquet = ParquetReader::new(std::fs::File::open(out.join("tables/table3.parquet")).unwrap()).finish().unwrap();
+    assert_eq!(parquet.height(), table3.height());
+    assert_eq!(parquet.column("magdem_mean_length_um").unwrap().f64().unwrap().get(row), Some(reported));
+
+    // The histogram table counts every particle of the runs once per run.
+    let table4 = read_csv(&out.join("tables/table4.csv"));
+    let rows = table4.filter(&table4.column("concentration_mg_per_ml").unwrap().f64().unwrap().equal(0.563)).unwrap();
+    let particles: f64 = rows
+        .column("particles_per_aggregate")
+        .unwrap()
+        .cast(&DataType::Float64)
+        .unwrap()
+        .f64()
+        .unwrap()
+        .into_no_null_iter()
+        .zip(rows.column("magdem_mean_count").unwrap().f64().unwrap().into_no_null_iter())
+        .map(|(s, n)| s * n)
+        .sum();
+    assert!((particles - 20.0).abs() < 1e-9, "{particles}");
+
+    for figure in ["table3.png", "table4.png", "boxplots.png", "length-vs-time.png"] {
+        assert!(out.join(figure).metadata().unwrap().len() > 10_000, "{figure}");
+        assert!(text.contains(&format!("({figure})")), "{figure} linked");
+    }
+    assert!(text.contains("No completed case-2 runs"), "missing studies are said to be missing");
+    assert!(text.contains("wrote this report took 12 s"));
+}
+
+#[test]
+fn box_statistics_follow_the_definitions() {
+    let values: Vec<f64> = (1..=9).map(f64::from).collect();
+    let b = BoxStats::of("x", RGBColor(0, 0, 0), &values).unwrap();
+    assert_eq!((b.lower_fence, b.q1, b.median, b.q3, b.upper_fence, b.mean), (1.0, 3.0, 5.0, 7.0, 9.0, 5.0));
+    // An outlier beyond q3 + 1.5 IQR moves the mean but not the whisker.
+    let mut with_outlier = values.clone();
+    with_outlier.push(100.0);
+    let b = BoxStats::of("x", RGBColor(0, 0, 0), &with_outlier).unwrap();
+    assert_eq!(b.upper_fence, 9.0);
+    assert!((b.mean - 14.5).abs() < 1e-12);
+    assert!(BoxStats::of("x", RGBColor(0, 0, 0), &[]).is_none());
+}
