@@ -67,6 +67,12 @@ fn bad_scenes_are_refused_with_a_message_naming_the_cause() {
         ("empty box", edit("hi = [1.0e-4, 1.0e-4, 1.0e-4]", "hi = [1.0e-4, 0.0, 1.0e-4]"), &["domain.hi", "must exceed domain.lo"]),
         ("wrong version", edit("version = 1", "version = 2"), &["version = 2", "scene version 1"]),
         (
+            "adaptive step with the lagged induction",
+            edit("induction = \"exact\"", "induction = \"paper\"").replace("dt = 1.0e-8", "scheme = \"adaptive-verlet\"\ndt = 1.0e-8"),
+            &["integration.scheme = adaptive-verlet", "depend on the state alone"],
+        ),
+        ("adaptive tolerance", edit("dt = 1.0e-8", "scheme = \"adaptive-verlet\"\ntolerance = 2.0\ndt = 1.0e-8"), &["integration.tolerance = 2", "(0, 1)"]),
+        (
             "overfull random placement",
             edit("positions = [[2.0e-5, 5.0e-5, 5.0e-5], [8.0e-5, 5.0e-5, 5.0e-5]]", "count = 2000"),
             &["particles[0].count = 2000", "could not place particle"],

@@ -84,6 +84,15 @@ fn resume_after_kill_is_bitwise_equal_with_multiple_time_stepping() {
     resume_after_kill("resume-respa", &scene_text().replace("dt = 1.0e-8", "scheme = \"respa\"\ndt = 1.0e-8\nslow_every = 10"));
 }
 
+/// The adaptive integrator's proposed substep is in the checkpoint.
+#[test]
+fn resume_after_kill_is_bitwise_equal_with_the_adaptive_step() {
+    // A loose tolerance and a shorter run: with 60 particles in chains the substeps follow every
+    // contact oscillation, and tight tolerances cost minutes.
+    let text = scene_text().replace("dt = 1.0e-8", "scheme = \"adaptive-verlet\"\ntolerance = 1e-4\ndt = 1.0e-8").replace("end_time = 3.0e-4", "end_time = 1.2e-4");
+    resume_after_kill("resume-adaptive", &text.replace("induction = \"paper\"", "induction = \"none\""));
+}
+
 fn resume_after_kill(name: &str, text: &str) {
     let dir = workdir(name);
     std::fs::write(dir.join("scene.toml"), text).unwrap();

@@ -404,6 +404,14 @@ fn check_integration(spec: &SceneSpec) -> Result<(), SceneError> {
     }
     positive("integration.dt", i.dt)?;
     positive("integration.end_time", i.end_time)?;
+    if i.scheme == "adaptive-verlet" && spec.forces.dipole.as_ref().is_some_and(|d| matches!(d.induction, InductionSpec::Paper)) {
+        return Err(invalid(
+            "integration.scheme",
+            &i.scheme,
+            "needs forces that depend on the state alone, and the paper's induction advances its moments by one sweep per \
+             force evaluation (step doubling would compare one sweep with two); use forces.dipole.induction = \"exact\" or \"none\"",
+        ));
+    }
     if !(i.tolerance > 0.0 && i.tolerance < 1.0) {
         return Err(invalid("integration.tolerance", i.tolerance, "must lie in (0, 1): a fraction of a particle radius"));
     }

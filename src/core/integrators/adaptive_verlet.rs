@@ -10,8 +10,10 @@
 //! retried from a saved state otherwise; the next h is h · clamp(0.9 err^(−1/3), 0.2, 2), kept
 //! in `State::next_substep` between calls (so checkpoints carry it). The
 //! accepted solution is velocity Verlet at h/2: order 2, with errors proportional to the
-//! tolerance. Three force evaluations per accepted substep; one impact anywhere shortens the step
-//! for all particles (the step is global).
+//! tolerance for position-dependent forces (with velocity-dependent drag, first order, as velocity
+//! Verlet). Three force evaluations per accepted substep; one impact anywhere shortens the step
+//! for all particles (the step is global). The forces must be functions of the state: the scene
+//! layer refuses the paper's lagged induction, which advances one sweep per evaluation.
 
 use super::{drift, kick, Evaluate, Integrator};
 use crate::core::simulation::ForceGroup;
@@ -61,9 +63,9 @@ impl Integrator for AdaptiveVerlet {
         let (start_step, start_time) = (state.step, state.time);
         let end = start_time + dt;
         let mut h = state.next_substep.unwrap_or(dt).min(dt);
-        // A floor far below any physical time scale of the scenes keeps a pathological state
-        // from stalling the run: the monitor then reports it.
-        let floor = dt * 1e-9;
+        // A floor of 1e-6 dt bounds the cost of a step whose error will not fall (a discontinuous
+        // force): the substep is then accepted and the monitor judges the result.
+        let floor = dt * 1e-6;
         loop {
             let remaining = end - state.time;
             if remaining <= 1e-12 * dt {
