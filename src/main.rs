@@ -30,6 +30,12 @@ enum SolverStudy {
         #[arg(long, default_value = "reports/accuracy")]
         report: PathBuf,
     },
+    /// Largest stable dt against Young's modulus and field per integrator (measured and
+    /// estimated), stiff and extreme cases, dipole cut-off error; writes reports/accuracy/stability.md.
+    Stability {
+        #[arg(long, default_value = "reports/accuracy")]
+        report: PathBuf,
+    },
 }
 
 #[derive(Subcommand)]
@@ -434,6 +440,16 @@ fn main() -> ExitCode {
         Command::Study { study: SolverStudy::Accuracy { report } } => match magdem::study::accuracy::study(&report) {
             Ok(_) => {
                 println!("wrote {}", report.join("README.md").display());
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(1)
+            }
+        },
+        Command::Study { study: SolverStudy::Stability { report } } => match magdem::study::stability::study(&report) {
+            Ok(_) => {
+                println!("wrote {}", report.join("stability.md").display());
                 ExitCode::SUCCESS
             }
             Err(e) => {

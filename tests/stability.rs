@@ -96,3 +96,29 @@ fn cli_reports_instability_with_exit_code_3_and_keeps_the_file() {
     assert!(t.attr_string("status_message").unwrap().contains("Estimated stable dt"));
     assert!(t.frames().unwrap() >= 1);
 }
+
+/// The measured largest stable step of velocity Verlet for the case-1 material and field lies
+/// within a small factor above the estimate (the estimate is meant to be safe, not loose).
+#[test]
+fn stability_map_brackets_the_estimate_at_the_paper_setting() {
+    let p = magdem::study::stability::map_point("velocity-verlet", 1e9, 0.4).unwrap();
+    println!("estimate {:.3e} s, measured {:.3e} s, Rayleigh {:.3e} s", p.estimate, p.measured, p.rayleigh);
+    assert!(p.measured.is_finite());
+    assert!(p.measured >= 0.7 * p.estimate && p.measured <= 16.0 * p.estimate, "measured {:e} vs estimate {:e}", p.measured, p.estimate);
+}
+
+/// Every stiff and extreme case either completes with finite values or stops (or is refused)
+/// with the solver's message: never NaN, never a silent result.
+#[test]
+fn extreme_cases_complete_or_stop_with_a_message() {
+    for case in magdem::study::stability::extremes() {
+        println!("{}: {}", case.name, case.outcome);
+        assert!(
+            case.outcome.starts_with("completed ") || case.outcome.starts_with("stopped: unstable at step") || case.outcome.starts_with("refused at load: "),
+            "{}: {}",
+            case.name,
+            case.outcome
+        );
+        assert!(!case.outcome.contains("non-finite values (a solver bug)"), "{}", case.name);
+    }
+}

@@ -484,11 +484,13 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
                 check_inside(&key(&format!("positions[{k}]")), x, at, s.radius, domain)?;
                 for j in 0..particles.len() {
                     let gap = domain.displacement(&at, &particles.position[j]).norm() - s.radius - particles.radius[j];
-                    if gap < 0.0 {
+                    // Overlaps the run monitor accepts are allowed (a pre-compressed start).
+                    let limit = spec.stability.max_overlap * 2.0 * s.radius.min(particles.radius[j]);
+                    if -gap > limit {
                         return Err(invalid(
                             key(&format!("positions[{k}]")),
                             fmt3(x),
-                            format!("overlaps particle {j} by {:e} m (explicit particles must not overlap)", -gap),
+                            format!("overlaps particle {j} by {:e} m, more than stability.max_overlap = {} of the smaller diameter", -gap, spec.stability.max_overlap),
                         ));
                     }
                 }
