@@ -313,7 +313,12 @@ pub fn study(dir: &Path) -> Result<String, Error> {
                     p.measured / p.estimate
                 );
             }
-            series.push(Series::markers(format!("measured, {b} T"), here.iter().map(|p| (p.youngs_modulus.log10(), p.measured.log10())).collect(), palette(k), 5));
+            series.push(Series::markers(
+                format!("measured, {b} T"),
+                here.iter().filter(|p| p.measured.is_finite()).map(|p| (p.youngs_modulus.log10(), p.measured.log10())).collect(),
+                palette(k),
+                5,
+            ));
             series.push(Series::line(format!("estimate, {b} T"), here.iter().map(|p| (p.youngs_modulus.log10(), p.estimate.log10())).collect(), palette(k)));
         }
         let rayleigh: Vec<(f64, f64)> = points.iter().filter(|p| p.scheme == scheme && p.b0 == FIELDS[0]).map(|p| (p.youngs_modulus.log10(), p.rayleigh.log10())).collect();
@@ -322,7 +327,7 @@ pub fn study(dir: &Path) -> Result<String, Error> {
             series.push(Series::markers("the paper: E = 1e9 Pa, dt = 1e-6 s", vec![(9.0, -6.0)], RGBColor(0, 0, 0), 8));
         }
         let figure = format!("stability-{scheme}.png");
-        line_chart_with_legend(&dir.join(&figure), &format!("Largest stable dt: {scheme}"), "log10 Young's modulus (Pa)", "log10 dt (s)", &series, SeriesLabelPosition::UpperRight)?;
+        line_chart_with_legend(&dir.join(&figure), &format!("Largest stable dt: {scheme}"), "log10 Young's modulus (Pa)", "log10 dt (s)", &series, SeriesLabelPosition::LowerLeft)?;
         let _ = writeln!(md, "\n![{scheme}]({figure})\n");
     }
     let ratio: Vec<f64> = points.iter().map(|p| p.measured / p.estimate).filter(|r| r.is_finite()).collect();
