@@ -239,7 +239,8 @@ fn gap_sensitivity(runs: &[Run]) -> Result<String, Error> {
         gaps.iter().map(|g| format!("{g:e}")).collect::<Vec<_>>().join(" | "),
         "---|".repeat(gaps.len())
     );
-    for r in completed(runs, "paper-table3").into_iter().filter(|r| r.seed == 1) {
+    let verlet = runs.iter().filter(|r| r.experiment == "paper-sensitivity" && r.variant == "verlet" && r.seed == 1 && r.completed());
+    for r in completed(runs, "paper-table3").into_iter().filter(|r| r.seed == 1).chain(verlet) {
         let t = crate::io::trajectory::Trajectory::open(&r.file)?;
         let means: Vec<String> = gaps
             .iter()
@@ -247,7 +248,11 @@ fn gap_sensitivity(runs: &[Run]) -> Result<String, Error> {
             .collect::<Result<_, _>>()?;
         md += &format!("| {} | {} |\n", r.id, means.join(" | "));
     }
-    Ok(md + "\n")
+    Ok(md
+        + "\nFrom 1e-3 to 5e-2 the answer does not move. Below 1e-3 (a gap of 5.5 nm) some r-RESPA runs split a chain: \
+           the magnetic kicks every 10 steps make chain contacts ring with nanometre amplitude, so at the last frame a \
+           contact can be momentarily open by 0.5–5 nm; the velocity Verlet run (last row) shows no such split. 1e-3 is \
+           the tolerance used throughout.\n\n")
 }
 
 fn table4_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Result<String, Error> {
