@@ -781,7 +781,7 @@ fn reference_section(runs: &[Run], out: &Path, tables: &Path) -> Result<String, 
          statistics is the requirement and agreement of trajectories a bonus; LAMMPS' tangential contact model differs from \
          LIGGGHTS' and magdem's by design (see the contact verification report). Engines not installed show as missing.\n\n"
     );
-    md += &markdown(&df, &["scene", "engine", "seed", "status", "aggregates", "mean length (µm)", "pop std (µm)", "largest", "max |Δx| at the end (m)", "max |Δx| over the run (m)", "wall time (s)"], &[0, 0, 0, 0, 0, 2, 2, 0, 0, 0, 1])?;
+    md += &markdown(&df, &["scene", "engine", "seed", "status", "aggregates", "mean length (µm)", "pop std (µm)", "largest", "largest Δx at the end (m)", "largest Δx over the run (m)", "wall time (s)"], &[0, 0, 0, 0, 0, 2, 2, 0, 0, 0, 1])?;
     let done: Vec<&&Run> = here.iter().filter(|r| r.completed()).collect();
     if !done.is_empty() {
         let series: Vec<Series> = done.iter().map(|r| Series::line(format!("{} ({})", r.engine, r.scene), r.times.iter().zip(&r.mean_length).map(|(t, l)| (t * 1e3, l * 1e6)).collect(), engine_colour(&r.engine))).collect();
