@@ -297,7 +297,7 @@ than the symplectic schemes at the same dt; semi-implicit Euler equals Verlet on
 velocity-dependent forces they produce the same positions).\n\
 - The Hertz orders are noisy because the largest overlap is sampled at the steps.\n\
 - **Work–precision**: on the magnetic approach exponential Verlet reaches a given error 10–1000 times sooner than \
-any other scheme; `respa` costs half of Verlet's time at the same error (here with K = 4). `adaptive-verlet` does \
+any other scheme; `respa` (K = 4 here) takes a third of Verlet's time at the same error. `adaptive-verlet` does \
 not improve as its tolerance tightens: its step-doubling estimate compares Verlet with Verlet, and Verlet's \
 first-order drag error is the same in both, so the controller never sees it (it does see contacts: the impact \
 test in tests/integrators.rs).\n";
