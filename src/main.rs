@@ -25,7 +25,7 @@ enum EngineChoice {
 
 #[derive(Subcommand)]
 enum SolverStudy {
-    /// Error against dt per integrator on problems with known answers; writes reports/accuracy/.
+    /// Error against dt and against run time per integrator on problems with known answers; writes reports/accuracy/.
     Accuracy {
         #[arg(long, default_value = "reports/accuracy")]
         report: PathBuf,
@@ -123,7 +123,7 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
     },
-    /// Numerical studies of the solver (accuracy against time step).
+    /// Numerical studies of the solver: accuracy (error against dt and run time), stability.
     Study {
         #[command(subcommand)]
         study: SolverStudy,
@@ -437,26 +437,22 @@ fn main() -> ExitCode {
                 ExitCode::from(2)
             }
         },
-        Command::Study { study: SolverStudy::Accuracy { report } } => match magdem::study::accuracy::study(&report) {
-            Ok(_) => {
-                println!("wrote {}", report.join("README.md").display());
-                ExitCode::SUCCESS
+        Command::Study { study } => {
+            let (result, written) = match study {
+                SolverStudy::Accuracy { report } => (magdem::study::accuracy::study(&report), report.join("README.md")),
+                SolverStudy::Stability { report } => (magdem::study::stability::study(&report), report.join("stability.md")),
+            };
+            match result {
+                Ok(_) => {
+                    println!("wrote {}", written.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(1)
+                }
             }
-            Err(e) => {
-                eprintln!("error: {e}");
-                ExitCode::from(1)
-            }
-        },
-        Command::Study { study: SolverStudy::Stability { report } } => match magdem::study::stability::study(&report) {
-            Ok(_) => {
-                println!("wrote {}", report.join("stability.md").display());
-                ExitCode::SUCCESS
-            }
-            Err(e) => {
-                eprintln!("error: {e}");
-                ExitCode::from(1)
-            }
-        },
+        }
         Command::Report(Report::Paper { experiments, reference, out, gap, wall_time }) => {
             let options = magdem::report::paper::PaperReportOptions { experiments, reference, out, gap, wall_time };
             match magdem::report::paper::write_report(&options) {
