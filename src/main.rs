@@ -477,9 +477,10 @@ fn main() -> ExitCode {
 }
 
 fn analyse(path: &Path, frame: isize, gap: f64, csv: bool, header: bool) -> Result<(), Box<dyn std::error::Error>> {
-    use magdem::analysis::{stats::summary, trajectory::frame_aggregates};
+    use magdem::analysis::{stats::summary, trajectory::FrameReader};
     let t = Trajectory::open(path)?;
-    let (time, aggs) = frame_aggregates(&t, frame, gap)?;
+    let reader = FrameReader::new(&t)?;
+    let (time, aggs) = reader.aggregates(frame, gap)?;
     let lengths: Vec<f64> = aggs.iter().map(|a| a.length * 1e6).collect();
     let s = summary(&lengths);
     if csv {
@@ -516,7 +517,7 @@ fn analyse(path: &Path, frame: isize, gap: f64, csv: bool, header: bool) -> Resu
     println!("size: count  {}", histogram.iter().map(|(k, v)| format!("{k}:{v}")).collect::<Vec<_>>().join("  "));
     print!("gap tolerance sensitivity (mean length µm):");
     for g in [1e-4, 1e-3, 1e-2, 5e-2] {
-        let (_, a) = frame_aggregates(&t, frame, g)?;
+        let (_, a) = reader.aggregates(frame, g)?;
         print!("  {g:e}: {:.2}", summary(&a.iter().map(|a| a.length * 1e6).collect::<Vec<_>>()).mean);
     }
     println!();

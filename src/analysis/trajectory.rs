@@ -1,24 +1,58 @@
-//! Aggregates of a stored trajectory frame (the trajectory carries its scene, so the domain and
+//! Aggregates of stored trajectory frames (the trajectory carries its scene, so the domain and
 //! field direction come with it).
 
 use super::aggregates::{aggregates, Aggregate, Frame};
+use crate::core::domain::Domain;
+use crate::core::state::Vec3;
 use crate::io::trajectory::Trajectory;
 use crate::scene::Scene;
 
-/// Aggregates of frame `k` (negative: from the end) of `t` at `gap_tolerance`.
-pub fn frame_aggregates(t: &Trajectory, k: isize, gap_tolerance: f64) -> Result<(f64, Vec<Aggregate>), Box<dyn std::error::Error>> {
-    let scene = Scene::parse(&t.scene_text()?, &t.path)?;
-    let frames = t.frames()? as isize;
-    let k = if k < 0 { frames + k } else { k };
-    if !(0..frames).contains(&k) {
-        return Err(format!("frame {k} outside 0..{frames}").into());
+type Error = Box<dyn std::error::Error>;
+
+/// What every frame of a trajectory shares: domain, field direction, radii, masses, times.
+pub struct FrameReader<'a> {
+    trajectory: &'a Trajectory,
+    domain: Domain,
+    field: Vec3,
+    radius: Vec<f64>,
+    mass: Vec<f64>,
+    pub times: Vec<f64>,
+}
+
+impl<'a> FrameReader<'a> {
+    pub fn new(t: &'a Trajectory) -> Result<Self, Error> {
+        let scene = Scene::parse(&t.scene_text()?, &t.path)?;
+        let field = scene.spec.field.as_ref().map_or(Vec3::x(), |f| Vec3::from(f.b0));
+        Ok(Self {
+            trajectory: t,
+            domain: scene.domain,
+            field,
+            radius: t.file.dataset("particles/radius")?.read_raw()?,
+            mass: t.file.dataset("particles/mass")?.read_raw()?,
+            times: t.times()?,
+        })
     }
-    let k = k as usize;
-    let position = t.frame_vectors("position", k)?;
-    let velocity = t.frame_vectors("velocity", k)?;
-    let radius: Vec<f64> = t.file.dataset("particles/radius")?.read_raw()?;
-    let mass: Vec<f64> = t.file.dataset("particles/mass")?.read_raw()?;
-    let field = scene.spec.field.as_ref().map_or(nalgebra::Vector3::x(), |f| nalgebra::Vector3::from(f.b0));
-    let frame = Frame { position: &position, velocity: &velocity, radius: &radius, mass: &mass };
-    Ok((t.times()?[k], aggregates(&frame, &scene.domain, &field, gap_tolerance)))
+
+    pub fn domain(&self) -> &Domain {
+        &self.domain
+    }
+
+    /// Aggregates of frame `k` (negative: from the end) at `gap_tolerance`, with its time.
+    pub fn aggregates(&self, k: isize, gap_tolerance: f64) -> Result<(f64, Vec<Aggregate>), Error> {
+        let frames = self.times.len() as isize;
+        let k = if k < 0 { frames + k } else { k };
+        if !(0..frames).contains(&k) {
+            return Err(format!("frame {k} outside 0..{frames}").into());
+        }
+        let k = k as usize;
+        let position = self.trajectory.frame_vectors("position", k)?;
+        let velocity = self.trajectory.frame_vectors("velocity", k)?;
+        let frame = Frame { position: &position, velocity: &velocity, radius: &self.radius, mass: &self.mass };
+        Ok((self.times[k], aggregates(&frame, &self.domain, &self.field, gap_tolerance)))
+    }
+}
+
+/// Aggregates of frame `k` (negative: from the end) of `t` at `gap_tolerance`.
+pub fn frame_aggregates(t: &Trajectory, k: isize, gap_tolerance: f64) -> Result<(f64, Vec<Aggregate>), Error> {
+    FrameReader::new(t)?.aggregates(k, gap_tolerance)
 }

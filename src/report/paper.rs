@@ -242,9 +242,10 @@ fn gap_sensitivity(runs: &[Run]) -> Result<String, Error> {
     let verlet = runs.iter().filter(|r| r.experiment == "paper-sensitivity" && r.variant == "verlet" && r.seed == 1 && r.completed());
     for r in completed(runs, "paper-table3").into_iter().filter(|r| r.seed == 1).chain(verlet) {
         let t = crate::io::trajectory::Trajectory::open(&r.file)?;
+        let reader = crate::analysis::trajectory::FrameReader::new(&t)?;
         let means: Vec<String> = gaps
             .iter()
-            .map(|&g| crate::analysis::trajectory::frame_aggregates(&t, -1, g).map(|(_, a)| format!("{:.1}", mean(&a.iter().map(|a| a.length * 1e6).collect::<Vec<_>>()))))
+            .map(|&g| reader.aggregates(-1, g).map(|(_, a)| format!("{:.1}", mean(&a.iter().map(|a| a.length * 1e6).collect::<Vec<_>>()))))
             .collect::<Result<_, _>>()?;
         md += &format!("| {} | {} |\n", r.id, means.join(" | "));
     }

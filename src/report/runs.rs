@@ -3,7 +3,7 @@
 
 use crate::analysis::aggregates::Aggregate;
 use crate::analysis::stats::summary;
-use crate::analysis::trajectory::frame_aggregates;
+use crate::analysis::trajectory::FrameReader;
 use crate::io::trajectory::{status, Trajectory};
 use crate::scene::experiment::Experiment;
 use rayon::prelude::*;
@@ -107,21 +107,22 @@ fn load(experiment: &Experiment, point: &crate::scene::experiment::Point, gap: f
     run.message = t.attr_string("status_message").unwrap_or_default();
     run.wall_time = t.attr::<f64>("wall_time_s").unwrap_or(f64::NAN);
     if run.completed() {
-        let frames = t.frames().map_err(|e| e.to_string())?;
+        let reader = FrameReader::new(&t).map_err(|e| e.to_string())?;
+        let frames = reader.times.len();
         for k in 0..frames {
-            let (time, aggs) = frame_aggregates(&t, k as isize, gap).map_err(|e| e.to_string())?;
+            let (time, aggs) = reader.aggregates(k as isize, gap).map_err(|e| e.to_string())?;
             run.times.push(time);
             run.mean_length.push(summary(&aggs.iter().map(|a| a.length).collect::<Vec<_>>()).mean);
             if k + 1 == frames {
                 run.last = aggs;
             }
         }
-        let times = t.times().map_err(|e| e.to_string())?;
+        let times = &reader.times;
         let end = frames - 1;
         let start = times.iter().position(|&x| x >= 0.9 * times[end]).unwrap_or(0).min(end.saturating_sub(1));
         let (now, then) = (t.frame_vectors("position", end).map_err(|e| e.to_string())?, t.frame_vectors("position", start).map_err(|e| e.to_string())?);
         let span = times[end] - times[start];
-        let domain = &point.scene.domain;
+        let domain = reader.domain();
         run.tracked_vx = run
             .last
             .iter()
