@@ -135,10 +135,7 @@ fn run_problem(problem: &Problem, scheme: &str, dt: f64, reference: Option<f64>)
             let delta = (15.0 * m_eff * v * v / (16.0 * e_star * r_eff.sqrt())).powf(0.4);
             (max_overlap - delta).abs() / delta
         }
-        "dipoles" => {
-            let reference = reference.expect("the dipole problem has a reference");
-            (separation(&sim) - reference).abs() / (6.6e-5 - reference)
-        }
+        "dipoles" => dipoles_error(&sim, reference.expect("the dipole problem has a reference")),
         _ => terminal_error(&sim),
     })
 }
@@ -156,18 +153,26 @@ fn timed<T>(runs: usize, mut f: impl FnMut() -> T) -> (T, f64, f64, f64) {
     (out.expect("at least one run"), times[times.len() / 2], times[0], times[times.len() - 1])
 }
 
-/// Error against run time on the two-dipole approach: each integrator over its dt range, and
-/// the adaptive integrator over tolerances (largest step 6.4e-8 s); median of 5 runs, the spread
-/// (min–max) in the table.
-fn work_precision(dir: &Path) -> Result<String, Box<dyn std::error::Error>> {
-    let problem = problems().into_iter().find(|p| p.name == "dipoles").expect("the dipole problem");
-    let scene = Scene::parse(&dipoles_scene("exponential-verlet", 1e-10), "reference")?;
+/// Runs a scene text to its end; the finished simulation.
+fn run_text(text: &str, origin: &str) -> Result<crate::core::simulation::Simulation, String> {
+    let scene = Scene::parse(text, origin).map_err(|e| e.to_string())?;
     let mut sim = scene.simulation(None);
-    sim.initialise()?;
+    sim.initialise().map_err(|e| e.to_string())?;
     while sim.state.step < scene.total_steps() {
-        sim.step()?;
+        sim.step().map_err(|e| e.to_string())?;
     }
-    let reference = Some(separation(&sim));
+    Ok(sim)
+}
+
+/// The dipole problem's error: separation error relative to the distance travelled.
+fn dipoles_error(sim: &crate::core::simulation::Simulation, reference: f64) -> f64 {
+    (separation(sim) - reference).abs() / (6.6e-5 - reference)
+}
+
+/// Error against run time on the two-dipole approach (`reference`: its reference separation):
+/// each integrator over its dt range, and the adaptive integrator over tolerances (largest step
+/// 6.4e-8 s); median of 5 runs, the spread (min–max) in the table.
+fn work_precision(dir: &Path, problem: &Problem, reference: f64) -> Result<String, Box<dyn std::error::Error>> {
     let mut md = String::from(
         "## Work–precision: error against run time\n\nThe two-dipole approach (a trajectory quantity before any contact, so \
          no chaos): error of the final separation against run time, median of 5 runs per point (min–max in brackets), one \
@@ -175,44 +180,33 @@ fn work_precision(dir: &Path) -> Result<String, Box<dyn std::error::Error>> {
          of 6.4e-8 s.\n\n| scheme | setting | error | run time, median (min–max) |\n|---|---|---|---|\n",
     );
     let mut series = vec![];
-    let mut curves: Vec<(String, Vec<(String, Box<dyn Fn() -> Result<f64, String>>)>)> = vec![];
-    for scheme in SCHEMES {
-        let problem = &problem;
-        curves.push((
-            scheme.to_string(),
-            problem.dts.iter().map(|&dt| (format!("dt {dt:.1e}"), Box::new(move || run_problem(problem, scheme, dt, reference)) as Box<dyn Fn() -> Result<f64, String>>)).collect(),
-        ));
-    }
-    let adaptive: Vec<(String, Box<dyn Fn() -> Result<f64, String>>)> = [1e-4, 1e-5, 1e-6, 1e-7, 1e-8]
-        .iter()
-        .map(|&tol| {
-            let run = move || -> Result<f64, String> {
-                let text = dipoles_scene("adaptive-verlet", 6.4e-8).replace("dt = ", &format!("tolerance = {tol:e}\ndt = "));
-                let scene = Scene::parse(&text, "adaptive").map_err(|e| e.to_string())?;
-                let mut sim = scene.simulation(None);
-                sim.initialise().map_err(|e| e.to_string())?;
-                while sim.state.step < scene.total_steps() {
-                    sim.step().map_err(|e| e.to_string())?;
-                }
-                Ok((separation(&sim) - reference.unwrap_or(f64::NAN)).abs() / (6.6e-5 - reference.unwrap_or(f64::NAN)))
-            };
-            (format!("tolerance {tol:.0e}"), Box::new(run) as Box<dyn Fn() -> Result<f64, String>>)
-        })
-        .collect();
-    curves.push(("adaptive-verlet".into(), adaptive));
-    for (scheme, points) in &curves {
+    let adaptive = "adaptive-verlet";
+    for scheme in SCHEMES.iter().copied().chain([adaptive]) {
+        let settings: Vec<(String, f64)> = if scheme == adaptive {
+            [1e-4, 1e-5, 1e-6, 1e-7, 1e-8].iter().map(|&tol| (format!("tolerance {tol:.0e}"), tol)).collect()
+        } else {
+            problem.dts.iter().map(|&dt| (format!("dt {dt:.1e}"), dt)).collect()
+        };
         let mut line = vec![];
-        for (setting, run) in points {
-            let (result, median, lo, hi) = timed(5, run);
+        for (label, value) in settings {
+            let (result, median, lo, hi) = timed(5, || {
+                if scheme == adaptive {
+                    let text = dipoles_scene(adaptive, 6.4e-8).replace("dt = ", &format!("tolerance = {value:e}\ndt = "));
+                    run_text(&text, adaptive).map(|sim| dipoles_error(&sim, reference))
+                } else {
+                    run_problem(problem, scheme, value, Some(reference))
+                }
+            });
             if let Ok(err) = result {
-                let _ = writeln!(md, "| {scheme} | {setting} | {err:.2e} | {median:.3} s ({lo:.3}–{hi:.3}) |");
+                let _ = writeln!(md, "| {scheme} | {label} | {err:.2e} | {median:.3} s ({lo:.3}–{hi:.3}) |");
                 if err > 0.0 {
                     line.push((median.log10(), err.log10()));
                 }
             }
         }
-        series.push(Series::markers(scheme.clone(), line.clone(), if scheme == "adaptive-verlet" { crate::plot::palette(6) } else { colour(scheme) }, 4));
-        series.push(Series::line("", line, if scheme == "adaptive-verlet" { crate::plot::palette(6) } else { colour(scheme) }));
+        let color = if scheme == adaptive { crate::plot::palette(6) } else { colour(scheme) };
+        series.push(Series::markers(scheme, line.clone(), color, 4));
+        series.push(Series::line("", line, color));
     }
     line_chart_with_legend(&dir.join("work-precision-dipoles.png"), "Work–precision: two-dipole approach", "log10 run time (s, median of 5)", "log10 error", &series, SeriesLabelPosition::UpperRight)?;
     md += "\n![Work–precision](work-precision-dipoles.png)\n\n";
@@ -240,18 +234,9 @@ pub fn study(dir: &Path) -> Result<String, Box<dyn std::error::Error>> {
         env!("CARGO_PKG_VERSION"),
         env!("MAGDEM_GIT_COMMIT")
     );
+    let mut work = None;
     for problem in problems() {
-        let reference = if problem.name == "dipoles" {
-            let scene = Scene::parse(&dipoles_scene("exponential-verlet", 1e-10), "reference")?;
-            let mut sim = scene.simulation(None);
-            sim.initialise()?;
-            while sim.state.step < scene.total_steps() {
-                sim.step()?;
-            }
-            Some(separation(&sim))
-        } else {
-            None
-        };
+        let reference = if problem.name == "dipoles" { Some(separation(&run_text(&dipoles_scene("exponential-verlet", 1e-10), "reference")?)) } else { None };
         let _ = writeln!(md, "## {}: {}\n\n| scheme | observed order | errors (dt: error) |\n|---|---|---|", problem.name, problem.description);
         let mut series = vec![];
         for scheme in SCHEMES {
@@ -283,8 +268,11 @@ pub fn study(dir: &Path) -> Result<String, Box<dyn std::error::Error>> {
             SeriesLabelPosition::LowerRight,
         )?;
         let _ = writeln!(md, "\n![{}]({figure})\n", problem.name);
+        if let Some(reference) = reference {
+            work = Some(work_precision(dir, &problem, reference)?);
+        }
     }
-    md += &work_precision(dir)?;
+    md += &work.unwrap_or_default();
     md += "## Reading it\n\n\
 - **Velocity Verlet is first order here**, not second: the drag is evaluated with the half-step velocity (as \
 LAMMPS' and LIGGGHTS' `nve/sphere` do with `fix viscous`), which is O(dt) off, and wherever drag matters — every \
