@@ -721,6 +721,7 @@ fn box_effect_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) ->
         errs.push(f64::NAN);
         panels.push(BarPanel { title: format!("{c} mg/ml"), y_label: "mean length (µm)".into(), categories: cats, groups: vec![BarGroup { label: String::new(), color: palette(1), values: vals, errors: errs }] });
     }
+    let rows: Vec<(f64, String, f64)> = c_col.iter().zip(&v_col).zip(&m_col).map(|((&c, v), &m)| (c, v.clone(), m)).collect();
     let mut df = frame(vec![
         col("concentration_mg_per_ml", c_col),
         scol("domain", v_col),
@@ -735,12 +736,7 @@ fn box_effect_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) ->
            periodic faces instead of walls, and with 10× (and, where run, 100×) the particles in a box scaled at equal \
            concentration (`experiments/paper/opt-in/`):\n\n";
     md += &markdown(&df, &["c (mg/ml)", "domain", "runs", "particles", "mean length (µm)", "± CI95", "experiment (µm)"], &[3, 0, 0, 0, 1, 1, 0])?;
-    let lookup = |c: f64, domain: &str| {
-        let c_col = df.column("concentration_mg_per_ml").ok()?.f64().ok()?.clone();
-        let d_col = df.column("domain").ok()?.str().ok()?.clone();
-        let m_col = df.column("mean_length_um").ok()?.f64().ok()?.clone();
-        (0..df.height()).find(|&k| c_col.get(k).is_some_and(|x| same(x, c)) && d_col.get(k) == Some(domain)).and_then(|k| m_col.get(k))
-    };
+    let lookup = |c: f64, domain: &str| rows.iter().find(|r| same(r.0, c) && r.1 == domain).map(|r| r.2);
     let mut findings = vec![];
     for &c in &conc {
         if let (Some(walls), Some(big)) = (lookup(c, "walls (table 3)"), lookup(c, "x10-walls")) {
