@@ -30,16 +30,10 @@ fn colour(scheme: &str) -> RGBColor {
     }
 }
 
-const MATERIAL: &str = r#"[[species]]
-name = "p"
-diameter = 11.0e-6
-density = 1087.0
-youngs_modulus = 1.0e9
-poisson_ratio = 0.5
-friction = 0.5
-restitution = 1.0
-relative_permeability = 12.3
-"#;
+/// The case-1 species, elastic (restitution 1).
+fn material(extra: &str) -> String {
+    super::fe3o4(1.0e9, 1.0, extra)
+}
 
 const TAU: f64 = 1087.0 * 4.0 / 3.0 * std::f64::consts::PI * 5.5e-6 * 5.5e-6 / (6.0 * std::f64::consts::PI * 1.0e-3);
 
@@ -57,7 +51,7 @@ fn integration(scheme: &str, dt: f64, end: f64) -> String {
 }
 
 fn terminal_scene(scheme: &str, dt: f64) -> String {
-    let material = MATERIAL.replace("relative_permeability = 12.3\n", "relative_permeability = 12.3\nsaturation_magnetisation = 1.0e4\n");
+    let material = material("saturation_magnetisation = 1.0e4\n");
     format!(
         "version = 1\n[domain]\nlo = [-1e-3, -1e-3, -1e-3]\nhi = [1e-3, 1e-3, 1e-3]\n[fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n\
          [field]\nb0 = [0.5, 0.0, 0.0]\ngradient = [[1.4, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]\n{material}\
@@ -74,9 +68,10 @@ fn terminal_error(sim: &crate::core::simulation::Simulation) -> f64 {
 
 fn hertz_scene(scheme: &str, dt: f64) -> String {
     format!(
-        "version = 1\n[domain]\nlo = [-1e-4, -1e-4, -1e-4]\nhi = [1e-4, 1e-4, 1e-4]\n{MATERIAL}\
+        "version = 1\n[domain]\nlo = [-1e-4, -1e-4, -1e-4]\nhi = [1e-4, 1e-4, 1e-4]\n{}\
          [[particles]]\nspecies = \"p\"\npositions = [[-5.5005e-6, 0.0, 0.0], [5.5005e-6, 0.0, 0.0]]\nvelocities = [[0.05, 0.0, 0.0], [-0.05, 0.0, 0.0]]\n\
          [forces.contact]\n{}",
+        material(""),
         integration(scheme, dt, 1.28e-7)
     )
 }

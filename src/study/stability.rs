@@ -22,11 +22,9 @@ pub const FIELDS: [f64; 4] = [0.005, 0.05, 0.4, 1.5];
 
 type Error = Box<dyn std::error::Error>;
 
+/// The case-1 species with restitution 0.5.
 fn species(youngs_modulus: f64, extra: &str) -> String {
-    format!(
-        "[[species]]\nname = \"p\"\ndiameter = 11.0e-6\ndensity = 1087.0\nyoungs_modulus = {youngs_modulus:e}\npoisson_ratio = 0.5\n\
-         friction = 0.5\nrestitution = 0.5\nrelative_permeability = 12.3\n{extra}"
-    )
+    super::fe3o4(youngs_modulus, 0.5, extra)
 }
 
 const WATER: &str = "[fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n";
