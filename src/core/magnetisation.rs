@@ -15,6 +15,7 @@
 
 use super::domain::Domain;
 use super::neighbours::{CellList, Pair, VerletList};
+use super::parallel;
 use super::state::{Particles, Species, Vec3};
 use nalgebra::Matrix3;
 use std::f64::consts::PI;
@@ -59,6 +60,8 @@ pub struct Magnetisation {
     verlet: VerletList,
     pairs: Vec<Pair>,
     field: Vec<Vec3>,
+    pair_fields: Vec<(Vec3, Vec3)>,
+    moments: Vec<Vec3>,
     /// Sweeps used by the last `Exact` update (diagnostic).
     pub last_iterations: usize,
 }
@@ -75,6 +78,8 @@ impl Magnetisation {
             verlet: VerletList::default(),
             pairs: vec![],
             field: vec![],
+            pair_fields: vec![],
+            moments: vec![],
             last_iterations: 0,
         }
     }
@@ -109,35 +114,57 @@ impl Magnetisation {
         m + p.permanent_moment[i]
     }
 
+    /// Sets every moment from the local fields in `self.field` (in parallel for many particles).
+    fn set_moments(&mut self, p: &mut Particles) {
+        let mut moments = std::mem::take(&mut self.moments);
+        parallel::map_ordered(p.len(), &mut moments, |i| self.moment_in(p, i, &self.field[i]));
+        p.moment.copy_from_slice(&moments);
+        self.moments = moments;
+    }
+
     /// Local fields from the applied field and the current moments over `self.pairs`.
     fn sweep_fields(&mut self, p: &Particles) {
         let mut field = std::mem::take(&mut self.field);
         field.clear();
         field.extend(p.position.iter().map(|x| self.external_field(x)));
-        self.field = field;
-        for pair in &self.pairs {
+        let pairs = &self.pairs;
+        let pair_fields = |pair: &Pair| {
             let (i, j) = (pair.i as usize, pair.j as usize);
-            self.field[i] += dipole_field(&p.moment[j], &pair.r, pair.dist);
-            self.field[j] += dipole_field(&p.moment[i], &(-pair.r), pair.dist);
+            (dipole_field(&p.moment[j], &pair.r, pair.dist), dipole_field(&p.moment[i], &(-pair.r), pair.dist))
+        };
+        if parallel::worth_it(pairs.len()) {
+            let mut buffer = std::mem::take(&mut self.pair_fields);
+            parallel::map_ordered(pairs.len(), &mut buffer, |k| pair_fields(&pairs[k]));
+            for (pair, (on_i, on_j)) in pairs.iter().zip(&buffer) {
+                field[pair.i as usize] += on_i;
+                field[pair.j as usize] += on_j;
+            }
+            self.pair_fields = buffer;
+        } else {
+            for pair in pairs {
+                let (on_i, on_j) = pair_fields(pair);
+                field[pair.i as usize] += on_i;
+                field[pair.j as usize] += on_j;
+            }
         }
+        self.field = field;
     }
 
     /// Updates `p.moment` for the current positions.
     pub fn update(&mut self, p: &mut Particles, domain: &Domain) -> Result<(), InductionError> {
         match self.induction {
             Induction::None => {
-                for i in 0..p.len() {
-                    let h = self.external_field(&p.position[i]);
-                    p.moment[i] = self.moment_in(p, i, &h);
-                }
+                let mut field = std::mem::take(&mut self.field);
+                field.clear();
+                field.extend(p.position.iter().map(|x| self.external_field(x)));
+                self.field = field;
+                self.set_moments(p);
             }
             Induction::Paper { radius } => {
                 // Skin radius/15: one diameter at the paper's 15-diameter neighbourhood.
                 self.verlet.pairs_within(&p.position, domain, radius, radius / 15.0, &mut self.pairs);
                 self.sweep_fields(p);
-                for i in 0..p.len() {
-                    p.moment[i] = self.moment_in(p, i, &self.field[i]);
-                }
+                self.set_moments(p);
             }
             Induction::Exact { tolerance, max_iterations, dense_max } => {
                 self.cells.pairs_within(&p.position, domain, None, &mut self.pairs);

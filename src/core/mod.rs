@@ -6,6 +6,7 @@ pub mod forces;
 pub mod integrators;
 pub mod magnetisation;
 pub mod neighbours;
+pub mod parallel;
 pub mod simulation;
 pub mod stability;
 pub mod state;

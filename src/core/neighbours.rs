@@ -2,6 +2,8 @@
 //! or all pairs when no cut-off is set. Periodic axes use the minimum image.
 
 use super::domain::Domain;
+use super::parallel;
+use rayon::prelude::*;
 use super::state::Vec3;
 
 /// A pair (i < j) closer than the search range; `r = x_i − x_j` (minimum image), `dist = |r|`.
@@ -160,28 +162,34 @@ impl VerletList {
     /// Fills `out` with the pairs closer than `range` in (i, j) order; `skin` is the extra
     /// candidate distance (a larger skin rebuilds less often but filters more candidates).
     pub fn pairs_within(&mut self, positions: &[Vec3], domain: &Domain, range: f64, skin: f64, out: &mut Vec<Pair>) {
-        let moved_too_far = self.reference.len() != positions.len()
-            || self.built_for != Some((range, skin))
-            || positions.iter().zip(&self.reference).any(|(x, x0)| domain.displacement(x, x0).norm_squared() > 0.25 * skin * skin);
+        let moved = |(x, x0): (&Vec3, &Vec3)| domain.displacement(x, x0).norm_squared() > 0.25 * skin * skin;
+        let stale = self.reference.len() != positions.len() || self.built_for != Some((range, skin));
+        let moved_too_far = stale
+            || if parallel::worth_it(positions.len()) {
+                positions.par_iter().zip(&self.reference).with_min_len(parallel::CHUNK).any(moved)
+            } else {
+                positions.iter().zip(&self.reference).any(moved)
+            };
         if moved_too_far {
             self.cells.pairs_within(positions, domain, Some(range + skin), &mut self.scratch);
             self.candidates.clear();
             self.candidates.extend(self.scratch.iter().map(|p| (p.i, p.j)));
-            self.candidates.sort_unstable();
+            self.candidates.par_sort_unstable();
             self.reference.clear();
             self.reference.extend_from_slice(positions);
             self.built_for = Some((range, skin));
             self.rebuilds += 1;
         }
-        out.clear();
         let range2 = range * range;
-        for &(i, j) in &self.candidates {
+        let candidates = &self.candidates;
+        parallel::collect_ordered(candidates.len(), out, |k, out| {
+            let (i, j) = candidates[k];
             let r = domain.displacement(&positions[i as usize], &positions[j as usize]);
             let d2 = r.norm_squared();
             if d2 < range2 {
                 out.push(Pair { i, j, r, dist: d2.sqrt() });
             }
-        }
+        });
     }
 }
 

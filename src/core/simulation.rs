@@ -65,8 +65,8 @@ impl ForceField {
     pub fn evaluate_group(&mut self, state: &mut State, dt: f64, group: ForceGroup) {
         let start = Instant::now();
         let p = &mut state.particles;
-        for x in p.position.iter_mut() {
-            self.domain.wrap(x);
+        if self.domain.periodic.contains(&true) {
+            p.position.iter_mut().for_each(|x| self.domain.wrap(x));
         }
         if group == ForceGroup::Slow {
             // Slow terms add into force/torque: point those at the slow arrays for this pass.

@@ -16,6 +16,7 @@
 use super::forces::drag::Drag;
 use super::state::{Particles, Species, State, Vec3};
 use super::magnetisation::MU0;
+use rayon::prelude::*;
 use std::f64::consts::PI;
 
 /// What the estimate needs to know about the scene.
@@ -164,6 +165,27 @@ impl Default for Monitor {
     }
 }
 
+/// The per-particle test of [`Monitor::check`]: finite, not faster than `travel` radii per
+/// second, not more than a radius beyond a wall (`lo`/`hi` are infinite on periodic axes).
+struct QuickTest {
+    lo: Vec3,
+    hi: Vec3,
+    travel: f64,
+}
+
+impl QuickTest {
+    #[inline(always)]
+    fn fails(&self, x: &Vec3, v: &Vec3, a: f64) -> bool {
+        // One sum is finite exactly when all its terms are (short of overflow, itself a blow-up);
+        // a force that is not finite has already made the velocity so in the last kick.
+        let finite = (x.x + x.y + x.z + v.x + v.y + v.z).is_finite();
+        let limit = self.travel * a;
+        let escaped = (x.x < self.lo.x - a) | (x.y < self.lo.y - a) | (x.z < self.lo.z - a)
+            | (x.x > self.hi.x + a) | (x.y > self.hi.y + a) | (x.z > self.hi.z + a);
+        !finite | (v.norm_squared() > limit * limit) | escaped
+    }
+}
+
 impl Monitor {
     pub fn check(&self, state: &State, domain: &super::domain::Domain, dt: f64) -> Result<(), Instability> {
         let p: &Particles = &state.particles;
@@ -172,38 +194,53 @@ impl Monitor {
             let j = d.max_overlap_pair.1.map_or("the wall".to_string(), |j| j.to_string());
             return Err(Instability::Overlap { i: d.max_overlap_pair.0, j, ratio: d.max_overlap_ratio, limit: self.max_overlap });
         }
-        let walls: Vec<(usize, bool)> = domain.walls().map(|(_, k, upper)| (k, upper)).collect();
-        for i in 0..p.len() {
-            // One sum is finite exactly when all its terms are (short of overflow, itself a blow-up).
-            let sum = p.position[i].sum() + p.velocity[i].sum() + p.force[i].sum();
-            if !sum.is_finite() {
-                for (q, v) in [("position", &p.position[i]), ("velocity", &p.velocity[i]), ("force", &p.force[i])] {
-                    if !v.iter().all(|c| c.is_finite()) {
-                        return Err(Instability::NotFinite { quantity: q, particle: i });
-                    }
-                }
-            }
-            let speed2 = p.velocity[i].norm_squared();
-            let limit = self.max_step_fraction * p.radius[i] / dt;
-            if speed2 > limit * limit {
-                let speed = speed2.sqrt();
-                return Err(Instability::Runaway {
-                    particle: i,
-                    speed,
-                    fraction: speed * dt / p.radius[i],
-                    limit: self.max_step_fraction,
-                    kinetic_energy: p.kinetic_energy(),
-                });
-            }
-            let x: Vec3 = p.position[i];
-            for &(k, upper) in &walls {
-                let outside = if upper { x[k] - domain.hi[k] } else { domain.lo[k] - x[k] };
-                if outside > p.radius[i] {
-                    let face = format!("{}-{}", ["x", "y", "z"][k], if upper { "hi" } else { "lo" });
-                    return Err(Instability::Escaped { particle: i, face, position: [x.x, x.y, x.z] });
-                }
+        // A cheap test per particle; the failing particle (the first, for any thread count) is
+        // then examined to say what went wrong.
+        let bounds = QuickTest {
+            lo: Vec3::from_fn(|k, _| if domain.periodic[k] { f64::NEG_INFINITY } else { domain.lo[k] }),
+            hi: Vec3::from_fn(|k, _| if domain.periodic[k] { f64::INFINITY } else { domain.hi[k] }),
+            travel: self.max_step_fraction / dt,
+        };
+        let suspect = |((x, v), a): ((&Vec3, &Vec3), &f64)| bounds.fails(x, v, *a);
+        let particles = || p.position.iter().zip(&p.velocity).zip(&p.radius);
+        // Branch-free test of all particles first; the first failing one is looked for only then.
+        let any = if super::parallel::worth_it(p.len()) {
+            let particles = p.position.par_iter().zip(&p.velocity).zip(&p.radius);
+            particles.with_min_len(super::parallel::CHUNK).map(suspect).reduce(|| false, |a, b| a | b)
+        } else {
+            particles().fold(false, |out, item| out | suspect(item))
+        };
+        let first = if any { particles().position(suspect) } else { None };
+        match first {
+            Some(i) => Err(self.diagnose(p, i, domain, dt)),
+            None => Ok(()),
+        }
+    }
+
+    /// What is wrong with particle `i`, which failed the quick test.
+    fn diagnose(&self, p: &Particles, i: usize, domain: &super::domain::Domain, dt: f64) -> Instability {
+        for (q, v) in [("position", &p.position[i]), ("velocity", &p.velocity[i]), ("force", &p.force[i])] {
+            if !v.iter().all(|c| c.is_finite()) {
+                return Instability::NotFinite { quantity: q, particle: i };
             }
         }
-        Ok(())
+        let limit = self.max_step_fraction / dt * p.radius[i];
+        if p.velocity[i].norm_squared() > limit * limit {
+            let speed = p.velocity[i].norm();
+            return Instability::Runaway {
+                particle: i,
+                speed,
+                fraction: speed * dt / p.radius[i],
+                limit: self.max_step_fraction,
+                kinetic_energy: p.kinetic_energy(),
+            };
+        }
+        let x = p.position[i];
+        let (_, k, upper) = domain
+            .walls()
+            .find(|&(_, k, upper)| if upper { x[k] - domain.hi[k] > p.radius[i] } else { domain.lo[k] - x[k] > p.radius[i] })
+            .expect("a particle that failed the check is outside a wall");
+        let face = format!("{}-{}", ["x", "y", "z"][k], if upper { "hi" } else { "lo" });
+        Instability::Escaped { particle: i, face, position: [x.x, x.y, x.z] }
     }
 }

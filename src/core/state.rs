@@ -2,8 +2,6 @@
 //!
 //! Everything a run needs to continue bit for bit lives here, so a checkpoint is this struct.
 
-use std::collections::HashMap;
-
 /// Three-vector of f64 used throughout the core (SI units).
 pub type Vec3 = nalgebra::Vector3<f64>;
 
@@ -55,6 +53,9 @@ pub struct Particles {
     pub radius: Vec<f64>,
     pub mass: Vec<f64>,
     pub inertia: Vec<f64>,
+    /// 1/m and 1/I, kept beside `mass` and `inertia` (a kick multiplies rather than divides).
+    pub inv_mass: Vec<f64>,
+    pub inv_inertia: Vec<f64>,
     pub position: Vec<Vec3>,
     pub velocity: Vec<Vec3>,
     pub angular_velocity: Vec<Vec3>,
@@ -68,6 +69,8 @@ pub struct Particles {
     pub moment: Vec<Vec3>,
     /// Permanent moment, rotated with the particle (zero for purely induced particles).
     pub permanent_moment: Vec<Vec3>,
+    /// Whether any particle carries a permanent moment (otherwise the drift need not turn them).
+    pub has_permanent_moments: bool,
 }
 
 impl Particles {
@@ -84,6 +87,8 @@ impl Particles {
         self.radius.push(species.radius);
         self.mass.push(species.mass());
         self.inertia.push(species.inertia());
+        self.inv_mass.push(1.0 / species.mass());
+        self.inv_inertia.push(1.0 / species.inertia());
         self.position.push(position);
         self.velocity.push(velocity);
         self.angular_velocity.push(Vec3::zeros());
@@ -92,7 +97,17 @@ impl Particles {
         self.slow_force.push(Vec3::zeros());
         self.slow_torque.push(Vec3::zeros());
         self.moment.push(Vec3::zeros());
-        self.permanent_moment.push(species.permanent_moment.unwrap_or_else(Vec3::zeros));
+        let permanent = species.permanent_moment.unwrap_or_else(Vec3::zeros);
+        self.has_permanent_moments |= permanent != Vec3::zeros();
+        self.permanent_moment.push(permanent);
+    }
+
+    /// Sets the masses, and from them and the radii the inertias (solid spheres) and inverses.
+    pub fn set_masses(&mut self, mass: Vec<f64>) {
+        self.inertia = mass.iter().zip(&self.radius).map(|(m, a)| 0.4 * m * a * a).collect();
+        self.inv_mass = mass.iter().map(|m| 1.0 / m).collect();
+        self.inv_inertia = self.inertia.iter().map(|i| 1.0 / i).collect();
+        self.mass = mass;
     }
 
     pub fn kinetic_energy(&self) -> f64 {
@@ -108,25 +123,13 @@ impl Particles {
 /// Wall faces of the box: 0..6 = x-lo, x-hi, y-lo, y-hi, z-lo, z-hi.
 pub type WallFace = u8;
 
-/// Tangential spring (shear history) of every active contact, keyed by the pair.
+/// Tangential spring (shear history) of every active contact, sorted by key: the order in which
+/// the contact term visits contacts, so it finds each spring by a merge rather than a hash, and a
+/// checkpoint stores them in a deterministic order.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ContactHistory {
-    pub pairs: HashMap<(u32, u32), Vec3>,
-    pub walls: HashMap<(u32, WallFace), Vec3>,
-}
-
-impl ContactHistory {
-    /// Pair entries sorted by key: a deterministic order for checkpoints.
-    pub fn sorted_pairs(&self) -> Vec<((u32, u32), Vec3)> {
-        let mut v: Vec<_> = self.pairs.iter().map(|(k, s)| (*k, *s)).collect();
-        v.sort_by_key(|(k, _)| *k);
-        v
-    }
-    pub fn sorted_walls(&self) -> Vec<((u32, WallFace), Vec3)> {
-        let mut v: Vec<_> = self.walls.iter().map(|(k, s)| (*k, *s)).collect();
-        v.sort_by_key(|(k, _)| *k);
-        v
-    }
+    pub pairs: Vec<((u32, u32), Vec3)>,
+    pub walls: Vec<((u32, WallFace), Vec3)>,
 }
 
 /// What the last force evaluation saw that the stability monitor needs.

@@ -319,9 +319,9 @@ impl TrajectoryWriter {
             let p = &state.particles;
             let active: Vec<(u32, u32, f64)> = state
                 .contacts
-                .sorted_pairs()
-                .into_iter()
-                .map(|((i, j), _)| {
+                .pairs
+                .iter()
+                .map(|&((i, j), _)| {
                     let (a, b) = (i as usize, j as usize);
                     (i, j, p.radius[a] + p.radius[b] - (p.position[a] - p.position[b]).norm())
                 })
@@ -346,8 +346,7 @@ impl TrajectoryWriter {
             for name in STATE_VECTORS {
                 ck.dataset(name)?.write(&vec3_rows(state_vector(&state.particles, name)))?;
             }
-            let pairs = state.contacts.sorted_pairs();
-            let walls = state.contacts.sorted_walls();
+            let (pairs, walls) = (&state.contacts.pairs, &state.contacts.walls);
             let keys = Array2::from_shape_fn((pairs.len(), 2), |(r, c)| if c == 0 { pairs[r].0 .0 } else { pairs[r].0 .1 });
             let shear = vec3_rows(&pairs.iter().map(|p| p.1).collect::<Vec<_>>());
             let wkeys = Array2::from_shape_fn((walls.len(), 2), |(r, c)| if c == 0 { walls[r].0 .0 } else { walls[r].0 .1 as u32 });
@@ -437,25 +436,27 @@ impl Trajectory {
         let ck = self.file.group("checkpoint")?;
         let mut particles = Particles {
             radius: self.file.dataset("particles/radius")?.read_raw()?,
-            mass: self.file.dataset("particles/mass")?.read_raw()?,
             species: self.file.dataset("particles/species")?.read_raw()?,
             ..Particles::default()
         };
-        particles.inertia = particles.mass.iter().zip(&particles.radius).map(|(m, a)| 0.4 * m * a * a).collect();
+        particles.set_masses(self.file.dataset("particles/mass")?.read_raw()?);
         for name in STATE_VECTORS {
             *state_vector_mut(&mut particles, name) = rows_vec3(&ck.dataset(name)?.read_2d()?);
         }
+        particles.has_permanent_moments = particles.permanent_moment.iter().any(|m| *m != Vec3::zeros());
         let keys: Array2<u32> = ck.dataset("pair_keys")?.read_2d()?;
         let shear: Array2<f64> = ck.dataset("pair_shear")?.read_2d()?;
         let wkeys: Array2<u32> = ck.dataset("wall_keys")?.read_2d()?;
         let wshear: Array2<f64> = ck.dataset("wall_shear")?.read_2d()?;
         let mut contacts = ContactHistory::default();
         for (k, s) in keys.rows().into_iter().zip(rows_vec3(&shear)) {
-            contacts.pairs.insert((k[0], k[1]), s);
+            contacts.pairs.push(((k[0], k[1]), s));
         }
         for (k, s) in wkeys.rows().into_iter().zip(rows_vec3(&wshear)) {
-            contacts.walls.insert((k[0], k[1] as u8), s);
+            contacts.walls.push(((k[0], k[1] as u8), s));
         }
+        contacts.pairs.sort_unstable_by_key(|(k, _)| *k);
+        contacts.walls.sort_unstable_by_key(|(k, _)| *k);
         let step: u64 = ck.attr("step")?.read_scalar()?;
         let time: f64 = ck.attr("time")?.read_scalar()?;
         let frames: u64 = ck.attr("frames")?.read_scalar()?;

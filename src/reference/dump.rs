@@ -56,9 +56,10 @@ pub fn read(engine: Engine, path: &Path, scene: &Scene) -> Result<Vec<State>, Re
         cells.pairs_within(&p.position, &scene.domain, Some(largest_d), &mut pairs);
         for pair in &pairs {
             if pair.dist < p.radius[pair.i as usize] + p.radius[pair.j as usize] {
-                state.contacts.pairs.insert((pair.i, pair.j), Vec3::zeros());
+                state.contacts.pairs.push(((pair.i, pair.j), Vec3::zeros()));
             }
         }
+        state.contacts.pairs.sort_unstable_by_key(|(k, _)| *k);
         frames.push(state);
     }
     if frames.is_empty() {

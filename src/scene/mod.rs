@@ -236,7 +236,7 @@ impl Scene {
             terms.push(Box::new(drag));
         }
         if let Some(g) = &f.gravity {
-            terms.push(Box::new(GravityBuoyancy { gravity: Vec3::from(g.g), fluid_density: fluid.density }));
+            terms.push(Box::new(GravityBuoyancy::new(Vec3::from(g.g), fluid.density)));
         }
         if let Some(c) = &f.contact {
             terms.push(Box::new(Contact::new(&self.species, c.walls)));

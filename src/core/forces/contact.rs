@@ -13,9 +13,9 @@
 //! - lever arm a − δ/2 for the torque and the rolling part of v_t,rel.
 
 use super::{ForceContext, ForceTerm};
-use crate::core::domain::Domain;
-use crate::core::state::{ContactDiagnostics, Species, State, Vec3};
-use std::collections::HashMap;
+use crate::core::neighbours::Pair;
+use crate::core::parallel;
+use crate::core::state::{ContactDiagnostics, Particles, Species, State, Vec3, WallFace};
 
 /// Pair constants of the contact law for two species (the wall takes the particle's own species).
 #[derive(Debug, Clone, Copy)]
@@ -85,60 +85,198 @@ fn contact_force(c: &ContactPoint, m: &PairMaterial, s: &mut Vec3, dt: f64) -> V
     fn_mag * c.normal + ft
 }
 
+/// What one contact gives: the force on i (j receives −force), the torques on i and j, the
+/// updated spring and the overlap as a fraction of the smaller diameter.
+struct ContactOutcome {
+    force: Vec3,
+    torque_i: Vec3,
+    torque_j: Vec3,
+    shear: Vec3,
+    overlap_ratio: f64,
+}
+
+/// A particle touching a wall face: (particle, face, axis, upper face?, overlap).
+#[derive(Clone, Copy)]
+struct WallTouch {
+    i: u32,
+    face: WallFace,
+    axis: usize,
+    upper: bool,
+    overlap: f64,
+}
+
 /// Particle–particle and particle–wall contacts.
+///
+/// Each evaluation runs in three passes: find the touching pairs and wall contacts and their
+/// springs (a merge with the sorted history), compute each contact (in parallel for many
+/// contacts), then add the results in contact order — the same bits for any thread count.
 pub struct Contact {
     /// Pair constants indexed `[species_i * n_species + species_j]`.
     materials: Vec<PairMaterial>,
     n_species: usize,
     walls: bool,
+    touching: Vec<(u32, Vec3)>,
+    wall_found: Vec<WallTouch>,
+    wall_touching: Vec<(WallTouch, Vec3)>,
+    outcomes: Vec<ContactOutcome>,
+    spare_pairs: Vec<((u32, u32), Vec3)>,
+    spare_walls: Vec<((u32, WallFace), Vec3)>,
+}
+
+/// The spring stored under `key` in the sorted `history`, advancing the merge `cursor`.
+fn spring<K: Ord + Copy>(history: &[(K, Vec3)], cursor: &mut usize, key: K) -> Vec3 {
+    while *cursor < history.len() && history[*cursor].0 < key {
+        *cursor += 1;
+    }
+    match history.get(*cursor) {
+        Some(&(k, s)) if k == key => s,
+        _ => Vec3::zeros(),
+    }
 }
 
 impl Contact {
     pub fn new(species: &[Species], walls: bool) -> Self {
         let n = species.len();
         let materials = (0..n * n).map(|k| PairMaterial::new(&species[k / n], &species[k % n])).collect();
-        Self { materials, n_species: n, walls }
+        Self {
+            materials,
+            n_species: n,
+            walls,
+            touching: vec![],
+            wall_found: vec![],
+            wall_touching: vec![],
+            outcomes: vec![],
+            spare_pairs: vec![],
+            spare_walls: vec![],
+        }
     }
 
     fn material(&self, si: u16, sj: u16) -> &PairMaterial {
         &self.materials[si as usize * self.n_species + sj as usize]
     }
 
-    fn apply_walls(&self, domain: &Domain, state: &mut State, dt: f64, diag: &mut ContactDiagnostics) {
+    fn pair_contact(&self, p: &Particles, pair: &Pair, mut shear: Vec3, dt: f64) -> ContactOutcome {
+        let (i, j) = (pair.i as usize, pair.j as usize);
+        let overlap = p.radius[i] + p.radius[j] - pair.dist;
+        let normal = pair.r / pair.dist;
+        let (cr_i, cr_j) = (p.radius[i] - 0.5 * overlap, p.radius[j] - 0.5 * overlap);
+        let point = ContactPoint {
+            overlap,
+            normal,
+            r_eff: p.radius[i] * p.radius[j] / (p.radius[i] + p.radius[j]),
+            m_eff: p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j]),
+            rel_velocity: p.velocity[i] - p.velocity[j],
+            spin: cr_i * p.angular_velocity[i] + cr_j * p.angular_velocity[j],
+        };
+        let force = contact_force(&point, self.material(p.species[i], p.species[j]), &mut shear, dt);
+        let n_x_ft = normal.cross(&(force - force.dot(&normal) * normal));
+        ContactOutcome {
+            force,
+            torque_i: -cr_i * n_x_ft,
+            torque_j: -cr_j * n_x_ft,
+            shear,
+            overlap_ratio: overlap / (2.0 * p.radius[i].min(p.radius[j])),
+        }
+    }
+
+    fn wall_contact(&self, p: &Particles, touch: &WallTouch, mut shear: Vec3, dt: f64) -> ContactOutcome {
+        let i = touch.i as usize;
+        let a = p.radius[i];
+        let mut normal = Vec3::zeros();
+        normal[touch.axis] = if touch.upper { -1.0 } else { 1.0 };
+        let cr = a - 0.5 * touch.overlap;
+        let point = ContactPoint {
+            overlap: touch.overlap,
+            normal,
+            r_eff: a,
+            m_eff: p.mass[i],
+            rel_velocity: p.velocity[i],
+            spin: cr * p.angular_velocity[i],
+        };
+        let force = contact_force(&point, self.material(p.species[i], p.species[i]), &mut shear, dt);
+        let ft = force - force.dot(&normal) * normal;
+        ContactOutcome { force, torque_i: -cr * normal.cross(&ft), torque_j: Vec3::zeros(), shear, overlap_ratio: touch.overlap / (2.0 * a) }
+    }
+
+    fn apply_pairs(&mut self, ctx: &ForceContext, state: &mut State, diag: &mut ContactDiagnostics) {
+        let history = std::mem::take(&mut state.contacts.pairs);
+        let p = &state.particles;
+        let mut cursor = 0;
+        self.touching.clear();
+        for (k, pair) in ctx.near_pairs.iter().enumerate() {
+            if pair.dist < p.radius[pair.i as usize] + p.radius[pair.j as usize] {
+                self.touching.push((k as u32, spring(&history, &mut cursor, (pair.i, pair.j))));
+            }
+        }
+        let mut outcomes = std::mem::take(&mut self.outcomes);
+        let touching = &self.touching;
+        parallel::map_ordered(touching.len(), &mut outcomes, |c| {
+            let (k, s) = touching[c];
+            self.pair_contact(p, &ctx.near_pairs[k as usize], s, ctx.dt)
+        });
+        let mut next = std::mem::replace(&mut self.spare_pairs, history);
+        next.clear();
         let p = &mut state.particles;
-        let mut next = HashMap::with_capacity(state.contacts.walls.len());
-        for i in 0..p.len() {
-            let a = p.radius[i];
-            for (face, k, upper) in domain.walls() {
-                let gap = if upper { domain.hi[k] - p.position[i][k] } else { p.position[i][k] - domain.lo[k] };
-                let overlap = a - gap;
-                if overlap <= 0.0 {
-                    continue;
+        for (&(k, _), o) in self.touching.iter().zip(&outcomes) {
+            let pair = &ctx.near_pairs[k as usize];
+            let (i, j) = (pair.i as usize, pair.j as usize);
+            p.force[i] += o.force;
+            p.force[j] -= o.force;
+            p.torque[i] += o.torque_i;
+            p.torque[j] += o.torque_j;
+            next.push(((pair.i, pair.j), o.shear));
+            if o.overlap_ratio > diag.max_overlap_ratio {
+                *diag = ContactDiagnostics { max_overlap_ratio: o.overlap_ratio, max_overlap_pair: (pair.i, Some(pair.j)) };
+            }
+        }
+        state.contacts.pairs = next;
+        self.outcomes = outcomes;
+    }
+
+    fn apply_walls(&mut self, ctx: &ForceContext, state: &mut State, diag: &mut ContactDiagnostics) {
+        let domain = ctx.domain;
+        // Walls on periodic axes are infinitely far away.
+        let lo = Vec3::from_fn(|k, _| if domain.periodic[k] { f64::NEG_INFINITY } else { domain.lo[k] });
+        let hi = Vec3::from_fn(|k, _| if domain.periodic[k] { f64::INFINITY } else { domain.hi[k] });
+        let p = &state.particles;
+        let history = std::mem::take(&mut state.contacts.walls);
+        let mut found = std::mem::take(&mut self.wall_found);
+        parallel::collect_ordered(p.len(), &mut found, |i, out| {
+            let (a, x) = (p.radius[i], p.position[i]);
+            let near = (x.x - lo.x < a) | (x.y - lo.y < a) | (x.z - lo.z < a) | (hi.x - x.x < a) | (hi.y - x.y < a) | (hi.z - x.z < a);
+            if !near {
+                return;
+            }
+            for axis in 0..3 {
+                for (upper, gap) in [(false, x[axis] - lo[axis]), (true, hi[axis] - x[axis])] {
+                    if gap < a {
+                        let face = (2 * axis + upper as usize) as WallFace;
+                        out.push(WallTouch { i: i as u32, face, axis, upper, overlap: a - gap });
+                    }
                 }
-                let mut normal = Vec3::zeros();
-                normal[k] = if upper { -1.0 } else { 1.0 };
-                let cr = a - 0.5 * overlap;
-                let point = ContactPoint {
-                    overlap,
-                    normal,
-                    r_eff: a,
-                    m_eff: p.mass[i],
-                    rel_velocity: p.velocity[i],
-                    spin: cr * p.angular_velocity[i],
-                };
-                let mut s = state.contacts.walls.get(&(i as u32, face)).copied().unwrap_or_else(Vec3::zeros);
-                let f = contact_force(&point, self.material(p.species[i], p.species[i]), &mut s, dt);
-                next.insert((i as u32, face), s);
-                let ft = f - f.dot(&normal) * normal;
-                p.force[i] += f;
-                p.torque[i] += -cr * normal.cross(&ft);
-                let ratio = overlap / (2.0 * a);
-                if ratio > diag.max_overlap_ratio {
-                    *diag = ContactDiagnostics { max_overlap_ratio: ratio, max_overlap_pair: (i as u32, None) };
-                }
+            }
+        });
+        let mut cursor = 0;
+        self.wall_touching.clear();
+        self.wall_touching.extend(found.iter().map(|&t| (t, spring(&history, &mut cursor, (t.i, t.face)))));
+        self.wall_found = found;
+        let mut outcomes = std::mem::take(&mut self.outcomes);
+        let touching = &self.wall_touching;
+        parallel::map_ordered(touching.len(), &mut outcomes, |c| self.wall_contact(p, &touching[c].0, touching[c].1, ctx.dt));
+        let mut next = std::mem::replace(&mut self.spare_walls, history);
+        next.clear();
+        let p = &mut state.particles;
+        for ((t, _), o) in self.wall_touching.iter().zip(&outcomes) {
+            let i = t.i as usize;
+            p.force[i] += o.force;
+            p.torque[i] += o.torque_i;
+            next.push(((t.i, t.face), o.shear));
+            if o.overlap_ratio > diag.max_overlap_ratio {
+                *diag = ContactDiagnostics { max_overlap_ratio: o.overlap_ratio, max_overlap_pair: (t.i, None) };
             }
         }
         state.contacts.walls = next;
+        self.outcomes = outcomes;
     }
 }
 
@@ -151,42 +289,9 @@ impl ForceTerm for Contact {
     }
     fn apply(&mut self, ctx: &ForceContext, state: &mut State) {
         let mut diag = ContactDiagnostics::default();
-        let mut next = HashMap::with_capacity(state.contacts.pairs.len());
-        let p = &mut state.particles;
-        for pair in ctx.near_pairs {
-            let (i, j) = (pair.i as usize, pair.j as usize);
-            let overlap = p.radius[i] + p.radius[j] - pair.dist;
-            if overlap <= 0.0 {
-                continue;
-            }
-            let normal = pair.r / pair.dist;
-            let (cr_i, cr_j) = (p.radius[i] - 0.5 * overlap, p.radius[j] - 0.5 * overlap);
-            let point = ContactPoint {
-                overlap,
-                normal,
-                r_eff: p.radius[i] * p.radius[j] / (p.radius[i] + p.radius[j]),
-                m_eff: p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j]),
-                rel_velocity: p.velocity[i] - p.velocity[j],
-                spin: cr_i * p.angular_velocity[i] + cr_j * p.angular_velocity[j],
-            };
-            let key = (pair.i, pair.j);
-            let mut s = state.contacts.pairs.get(&key).copied().unwrap_or_else(Vec3::zeros);
-            let f = contact_force(&point, self.material(p.species[i], p.species[j]), &mut s, ctx.dt);
-            next.insert(key, s);
-            let ft = f - f.dot(&normal) * normal;
-            let n_x_ft = normal.cross(&ft);
-            p.force[i] += f;
-            p.force[j] -= f;
-            p.torque[i] -= cr_i * n_x_ft;
-            p.torque[j] -= cr_j * n_x_ft;
-            let ratio = overlap / (2.0 * p.radius[i].min(p.radius[j]));
-            if ratio > diag.max_overlap_ratio {
-                diag = ContactDiagnostics { max_overlap_ratio: ratio, max_overlap_pair: (pair.i, Some(pair.j)) };
-            }
-        }
-        state.contacts.pairs = next;
+        self.apply_pairs(ctx, state, &mut diag);
         if self.walls {
-            self.apply_walls(ctx.domain, state, ctx.dt, &mut diag);
+            self.apply_walls(ctx, state, &mut diag);
         }
         state.diagnostics = diag;
     }

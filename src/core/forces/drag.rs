@@ -7,7 +7,9 @@
 
 use super::shielding::shadow_area;
 use super::{ForceContext, ForceTerm};
-use crate::core::state::{State, Vec3};
+use crate::core::parallel;
+use crate::core::state::{Particles, State, Vec3};
+use rayon::prelude::*;
 use std::f64::consts::PI;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -95,15 +97,15 @@ impl ForceTerm for Drag {
         if self.shielding == Shielding::Paper {
             self.compute_shadows(ctx, state);
         }
-        let p = &mut state.particles;
-        for i in 0..p.len() {
-            let a = p.radius[i];
+        let Particles { force, torque, velocity, angular_velocity, radius, .. } = &mut state.particles;
+        let drag = |(i, (f, t)): (usize, (&mut Vec3, &mut Vec3))| {
+            let a = radius[i];
             let full = PI * a * a;
             let area = match self.shielding {
                 Shielding::None => full,
                 Shielding::Paper => full - self.shadow[i],
             };
-            let u = p.velocity[i] - self.fluid_velocity;
+            let u = velocity[i] - self.fluid_velocity;
             let correction = match self.law {
                 DragLaw::Stokes => 1.0,
                 DragLaw::SchillerNaumann => {
@@ -112,10 +114,15 @@ impl ForceTerm for Drag {
                 }
             };
             let linear = if self.exclude_linear { Self::stokes_coefficient(self.viscosity, a) } else { 0.0 };
-            p.force[i] -= (12.0 * self.viscosity * area / (2.0 * a) * correction - linear) * u;
+            *f -= (12.0 * self.viscosity * area / (2.0 * a) * correction - linear) * u;
             if self.rotational && !self.exclude_linear {
-                p.torque[i] -= 8.0 * PI * self.viscosity * a.powi(3) * p.angular_velocity[i];
+                *t -= 8.0 * PI * self.viscosity * a.powi(3) * angular_velocity[i];
             }
+        };
+        if parallel::worth_it(force.len()) {
+            force.par_iter_mut().zip(torque.par_iter_mut()).enumerate().with_min_len(parallel::CHUNK).for_each(drag);
+        } else {
+            force.iter_mut().zip(torque.iter_mut()).enumerate().for_each(drag);
         }
     }
 }

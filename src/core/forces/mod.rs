@@ -15,7 +15,8 @@ use super::state::State;
 /// What a term may read besides the state during one force evaluation.
 pub struct ForceContext<'a> {
     pub domain: &'a Domain,
-    /// Pairs within contact range (touching or overlapping within the touch tolerance).
+    /// Pairs within contact range (touching or overlapping within the touch tolerance), in
+    /// (i, j) order.
     pub near_pairs: &'a [Pair],
     /// Time step, for history-dependent terms (tangential spring).
     pub dt: f64,

@@ -15,7 +15,7 @@
 //! for all particles (the step is global). The forces must be functions of the state: the scene
 //! layer refuses the paper's lagged induction, which advances one sweep per evaluation.
 
-use super::{drift, kick, Evaluate, Integrator};
+use super::{kick, kick_drift, Evaluate, Integrator};
 use crate::core::simulation::ForceGroup;
 use crate::core::state::State;
 
@@ -37,8 +37,7 @@ impl AdaptiveVerlet {
 
 /// One velocity Verlet step of `h` (forces on entry belong to `state`).
 fn verlet(state: &mut State, h: f64, evaluate: &mut Evaluate) {
-    kick(&mut state.particles, 0.5 * h);
-    drift(&mut state.particles, h);
+    kick_drift(&mut state.particles, 0.5 * h, h);
     state.time += h;
     evaluate(state, ForceGroup::All, h);
     kick(&mut state.particles, 0.5 * h);

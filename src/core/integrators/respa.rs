@@ -5,7 +5,7 @@
 //! time-reversible for smooth slow forces; like every impulse scheme it can resonate when K·dt
 //! approaches half the period of a fast oscillation, which the stability studies measure.
 
-use super::{drift, kick, slow_kick, tick, Evaluate, Integrator};
+use super::{kick, kick_drift, slow_kick, tick, Evaluate, Integrator};
 use crate::core::simulation::ForceGroup;
 use crate::core::state::State;
 
@@ -31,8 +31,7 @@ impl Integrator for Respa {
         let outer = self.slow_every as f64 * dt;
         slow_kick(&mut state.particles, 0.5 * outer);
         for _ in 0..self.slow_every {
-            kick(&mut state.particles, 0.5 * dt);
-            drift(&mut state.particles, dt);
+            kick_drift(&mut state.particles, 0.5 * dt, dt);
             tick(state, dt);
             evaluate(state, ForceGroup::Fast, dt);
             kick(&mut state.particles, 0.5 * dt);

@@ -1,7 +1,7 @@
 //! Semi-implicit (symplectic) Euler: v' = v + F(x, v)/m dt, x' = x + v' dt. First order,
 //! stable for an oscillator while ω dt < 2.
 
-use super::{drift, kick, tick, Evaluate, Integrator};
+use super::{kick_drift, tick, Evaluate, Integrator};
 use crate::core::simulation::ForceGroup;
 use crate::core::state::State;
 
@@ -15,8 +15,7 @@ impl Integrator for SemiImplicitEuler {
         1
     }
     fn step(&mut self, state: &mut State, dt: f64, evaluate: &mut Evaluate) {
-        kick(&mut state.particles, dt);
-        drift(&mut state.particles, dt);
+        kick_drift(&mut state.particles, dt, dt);
         tick(state, dt);
         evaluate(state, ForceGroup::All, dt);
     }

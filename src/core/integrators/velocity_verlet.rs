@@ -2,7 +2,7 @@
 //! dependent ones see the half-step velocity), half kick. Second order for position-dependent
 //! forces; stable for an oscillator while ω dt < 2.
 
-use super::{drift, kick, tick, Evaluate, Integrator};
+use super::{kick, kick_drift, tick, Evaluate, Integrator};
 use crate::core::simulation::ForceGroup;
 use crate::core::state::State;
 
@@ -16,8 +16,7 @@ impl Integrator for VelocityVerlet {
         2
     }
     fn step(&mut self, state: &mut State, dt: f64, evaluate: &mut Evaluate) {
-        kick(&mut state.particles, 0.5 * dt);
-        drift(&mut state.particles, dt);
+        kick_drift(&mut state.particles, 0.5 * dt, dt);
         tick(state, dt);
         evaluate(state, ForceGroup::All, dt);
         kick(&mut state.particles, 0.5 * dt);

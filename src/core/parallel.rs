@@ -1,0 +1,48 @@
+//! When the core uses more than one thread. Loops over particles or pairs go parallel (rayon) only
+//! when they are long enough to pay for the hand-off and the pool has more than one thread, and
+//! every parallel loop gives the same bits as the serial one: per-particle work is elementwise,
+//! pair results are gathered in pair order and summed serially, and reductions are exact (max,
+//! first match). A run's result therefore does not depend on the thread count.
+
+/// Shortest loop worth splitting across threads (about 20 µs of per-particle work).
+pub const MIN_PARALLEL_LEN: usize = 4096;
+
+/// Chunk length for parallel loops: long enough that the hand-off stays small.
+pub const CHUNK: usize = 1024;
+
+/// Whether a loop of `len` items should run in parallel.
+#[inline]
+pub fn worth_it(len: usize) -> bool {
+    len >= MIN_PARALLEL_LEN && rayon::current_num_threads() > 1
+}
+
+/// Calls `f(k, out)` for k in 0..n, which may push items; the items end up in `out` in k order
+/// (in parallel chunks when worth it).
+pub fn collect_ordered<T: Send>(n: usize, out: &mut Vec<T>, f: impl Fn(usize, &mut Vec<T>) + Sync) {
+    out.clear();
+    if worth_it(n) {
+        use rayon::prelude::*;
+        let parts: Vec<Vec<T>> = (0..n.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let mut part = vec![];
+                (c * CHUNK..n.min((c + 1) * CHUNK)).for_each(|k| f(k, &mut part));
+                part
+            })
+            .collect();
+        parts.into_iter().for_each(|mut part| out.append(&mut part));
+    } else {
+        (0..n).for_each(|k| f(k, out));
+    }
+}
+
+/// `f(k)` for k in 0..n into `out`, in k order (in parallel chunks when worth it).
+pub fn map_ordered<T: Send>(n: usize, out: &mut Vec<T>, f: impl Fn(usize) -> T + Sync + Send) {
+    out.clear();
+    if worth_it(n) {
+        use rayon::prelude::*;
+        (0..n).into_par_iter().with_min_len(CHUNK).map(f).collect_into_vec(out);
+    } else {
+        out.extend((0..n).map(f));
+    }
+}
