@@ -4,6 +4,7 @@
 //! simulation) ← [`io`] (HDF5 trajectories and checkpoints) ← [`run`] (the driver used by the CLI).
 
 pub mod analysis;
+pub mod bench;
 pub mod core;
 pub mod experiment;
 pub mod io;

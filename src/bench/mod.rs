@@ -1,0 +1,214 @@
+//! `magdem bench`: magdem against LIGGGHTS and LAMMPS on the same scenes, the cost per particle
+//! as N grows, and what a second thread buys; writes `reports/performance.md` and its figure.
+//! Outside the physics core.
+//!
+//! Every case is a scene (TOML, written beside the runs so that it can be rerun by hand). magdem
+//! is timed around its step loop only (no output), like the "Loop time" LIGGGHTS and LAMMPS
+//! print; the engines run their generated decks as separate processes.
+
+pub mod report;
+
+use crate::core::simulation::Simulation;
+use crate::reference::{deck, dipole_check, Engine};
+use crate::scene::Scene;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+pub type Error = Box<dyn std::error::Error + Send + Sync>;
+
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// Report directory (`performance.md`, the figure and CSV go here).
+    pub out: PathBuf,
+    /// Directory for scenes, decks and engine logs.
+    pub work: PathBuf,
+    /// Runs per measurement (min, median and max are reported).
+    pub repeats: usize,
+    /// Largest N of the scaling study.
+    pub max_particles: usize,
+}
+
+/// Contact-only packings: box edge for 300 particles (the edge grows as N^(1/3)).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Packing {
+    /// 0.5 mm cube for 300 (solid fraction 0.0017): few contacts.
+    Sparse,
+    /// 0.1 mm cube for 300 (solid fraction 0.21): particles settle into contact.
+    Dense,
+}
+
+impl Packing {
+    pub fn name(self) -> &'static str {
+        match self {
+            Packing::Sparse => "sparse",
+            Packing::Dense => "dense",
+        }
+    }
+    fn edge_for_300(self) -> f64 {
+        match self {
+            Packing::Sparse => 5.0e-4,
+            Packing::Dense => 1.0e-4,
+        }
+    }
+}
+
+const SPECIES: &str = "[[species]]\nname = \"fe3o4\"\ndiameter = 11.0e-6\ndensity = 1087.0\nyoungs_modulus = 1.0e9\npoisson_ratio = 0.5\n\
+                       friction = 0.5\nrestitution = 0.5\nrelative_permeability = 12.3\n";
+
+/// The contact-only scene of REFERENCE-CODES.md (11 µm Hertz spheres, walls, gravity,
+/// dt = 1e-8 s) with `n` particles for `steps` steps.
+pub fn contact_scene(packing: Packing, n: usize, steps: u64) -> String {
+    let edge = packing.edge_for_300() * (n as f64 / 300.0).cbrt();
+    let end = steps as f64 * 1e-8;
+    format!(
+        "version = 1\nname = \"bench-contact-{}-{n}\"\nseed = 1\n[domain]\nlo = [0.0, 0.0, 0.0]\nhi = [{edge:e}, {edge:e}, {edge:e}]\n\
+         [fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n{SPECIES}[[particles]]\nspecies = \"fe3o4\"\ncount = {n}\n\
+         [forces.contact]\nwalls = true\n[forces.gravity]\ng = [0.0, 0.0, -9.81]\n\
+         [integration]\nscheme = \"velocity-verlet\"\ndt = 1.0e-8\nend_time = {end:e}\n[output]\ninterval = {end:e}\n",
+        packing.name()
+    )
+}
+
+/// The case-1 magnetic scene at 4.5 mg/ml (307 particles in the paper's box; a box scaled by
+/// (n/307)^(1/3) for other `n`) with only the dipole force, induced moments without mutual
+/// induction (fixed dipoles, as LAMMPS holds them), over all pairs or within `cutoff` diameters.
+/// Without contact forces its particles cannot be stepped for long: it is timed as force
+/// evaluations ([`Work::Forces`]).
+pub fn magnetic_scene(n: usize, cutoff: Option<f64>, steps: u64) -> String {
+    let scale = (n as f64 / 307.0).cbrt();
+    let (lx, lz) = (3.96e-4 * scale, 3.3e-4 * scale);
+    let end = steps as f64 * 1e-8;
+    let cutoff = cutoff.map_or(String::new(), |c| format!("cutoff_diameters = {c:?}\n"));
+    format!(
+        "version = 1\nname = \"bench-dipole-{n}\"\nseed = 1\n[domain]\nlo = [0.0, 0.0, 0.0]\nhi = [{lx:e}, {lx:e}, {lz:e}]\n\
+         [fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n[field]\nb0 = [0.4, 0.0, 0.0]\n{SPECIES}[[particles]]\nspecies = \"fe3o4\"\ncount = {n}\n\
+         [forces.dipole]\ninduction = \"none\"\n{cutoff}\
+         [integration]\nscheme = \"velocity-verlet\"\ndt = 1.0e-8\nend_time = {end:e}\n[output]\ninterval = {end:e}\n"
+    )
+}
+
+/// Min, median and max of repeated measurements.
+#[derive(Debug, Clone, Copy)]
+pub struct Spread {
+    pub min: f64,
+    pub median: f64,
+    pub max: f64,
+}
+
+impl Spread {
+    pub fn of(values: &[f64]) -> Self {
+        let mut v = values.to_vec();
+        v.sort_by(f64::total_cmp);
+        let median = if v.len() % 2 == 1 { v[v.len() / 2] } else { 0.5 * (v[v.len() / 2 - 1] + v[v.len() / 2]) };
+        Spread { min: v[0], median, max: v[v.len() - 1] }
+    }
+}
+
+/// One timed magdem run: loop seconds, the finished simulation, and the heap memory the
+/// simulation holds at its end (bytes: state, neighbour and pair lists, buffers).
+pub struct MagdemRun {
+    pub seconds: f64,
+    pub simulation: Simulation,
+    pub memory: u64,
+}
+
+/// Bytes live on the heap, as counted by `stats_alloc` when the binary installs its
+/// instrumented allocator (the `magdem` binary does; elsewhere this stays 0).
+fn heap_bytes() -> u64 {
+    let s = stats_alloc::INSTRUMENTED_SYSTEM.stats();
+    (s.bytes_allocated as i64 - s.bytes_deallocated as i64 + s.bytes_reallocated as i64).max(0) as u64
+}
+
+/// What a timed magdem loop repeats.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Work {
+    /// Full steps of the scene's integrator.
+    Steps,
+    /// Force evaluations of the initial state, the particles held still (a kernel timing, like
+    /// a LAMMPS `run` without an integrating fix).
+    Forces,
+}
+
+/// Runs `scene` in magdem on `threads` threads and times its loop of `work` over the scene's
+/// number of steps.
+pub fn time_magdem(scene: &Scene, threads: usize, work: Work) -> Result<MagdemRun, Error> {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
+    pool.install(|| {
+        let before = heap_bytes();
+        let mut simulation = scene.simulation(None);
+        simulation.initialise()?;
+        let start = Instant::now();
+        match work {
+            Work::Steps => {
+                for _ in 0..scene.total_steps() / simulation.integrator.steps_per_call() {
+                    simulation.step()?;
+                }
+            }
+            Work::Forces => {
+                for _ in 0..scene.total_steps() {
+                    simulation.field.evaluate(&mut simulation.state, scene.dt());
+                }
+            }
+        }
+        let seconds = start.elapsed().as_secs_f64();
+        let memory = heap_bytes().saturating_sub(before);
+        Ok(MagdemRun { seconds, simulation, memory })
+    })
+}
+
+/// The "Loop time of X" a LIGGGHTS or LAMMPS log reports (s).
+pub fn loop_time(log: &str) -> Option<f64> {
+    log.lines().find_map(|l| l.strip_prefix("Loop time of ")?.split_whitespace().next()?.parse().ok())
+}
+
+/// Runs `in_file` in `dir` with the engine's binary (under `mpirun -np procs` when procs > 1)
+/// and returns its loop time.
+pub fn time_engine(engine: Engine, dir: &Path, in_file: &str, procs: usize) -> Result<f64, Error> {
+    let mut command = if procs > 1 {
+        let mut c = Command::new("mpirun");
+        c.args(["--allow-run-as-root", "--oversubscribe", "-np", &procs.to_string(), engine.binary()]);
+        c
+    } else {
+        Command::new(engine.binary())
+    };
+    let out = command.args(["-in", in_file, "-log", "log.bench"]).current_dir(dir).output()?;
+    let log = std::fs::read_to_string(dir.join("log.bench")).unwrap_or_default();
+    match (out.status.success(), loop_time(&log)) {
+        (true, Some(t)) => Ok(t),
+        _ => Err(format!("{} failed in {} (exit {:?}); see its log.bench", engine.name(), dir.display(), out.status.code()).into()),
+    }
+}
+
+/// Writes the engine's deck of `scene` into `dir` and times it.
+pub fn time_engine_scene(engine: Engine, scene: &Scene, dir: &Path) -> Result<f64, Error> {
+    let written = deck::write(engine, scene, dir)?;
+    time_engine(engine, dir, &written.input.to_string_lossy(), 1)
+}
+
+/// Writes the LAMMPS `lj/cut/dipole/cut` deck of a dipole-only `scene` (its initial moments)
+/// into `dir` and times its force evaluations over the scene's steps (no integrating fix: the
+/// particles hold still, as in magdem's [`Work::Forces`]).
+pub fn time_lammps_dipoles(scene: &Scene, dir: &Path) -> Result<f64, Error> {
+    let cutoff = scene.spec.forces.dipole.as_ref().ok_or("the scene has no dipole term")?.cutoff_diameters;
+    let mut field = scene.magnetic_force_field().ok_or("the scene has no magnetic term")?;
+    let mut state = scene.initial_state();
+    field.evaluate(&mut state, scene.dt());
+    let rc = dipole_check::lammps_cutoff(scene, cutoff)?;
+    dipole_check::write_deck(&state.particles, &scene.domain, rc, dir, &scene.hash, Some((scene.total_steps(), scene.dt())))?;
+    time_engine(Engine::Lammps, dir, "in.dipole", 1)
+}
+
+/// Writes `text` as `dir/name.toml` (for rerunning by hand) and parses it.
+pub fn scene_in(dir: &Path, name: &str, text: &str) -> Result<Scene, Error> {
+    std::fs::create_dir_all(dir)?;
+    let path = dir.join(format!("{name}.toml"));
+    std::fs::write(&path, text)?;
+    Ok(Scene::from_file(&path)?)
+}
+
+/// Whether two finished runs hold bit-identical positions and velocities.
+pub fn bitwise_equal(a: &Simulation, b: &Simulation) -> bool {
+    let (p, q) = (&a.state.particles, &b.state.particles);
+    p.position == q.position && p.velocity == q.velocity && p.angular_velocity == q.angular_velocity
+}

@@ -1,0 +1,375 @@
+//! The measurements of `magdem bench` and `reports/performance.md`.
+
+use super::*;
+use crate::plot::{line_chart_with_legend, palette, RGBColor, Series, SeriesLabelPosition};
+use crate::reference::dipole_check;
+use std::fmt::Write as _;
+
+/// One measured case: who ran it, on how many threads, and the loop times.
+#[derive(Debug, Clone)]
+pub struct Measurement {
+    pub case: String,
+    pub engine: &'static str,
+    pub threads: usize,
+    pub particles: usize,
+    pub steps: u64,
+    pub seconds: Spread,
+}
+
+impl Measurement {
+    /// Nanoseconds per particle-step at the median.
+    pub fn ns_per_particle_step(&self) -> f64 {
+        self.seconds.median / (self.particles as f64 * self.steps as f64) * 1e9
+    }
+    pub fn particle_steps_per_second(&self) -> f64 {
+        self.particles as f64 * self.steps as f64 / self.seconds.median
+    }
+}
+
+/// Steps of a contact-only case with `n` particles: 3e7 particle-steps, at least 1000 steps.
+fn contact_steps(n: usize) -> u64 {
+    (3e7 / n as f64).round().max(1000.0) as u64
+}
+
+struct Bench<'a> {
+    options: &'a Options,
+    measurements: Vec<Measurement>,
+    /// Phase shares (name, fraction) of magdem's single-thread run per case.
+    profiles: Vec<(String, Vec<(&'static str, f64)>)>,
+    /// Per case: whether the 1- and 2-thread runs ended bit for bit equal.
+    bitwise: Vec<(String, bool)>,
+    /// (case, particles, bytes per particle)
+    memory: Vec<(String, usize, f64)>,
+    engine_versions: Vec<String>,
+    notes: Vec<String>,
+}
+
+impl Bench<'_> {
+    fn magdem(&mut self, case: &str, scene: &Scene, threads: usize, work: Work, profile: bool) -> Result<MagdemRun, Error> {
+        let mut times = vec![];
+        let mut last = None;
+        for _ in 0..self.options.repeats {
+            let run = time_magdem(scene, threads, work)?;
+            times.push(run.seconds);
+            last = Some(run);
+        }
+        let run = last.expect("at least one repeat");
+        let particles = run.simulation.state.particles.len();
+        self.measurements.push(Measurement { case: case.into(), engine: "magdem", threads, particles, steps: scene.total_steps(), seconds: Spread::of(&times) });
+        if profile {
+            let timers = run.simulation.timers();
+            let total: f64 = timers.phases().iter().map(|(_, d)| d.as_secs_f64()).sum();
+            let shares = timers.phases().iter().map(|(n, d)| (*n, d.as_secs_f64() / total)).collect();
+            self.profiles.push((case.into(), shares));
+        }
+        Ok(run)
+    }
+
+    fn engine(&mut self, case: &str, engine: Engine, particles: usize, steps: u64, mut run: impl FnMut() -> Result<f64, Error>) {
+        if !engine.available() {
+            return;
+        }
+        let mut times = vec![];
+        for _ in 0..self.options.repeats {
+            match run() {
+                Ok(t) => times.push(t),
+                Err(e) => {
+                    self.notes.push(format!("{} on {case}: {e}", engine.name()));
+                    return;
+                }
+            }
+        }
+        self.measurements.push(Measurement { case: case.into(), engine: engine.name(), threads: 1, particles, steps, seconds: Spread::of(&times) });
+    }
+
+    fn find(&self, case: &str, engine: &str, threads: usize) -> Option<&Measurement> {
+        self.measurements.iter().find(|m| m.case == case && m.engine == engine && m.threads == threads)
+    }
+
+    fn contact_cases(&mut self, progress: &indicatif::ProgressBar) -> Result<(), Error> {
+        for packing in [Packing::Sparse, Packing::Dense] {
+            for n in [300, 3000, 30000] {
+                let case = format!("contact {} {n}", packing.name());
+                progress.set_message(case.clone());
+                let steps = contact_steps(n);
+                let dir = self.options.work.join(format!("contact-{}-{n}", packing.name()));
+                let scene = scene_in(&dir, "scene", &contact_scene(packing, n, steps))?;
+                let one = self.magdem(&case, &scene, 1, Work::Steps, true)?;
+                let two = self.magdem(&case, &scene, 2, Work::Steps, false)?;
+                self.bitwise.push((case.clone(), bitwise_equal(&one.simulation, &two.simulation)));
+                for engine in [Engine::Liggghts, Engine::Lammps] {
+                    let engine_dir = dir.join(engine.name());
+                    self.engine(&case, engine, n, steps, || time_engine_scene(engine, &scene, &engine_dir));
+                    self.record_version(&engine_dir);
+                }
+                progress.inc(1);
+            }
+        }
+        Ok(())
+    }
+
+    fn record_version(&mut self, dir: &Path) {
+        let log = std::fs::read_to_string(dir.join("log.bench")).unwrap_or_default();
+        if let Some(first) = log.lines().next().filter(|l| l.starts_with("LIGGGHTS") || l.starts_with("LAMMPS")) {
+            if !self.engine_versions.iter().any(|v| v == first) {
+                self.engine_versions.push(first.to_string());
+            }
+        }
+    }
+
+    /// Dipole forces at case-1 parameters, all pairs and with the paper's 15-diameter cut-off.
+    fn magnetic_cases(&mut self, progress: &indicatif::ProgressBar) -> Result<Vec<(String, f64)>, Error> {
+        let mut agreement = vec![];
+        for (label, cutoff, steps) in [("all pairs", None, 2000), ("cut-off 15 d", Some(15.0), 2000)] {
+            let case = format!("dipole {label} 307");
+            progress.set_message(case.clone());
+            let dir = self.options.work.join(format!("dipole-{}", label.replace(' ', "-")));
+            let scene = scene_in(&dir, "scene", &magnetic_scene(307, cutoff, steps))?;
+            self.magdem(&case, &scene, 1, Work::Forces, true)?;
+            let lammps_dir = dir.join("lammps");
+            self.engine(&case, Engine::Lammps, scene.initial.len(), steps, || time_lammps_dipoles(&scene, &lammps_dir));
+            if Engine::Lammps.available() {
+                match dipole_check::check(&scene, &dir.join("force-check")) {
+                    Ok(check) => agreement.push((case.clone(), check.max_relative_error)),
+                    Err(e) => self.notes.push(format!("force check on {case}: {e}")),
+                }
+            }
+            progress.inc(1);
+        }
+        Ok(agreement)
+    }
+
+    fn scaling(&mut self, progress: &indicatif::ProgressBar) -> Result<(), Error> {
+        for n in scaling_sizes(self.options.max_particles) {
+            progress.set_message(format!("scaling {n}"));
+            let dir = self.options.work.join(format!("scaling-{n}"));
+            for packing in [Packing::Sparse, Packing::Dense] {
+                let steps = (1e7 / n as f64).round().max(100.0) as u64;
+                let scene = scene_in(&dir, &format!("contact-{}", packing.name()), &contact_scene(packing, n, steps))?;
+                let case = format!("scaling contact {}", packing.name());
+                let run = self.magdem(&case, &scene, 1, Work::Steps, false)?;
+                self.memory.push((case.clone(), n, run.memory as f64 / n as f64));
+                drop(run);
+                if packing == Packing::Dense {
+                    self.magdem(&case, &scene, 2, Work::Steps, false)?;
+                }
+            }
+            let steps = (2e6 / n as f64).round().max(20.0) as u64;
+            let scene = scene_in(&dir, "dipole-cutoff", &magnetic_scene(n, Some(15.0), steps))?;
+            let case = "scaling dipole cut-off 15 d".to_string();
+            let run = self.magdem(&case, &scene, 1, Work::Forces, false)?;
+            self.memory.push((case, n, run.memory as f64 / n as f64));
+            progress.inc(1);
+        }
+        Ok(())
+    }
+}
+
+fn scaling_sizes(max: usize) -> Vec<usize> {
+    [1000, 3000, 10000, 30000, 100000].into_iter().filter(|&n| n <= max).collect()
+}
+
+/// What this machine is (CPU model, cores, memory, kernel).
+fn machine() -> String {
+    let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
+    let model = cpuinfo.lines().find_map(|l| l.strip_prefix("model name")).map(|s| s.trim_start_matches([' ', '\t', ':']).to_string()).unwrap_or("unknown CPU".into());
+    let flags = cpuinfo.lines().find_map(|l| l.strip_prefix("flags")).unwrap_or("");
+    let simd: Vec<&str> = ["avx512f", "avx2", "fma"].into_iter().filter(|f| flags.split_whitespace().any(|x| x == *f)).collect();
+    let meminfo = std::fs::read_to_string("/proc/meminfo").unwrap_or_default();
+    let memory_kb: f64 = meminfo.lines().find_map(|l| l.strip_prefix("MemTotal:")).and_then(|s| s.split_whitespace().next()?.parse().ok()).unwrap_or(0.0);
+    let kernel = std::fs::read_to_string("/proc/sys/kernel/osrelease").unwrap_or_default();
+    format!(
+        "{model} ({}), {} cores, {:.1} GiB memory, Linux {}",
+        simd.join(", "),
+        std::thread::available_parallelism().map_or(0, |n| n.get()),
+        memory_kb / 1024.0 / 1024.0,
+        kernel.trim()
+    )
+}
+
+fn seconds(s: &Spread) -> String {
+    format!("{:.3} / {:.3} / {:.3}", s.min, s.median, s.max)
+}
+
+/// Runs every measurement and writes `performance.md`, `performance-scaling.png` and
+/// `performance.csv` into `options.out`; returns the report's path.
+pub fn write(options: &Options) -> Result<PathBuf, Error> {
+    std::fs::create_dir_all(&options.out)?;
+    let mut bench = Bench { options, measurements: vec![], profiles: vec![], bitwise: vec![], memory: vec![], engine_versions: vec![], notes: vec![] };
+    let total = 6 + 2 + scaling_sizes(options.max_particles).len() as u64;
+    let progress = indicatif::ProgressBar::new(total).with_style(indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} cases {elapsed} {msg}")?);
+    bench.contact_cases(&progress)?;
+    let agreement = bench.magnetic_cases(&progress)?;
+    bench.scaling(&progress)?;
+    progress.finish_and_clear();
+
+    write_csv(&options.out.join("performance.csv"), &bench.measurements)?;
+    scaling_figure(&options.out.join("performance-scaling.png"), &bench.measurements)?;
+    let text = markdown(&bench, &agreement);
+    let path = options.out.join("performance.md");
+    std::fs::write(&path, text)?;
+    Ok(path)
+}
+
+fn write_csv(path: &Path, rows: &[Measurement]) -> Result<(), Error> {
+    let mut csv = String::from("case,engine,threads,particles,steps,min_s,median_s,max_s,particle_steps_per_s\n");
+    for m in rows {
+        let _ = writeln!(
+            csv,
+            "{},{},{},{},{},{:.6},{:.6},{:.6},{:.4e}",
+            m.case, m.engine, m.threads, m.particles, m.steps, m.seconds.min, m.seconds.median, m.seconds.max, m.particle_steps_per_second()
+        );
+    }
+    std::fs::write(path, csv)?;
+    Ok(())
+}
+
+fn scaling_figure(path: &Path, rows: &[Measurement]) -> Result<(), Error> {
+    let line = |case: &str, engine: &str, threads: usize| -> Vec<(f64, f64)> {
+        rows.iter()
+            .filter(|m| m.case == case && m.engine == engine && m.threads == threads)
+            .map(|m| ((m.particles as f64).log10(), m.ns_per_particle_step().log10()))
+            .collect()
+    };
+    let points = |packing: &str, engine: &str| -> Vec<(f64, f64)> {
+        rows.iter()
+            .filter(|m| m.case.starts_with(&format!("contact {packing}")) && m.engine == engine)
+            .map(|m| ((m.particles as f64).log10(), m.ns_per_particle_step().log10()))
+            .collect()
+    };
+    let mut series = vec![
+        Series::line("magdem contact sparse, 1 thread", line("scaling contact sparse", "magdem", 1), palette(0)),
+        Series::line("magdem contact dense, 1 thread", line("scaling contact dense", "magdem", 1), palette(1)),
+        Series::line("magdem contact dense, 2 threads", line("scaling contact dense", "magdem", 2), palette(5)),
+        Series::line("magdem dipoles, 15 d cut-off, 1 thread", line("scaling dipole cut-off 15 d", "magdem", 1), palette(4)),
+    ];
+    for (k, (engine, packing)) in [("liggghts", "sparse"), ("liggghts", "dense"), ("lammps", "sparse"), ("lammps", "dense")].into_iter().enumerate() {
+        let colour = if engine == "liggghts" { RGBColor(30, 150, 60) } else { RGBColor(230, 140, 0) };
+        let pts = points(packing, engine);
+        if !pts.is_empty() {
+            series.push(Series::markers(format!("{engine} contact {packing}"), pts, colour, if k % 2 == 0 { 4 } else { 7 }));
+        }
+    }
+    series.retain(|s| !s.points.is_empty());
+    line_chart_with_legend(
+        path,
+        "Cost per particle and step against N (flat = linear in N)",
+        "log10 N (particles)",
+        "log10 ns per particle-step",
+        &series,
+        SeriesLabelPosition::UpperRight,
+    )
+    .map_err(|e| e.to_string().into())
+}
+
+/// The `make reproduce` wall time quoted by the committed paper report, if any.
+fn reproduce_wall_time() -> Option<u64> {
+    let text = std::fs::read_to_string("reports/paper/README.md").ok()?;
+    let at = text.find(" s of wall time")?;
+    text[..at].rsplit(' ').next()?.parse().ok()
+}
+
+fn markdown(bench: &Bench, agreement: &[(String, f64)]) -> String {
+    let o = bench.options;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# Performance: magdem against LIGGGHTS and LAMMPS\n\nGenerated by `magdem bench --repeats {}` (magdem {}, commit {}). Machine: {}.{}\n",
+        o.repeats,
+        env!("CARGO_PKG_VERSION"),
+        env!("MAGDEM_GIT_COMMIT"),
+        machine(),
+        if bench.engine_versions.is_empty() { String::new() } else { format!(" Engines: {}.", bench.engine_versions.join("; ")) }
+    );
+    let _ = writeln!(
+        s,
+        "Times are loop times in seconds, min / median / max of {} runs: magdem around its step loop (no output), LIGGGHTS and LAMMPS as the `Loop time` of their logs, each engine a separate process running the deck `magdem deck` writes for the same scene (same particles, dt = 1e-8 s, same output interval). Ratios compare medians (particle-steps per second). The scenes, decks and logs are under `{}`; the numbers are in `performance.csv`.\n",
+        o.repeats,
+        o.work.display()
+    );
+
+    s += "## Contact only: Hertz + history + walls + gravity\n\n11 µm spheres (E = 1e9 Pa, e = 0.5, μ = 0.5), 300 / 3 000 / 30 000 particles placed at random, sparse (0.5 mm cube for 300, solid fraction 0.0017) and dense (0.1 mm cube for 300, solid fraction 0.21), the box edge scaled with N^(1/3); 3e7 particle-steps per run.\n\n";
+    s += "| case | steps | magdem 1 thread (s) | magdem 2 threads (s) | LIGGGHTS (s) | LAMMPS (s) | magdem ÷ LIGGGHTS speed | magdem ÷ LAMMPS speed | 2 threads ÷ 1 | 1 and 2 threads bitwise equal |\n|---|---|---|---|---|---|---|---|---|---|\n";
+    let cases: Vec<String> = bench.measurements.iter().filter(|m| m.case.starts_with("contact ")).map(|m| m.case.clone()).fold(vec![], |mut v, c| {
+        if !v.contains(&c) {
+            v.push(c);
+        }
+        v
+    });
+    let ratio = |a: Option<&Measurement>, b: Option<&Measurement>| match (a, b) {
+        (Some(a), Some(b)) => format!("{:.2}×", b.seconds.median / a.seconds.median),
+        _ => "–".into(),
+    };
+    let cell = |m: Option<&Measurement>| m.map_or("–".into(), |m| seconds(&m.seconds));
+    for case in &cases {
+        let (one, two) = (bench.find(case, "magdem", 1), bench.find(case, "magdem", 2));
+        let (lig, lmp) = (bench.find(case, "liggghts", 1), bench.find(case, "lammps", 1));
+        let bitwise = bench.bitwise.iter().find(|(c, _)| c == case).map_or("–", |(_, b)| if *b { "yes" } else { "no" });
+        let _ = writeln!(
+            s,
+            "| {case} | {} | {} | {} | {} | {} | {} | {} | {} | {bitwise} |",
+            one.map_or(0, |m| m.steps),
+            cell(one),
+            cell(two),
+            cell(lig),
+            cell(lmp),
+            ratio(one, lig),
+            ratio(one, lmp),
+            ratio(two, one)
+        );
+    }
+
+    s += "\n## Dipole forces at case-1 parameters\n\n307 particles in the paper's 4.5 mg/ml box (396 × 396 × 330 µm), moments induced by 0.4 T without mutual induction (fixed dipoles, as LAMMPS holds them), dipole force only, 2 000 force evaluations with the particles held still (without contact forces the nearest pairs would collide within microseconds). LAMMPS runs its own `lj/cut/dipole/cut` (ε = 0) on the same positions and moments (REFERENCE-CODES.md: p = m √(1e-7/k_e)) as a `run` without an integrating fix; the force agreement is the largest |F_LAMMPS − F_magdem| over particles relative to the largest force, at the initial configuration (`reference::dipole_check`).\n\n";
+    s += "| case | magdem 1 thread (s) | LAMMPS (s) | magdem ÷ LAMMPS speed | force agreement |\n|---|---|---|---|---|\n";
+    for case in ["dipole all pairs 307", "dipole cut-off 15 d 307"] {
+        let (one, lmp) = (bench.find(case, "magdem", 1), bench.find(case, "lammps", 1));
+        let agree = agreement.iter().find(|(c, _)| c == case).map_or("–".into(), |(_, e)| format!("{e:.1e}"));
+        let _ = writeln!(s, "| {case} | {} | {} | {} | {agree} |", cell(one), cell(lmp), ratio(one, lmp));
+    }
+
+    s += "\n## Cost against N\n\n![scaling](performance-scaling.png)\n\nnanoseconds per particle-step (median), magdem; contact scenes at 1e7 particle-steps (at least 100 steps), the dipole scene (as above, box scaled at equal concentration) as force evaluations at 2e6 particle-evaluations (at least 20). Memory: heap bytes the simulation holds at the end of its run, per particle (state, contact history, neighbour and pair lists, buffers; counted by the binary's instrumented allocator).\n\n";
+    s += "| case | threads |";
+    let sizes: Vec<usize> = scaling_sizes(o.max_particles);
+    for n in &sizes {
+        let _ = write!(s, " N = {n} |");
+    }
+    s += "\n|---|---|";
+    s += &"---|".repeat(sizes.len());
+    s += "\n";
+    for (case, threads) in [("scaling contact sparse", 1), ("scaling contact dense", 1), ("scaling contact dense", 2), ("scaling dipole cut-off 15 d", 1)] {
+        let _ = write!(s, "| {} | {threads} |", case.trim_start_matches("scaling "));
+        for n in &sizes {
+            let m = bench.measurements.iter().find(|m| m.case == case && m.threads == threads && m.particles == *n);
+            let _ = write!(s, " {} |", m.map_or("–".into(), |m| format!("{:.1} ns", m.ns_per_particle_step())));
+        }
+        s += "\n";
+    }
+    for (case, threads) in [("scaling contact sparse", 1), ("scaling contact dense", 1), ("scaling dipole cut-off 15 d", 1)] {
+        let _ = write!(s, "| memory, {} | {threads} |", case.trim_start_matches("scaling "));
+        for n in &sizes {
+            let m = bench.memory.iter().find(|(c, k, _)| c == case && k == n);
+            let _ = write!(s, " {} |", m.filter(|(_, _, b)| *b > 0.0).map_or("–".into(), |(_, _, b)| format!("{:.0} B", b)));
+        }
+        s += "\n";
+    }
+
+    s += "\n## Where the time goes\n\nShare of magdem's single-thread loop time per step phase (the solver's own timers, `magdem run --timings`); `integrate` is the integrator's own work between force evaluations.\n\n| case | phases |\n|---|---|\n";
+    for (case, shares) in &bench.profiles {
+        let mut shares = shares.clone();
+        shares.sort_by(|a, b| b.1.total_cmp(&a.1));
+        let text: Vec<String> = shares.iter().map(|(n, f)| format!("{n} {:.0}%", 100.0 * f)).collect();
+        let _ = writeln!(s, "| {case} | {} |", text.join(", "));
+    }
+    s += "\nThe profile-led history of the optimisations (what each bought, measured with `perf` and the phase timers at the commits named) is in [performance-history.md](performance-history.md).\n";
+
+    if let Some(t) = reproduce_wall_time() {
+        let _ = writeln!(s, "\n## The default `make reproduce` ensemble\n\nThe committed paper report (`reports/paper/README.md`) was produced by a `make reproduce` whose runs took {t} s of wall time ({:.1} min) on this kind of machine; the time before this work is in the history.", t as f64 / 60.0);
+    }
+    if !bench.notes.is_empty() {
+        s += "\n## Notes\n\n";
+        for n in &bench.notes {
+            let _ = writeln!(s, "- {n}");
+        }
+    }
+    s
+}
