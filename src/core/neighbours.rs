@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use super::state::Vec3;
 
 /// A pair (i < j) closer than the search range; `r = x_i − x_j` (minimum image), `dist = |r|`.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, Default)]
 pub struct Pair {
     pub i: u32,
     pub j: u32,
@@ -159,9 +159,9 @@ pub struct VerletList {
 }
 
 impl VerletList {
-    /// Fills `out` with the pairs closer than `range` in (i, j) order; `skin` is the extra
-    /// candidate distance (a larger skin rebuilds less often but filters more candidates).
-    pub fn pairs_within(&mut self, positions: &[Vec3], domain: &Domain, range: f64, skin: f64, out: &mut Vec<Pair>) {
+    /// Brings the candidates up to date for `range` and `skin` (rebuilt when some particle has
+    /// moved more than half the skin since the last build); returns whether it rebuilt them.
+    pub fn update(&mut self, positions: &[Vec3], domain: &Domain, range: f64, skin: f64) -> bool {
         let moved = |(x, x0): (&Vec3, &Vec3)| domain.displacement(x, x0).norm_squared() > 0.25 * skin * skin;
         let stale = self.reference.len() != positions.len() || self.built_for != Some((range, skin));
         let moved_too_far = stale
@@ -180,6 +180,18 @@ impl VerletList {
             self.built_for = Some((range, skin));
             self.rebuilds += 1;
         }
+        moved_too_far
+    }
+
+    /// Candidate pairs (i < j) within range + skin of the last build, sorted by (i, j).
+    pub fn candidates(&self) -> &[(u32, u32)] {
+        &self.candidates
+    }
+
+    /// Fills `out` with the pairs closer than `range` in (i, j) order; `skin` is the extra
+    /// candidate distance (a larger skin rebuilds less often but filters more candidates).
+    pub fn pairs_within(&mut self, positions: &[Vec3], domain: &Domain, range: f64, skin: f64, out: &mut Vec<Pair>) {
+        self.update(positions, domain, range, skin);
         let range2 = range * range;
         let candidates = &self.candidates;
         parallel::collect_ordered(candidates.len(), out, |k, out| {

@@ -7,6 +7,7 @@ use super::forces::{ForceContext, ForceTerm};
 use super::integrators::Integrator;
 use super::magnetisation::{InductionError, Magnetisation};
 use super::neighbours::{Pair, VerletList};
+use super::parallel;
 use super::stability::{Instability, Monitor, StepEstimate};
 use super::state::{State, Vec3};
 use super::timers::PhaseTimers;
@@ -153,8 +154,8 @@ impl Simulation {
     pub fn step(&mut self) -> Result<(), RunError> {
         let start = Instant::now();
         let eval_before = self.field.evaluation_time;
-        let (field, dt) = (&mut self.field, self.dt);
-        self.integrator.step(&mut self.state, dt, &mut |s, group, h| field.evaluate_group(s, h, group));
+        let (field, dt, state, integrator) = (&mut self.field, self.dt, &mut self.state, &mut self.integrator);
+        parallel::with_warm_pool(state.particles.len(), || integrator.step(state, dt, &mut |s, group, h| field.evaluate_group(s, h, group)));
         let integrate = start.elapsed().saturating_sub(self.field.evaluation_time - eval_before);
         self.field.timers.add("integrate", integrate);
         let t0 = Instant::now();

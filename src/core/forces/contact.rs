@@ -96,7 +96,7 @@ struct ContactOutcome {
 }
 
 /// A particle touching a wall face: (particle, face, axis, upper face?, overlap).
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Default)]
 struct WallTouch {
     i: u32,
     face: WallFace,

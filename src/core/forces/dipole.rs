@@ -6,16 +6,17 @@
 //! T_i = m_perm,i × B_loc,i acts only on permanent moments: an induced moment of a linear sphere is
 //! parallel to its local field.
 //!
-//! All pairs need no pair list: below [`parallel::MIN_PARALLEL_LEN`] particles a half loop uses
-//! F_ji = −F_ij; above it each particle sums its own row (twice the pair work, but rows run in
-//! parallel and in the same order for any thread count). The loop over j works on coordinate
-//! arrays so that it compiles to SIMD; its sums run in j order afterwards (a vectorised sum would
-//! reorder the additions).
+//! The sum runs over rows of partners (all other particles, or the Verlet candidates within the
+//! cut-off): below [`parallel::MIN_PARALLEL_LEN`] particles half rows with F_ji = −F_ij; above
+//! it full rows, each particle summing its own (twice the pair work, but rows run in parallel
+//! and in the same order for any thread count). The loop over a row works on coordinate arrays
+//! so that it compiles to SIMD, and so does its sum, in a fixed order of eight lanes. When the moments phase has already listed the pairs (the paper's
+//! induction), the term sums over that list instead.
 
 use super::{ForceContext, ForceTerm};
 use crate::core::magnetisation::{dipole_field, MU0};
 use crate::core::domain::Domain;
-use crate::core::neighbours::{Pair, VerletList};
+use crate::core::neighbours::{CellList, Pair, VerletList};
 use crate::core::parallel;
 use crate::core::state::{State, Vec3};
 use nalgebra::Matrix3;
@@ -58,66 +59,163 @@ struct Image {
     inverse: [f64; 3],
 }
 
-/// Writes F_ij for j in `js` into `out[k][j − js.start]` (k = x, y, z): the vectorisable part.
-fn row_forces(c: &Columns, image: &Image, i: usize, js: std::ops::Range<usize>, out: &mut [Vec<f64>; 3]) {
+impl Image {
+    fn of(domain: &Domain) -> Self {
+        let length = [0, 1, 2].map(|k| if domain.periodic[k] { domain.hi[k] - domain.lo[k] } else { 0.0 });
+        Image { length, inverse: length.map(|l| if l > 0.0 { 1.0 / l } else { 0.0 }) }
+    }
+}
+
+/// Neighbour rows of the cut-off sum, from the Verlet candidates: row i lists its j in ascending
+/// order, only j > i (half rows, for F_ji = −F_ij) or every neighbour (full rows).
+#[derive(Debug, Default, Clone)]
+struct Rows {
+    start: Vec<usize>,
+    js: Vec<u32>,
+}
+
+impl Rows {
+    fn build(&mut self, n: usize, candidates: &[(u32, u32)], full: bool) {
+        self.start.clear();
+        self.start.resize(n + 1, 0);
+        for &(i, j) in candidates {
+            self.start[i as usize + 1] += 1;
+            if full {
+                self.start[j as usize + 1] += 1;
+            }
+        }
+        for i in 0..n {
+            self.start[i + 1] += self.start[i];
+        }
+        let mut fill = self.start.clone();
+        self.js.clear();
+        self.js.resize(self.start[n], 0);
+        // Candidates are sorted by (i, j): each row receives its entries in ascending order.
+        for &(i, j) in candidates {
+            self.js[fill[i as usize]] = j;
+            fill[i as usize] += 1;
+            if full {
+                self.js[fill[j as usize]] = i;
+                fill[j as usize] += 1;
+            }
+        }
+    }
+
+    fn row(&self, i: usize) -> &[u32] {
+        &self.js[self.start[i]..self.start[i + 1]]
+    }
+}
+
+/// Partner coordinates and moments of one row, contiguous: x, y, z, mx, my, mz.
+type Partners<'a> = [&'a [f64]; 6];
+
+/// Gathers the columns of the particles `js` into `buffer` (one row's partners).
+fn gather<'a>(c: &Columns, js: &[u32], buffer: &'a mut [Vec<f64>; 6]) -> Partners<'a> {
+    let sources = [&c.x[0], &c.x[1], &c.x[2], &c.m[0], &c.m[1], &c.m[2]];
+    for (b, source) in buffer.iter_mut().zip(sources) {
+        b.clear();
+        b.extend(js.iter().map(|&j| source[j as usize]));
+    }
+    let [x, y, z, mx, my, mz] = buffer;
+    [x, y, z, mx, my, mz]
+}
+
+/// The columns of particles `range` (contiguous already).
+fn slice(c: &Columns, range: std::ops::Range<usize>) -> Partners<'_> {
+    [&c.x[0][range.clone()], &c.x[1][range.clone()], &c.x[2][range.clone()], &c.m[0][range.clone()], &c.m[1][range.clone()], &c.m[2][range]]
+}
+
+/// Writes F_ij into `out[k][q]` (k = x, y, z) for each partner q of particle i, zero beyond
+/// the cut-off (squared distance `cutoff2`). The vectorisable part: contiguous arrays, no sums.
+fn row_forces(c: &Columns, image: &Image, i: usize, partners: Partners, cutoff2: f64, out: &mut [Vec<f64>; 3]) {
     let (xi, mi) = ([c.x[0][i], c.x[1][i], c.x[2][i]], [c.m[0][i], c.m[1][i], c.m[2][i]]);
-    let len = js.len();
+    let len = partners[0].len();
     for o in out.iter_mut() {
         o.clear();
         o.resize(len, 0.0);
     }
     let [ox, oy, oz] = out;
-    let (xs, ys, zs) = (&c.x[0][js.clone()], &c.x[1][js.clone()], &c.x[2][js.clone()]);
-    let (mxs, mys, mzs) = (&c.m[0][js.clone()], &c.m[1][js.clone()], &c.m[2][js]);
-    for j in 0..len {
-        let d = [xi[0] - xs[j], xi[1] - ys[j], xi[2] - zs[j]];
-        let d = [0, 1, 2].map(|k| d[k] - image.length[k] * (d[k] * image.inverse[k]).round());
-        let inv = 1.0 / (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    let [xs, ys, zs, mxs, mys, mzs] = partners.map(|p| &p[..len]);
+    for q in 0..len {
+        let d = [xi[0] - xs[q], xi[1] - ys[q], xi[2] - zs[q]];
+        let d = [0, 1, 2].map(|k| d[k] - image.length[k] * (d[k] * image.inverse[k]).round_ties_even());
+        let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        let inv = 1.0 / r2.sqrt();
         let rhat = [d[0] * inv, d[1] * inv, d[2] * inv];
-        let mj = [mxs[j], mys[j], mzs[j]];
+        let mj = [mxs[q], mys[q], mzs[q]];
         let mir = mi[0] * rhat[0] + mi[1] * rhat[1] + mi[2] * rhat[2];
         let mjr = mj[0] * rhat[0] + mj[1] * rhat[1] + mj[2] * rhat[2];
         let mimj = mi[0] * mj[0] + mi[1] * mj[1] + mi[2] * mj[2];
-        let scale = PREFACTOR * (inv * inv) * (inv * inv);
+        let scale = if r2 < cutoff2 { PREFACTOR * (inv * inv) * (inv * inv) } else { 0.0 };
         let radial = mimj - 5.0 * mir * mjr;
-        ox[j] = scale * (mir * mj[0] + mjr * mi[0] + radial * rhat[0]);
-        oy[j] = scale * (mir * mj[1] + mjr * mi[1] + radial * rhat[1]);
-        oz[j] = scale * (mir * mj[2] + mjr * mi[2] + radial * rhat[2]);
+        ox[q] = scale * (mir * mj[0] + mjr * mi[0] + radial * rhat[0]);
+        oy[q] = scale * (mir * mj[1] + mjr * mi[1] + radial * rhat[1]);
+        oz[q] = scale * (mir * mj[2] + mjr * mi[2] + radial * rhat[2]);
     }
 }
 
-/// Adds Σ_j F_ij over all pairs to `force` (see the module note on the two orders).
-fn add_all_pairs(position: &[Vec3], moment: &[Vec3], domain: &Domain, force: &mut [Vec3], columns: &mut Columns) {
-    let n = position.len();
-    columns.fill(position, moment);
-    let length = [0, 1, 2].map(|k| if domain.periodic[k] { domain.hi[k] - domain.lo[k] } else { 0.0 });
-    let image = Image { length, inverse: length.map(|l| if l > 0.0 { 1.0 / l } else { 0.0 }) };
-    let sum = |v: &[f64]| v.iter().fold(0.0, |a, b| a + b);
+/// Σ of one row's forces: eight running sums over the row's positions mod 8, then those eight
+/// in order. A fixed order (the same for any thread count) that compiles to SIMD adds.
+fn row_sum(out: &[Vec<f64>; 3]) -> Vec3 {
+    let sum = |v: &[f64]| {
+        let mut lanes = [0.0; 8];
+        let chunks = v.chunks_exact(8);
+        let rest = chunks.remainder();
+        for chunk in chunks {
+            for l in 0..8 {
+                lanes[l] += chunk[l];
+            }
+        }
+        for (l, x) in rest.iter().enumerate() {
+            lanes[l] += x;
+        }
+        lanes.iter().fold(0.0, |a, b| a + b)
+    };
+    Vec3::new(sum(&out[0]), sum(&out[1]), sum(&out[2]))
+}
+
+/// Adds Σ_j F_ij to `force` with partners from `rows` (`None` = all other particles) within
+/// `cutoff2`: half rows with F_ji = −F_ij below [`parallel::MIN_PARALLEL_LEN`] particles, full
+/// rows summed per particle in parallel above (see the module note).
+fn add_row_sums(c: &Columns, image: &Image, rows: Option<&Rows>, cutoff2: f64, force: &mut [Vec3]) {
+    let n = force.len();
     if n < parallel::MIN_PARALLEL_LEN {
-        let mut row: [Vec<f64>; 3] = Default::default();
+        let (mut out, mut buffer): ([Vec<f64>; 3], [Vec<f64>; 6]) = Default::default();
         for i in 0..n {
-            row_forces(columns, &image, i, i + 1..n, &mut row);
-            force[i] += Vec3::new(sum(&row[0]), sum(&row[1]), sum(&row[2]));
-            for (k, (fx, (fy, fz))) in row[0].iter().zip(row[1].iter().zip(&row[2])).enumerate() {
-                force[i + 1 + k] -= Vec3::new(*fx, *fy, *fz);
+            let partners = match rows {
+                Some(rows) => gather(c, rows.row(i), &mut buffer),
+                None => slice(c, i + 1..n),
+            };
+            row_forces(c, image, i, partners, cutoff2, &mut out);
+            force[i] += row_sum(&out);
+            let mut subtract = |q: usize, j: usize| force[j] -= Vec3::new(out[0][q], out[1][q], out[2][q]);
+            match rows {
+                Some(rows) => rows.row(i).iter().enumerate().for_each(|(q, &j)| subtract(q, j as usize)),
+                None => (0..n - i - 1).for_each(|q| subtract(q, i + 1 + q)),
             }
         }
     } else {
         use rayon::prelude::*;
-        let columns = &*columns;
-        let rows: Vec<Vec3> = (0..n)
+        let sums: Vec<Vec3> = (0..n)
             .into_par_iter()
             .with_min_len(64)
             .map_init(
-                || (<[Vec<f64>; 3]>::default(), <[Vec<f64>; 3]>::default()),
-                |(before, after), i| {
-                    row_forces(columns, &image, i, 0..i, before);
-                    row_forces(columns, &image, i, i + 1..n, after);
-                    Vec3::from_fn(|k, _| sum(&before[k]) + sum(&after[k]))
+                || <([Vec<f64>; 3], [Vec<f64>; 6])>::default(),
+                |(out, buffer), i| match rows {
+                    Some(rows) => {
+                        row_forces(c, image, i, gather(c, rows.row(i), buffer), cutoff2, out);
+                        row_sum(out)
+                    }
+                    None => {
+                        row_forces(c, image, i, slice(c, 0..i), cutoff2, out);
+                        let before = row_sum(out);
+                        row_forces(c, image, i, slice(c, i + 1..n), cutoff2, out);
+                        before + row_sum(out)
+                    }
                 },
             )
             .collect();
-        force.iter_mut().zip(&rows).for_each(|(f, row)| *f += row);
+        force.iter_mut().zip(&sums).for_each(|(f, sum)| *f += sum);
     }
 }
 
@@ -149,11 +247,12 @@ pub struct DipoleForce {
     pairs: Vec<Pair>,
     buffer: Vec<Vec3>,
     columns: Columns,
+    rows: Rows,
 }
 
 impl DipoleForce {
     pub fn new(cutoff: Option<f64>, b0: Vec3, gradient: Matrix3<f64>) -> Self {
-        Self { cutoff, b0, gradient, verlet: VerletList::default(), pairs: vec![], buffer: vec![], columns: Columns::default() }
+        Self { cutoff, b0, gradient, verlet: VerletList::default(), pairs: vec![], buffer: vec![], columns: Columns::default(), rows: Rows::default() }
     }
 }
 
@@ -166,36 +265,39 @@ impl ForceTerm for DipoleForce {
     }
     fn apply(&mut self, ctx: &ForceContext, state: &mut State) {
         let p = &mut state.particles;
-        // The moments phase already found the pairs when its range is this cut-off.
-        let pairs: Option<&[Pair]> = match (ctx.magnetic_pairs, self.cutoff) {
-            (Some((range, pairs)), _) if range == self.cutoff => Some(pairs),
+        let n = p.len();
+        match (ctx.magnetic_pairs, self.cutoff) {
+            // The moments phase already found the pairs when its range is this cut-off.
+            (Some((range, pairs)), _) if range == self.cutoff => add_listed_pairs(pairs, &p.moment, &mut p.force, &mut self.buffer),
             (_, Some(c)) => {
-                self.verlet.pairs_within(&p.position, ctx.domain, c, c / 15.0, &mut self.pairs);
-                Some(&self.pairs)
+                if self.verlet.update(&p.position, ctx.domain, c, c / 15.0) {
+                    self.rows.build(n, self.verlet.candidates(), n >= parallel::MIN_PARALLEL_LEN);
+                }
+                self.columns.fill(&p.position, &p.moment);
+                add_row_sums(&self.columns, &Image::of(ctx.domain), Some(&self.rows), c * c, &mut p.force);
             }
-            (_, None) => None,
-        };
-        match pairs {
-            Some(pairs) => add_listed_pairs(pairs, &p.moment, &mut p.force, &mut self.buffer),
-            None => add_all_pairs(&p.position, &p.moment, ctx.domain, &mut p.force, &mut self.columns),
+            (_, None) => {
+                self.columns.fill(&p.position, &p.moment);
+                add_row_sums(&self.columns, &Image::of(ctx.domain), None, f64::INFINITY, &mut p.force);
+            }
         }
         if p.has_permanent_moments {
-            // B_loc = B_ext + μ0 Σ_j H_dip,j over the same pairs as the force.
-            let mut b_loc: Vec<Vec3> = p.position.iter().map(|x| self.b0 + self.gradient * x).collect();
-            let mut add = |i: usize, j: usize, r: &Vec3, dist: f64| {
-                b_loc[i] += MU0 * dipole_field(&p.moment[j], r, dist);
-                b_loc[j] += MU0 * dipole_field(&p.moment[i], &(-r), dist);
-            };
-            match pairs {
-                Some(pairs) => pairs.iter().for_each(|pair| add(pair.i as usize, pair.j as usize, &pair.r, pair.dist)),
-                None => {
-                    for i in 0..p.len() {
-                        for j in i + 1..p.len() {
-                            let r = ctx.domain.displacement(&p.position[i], &p.position[j]);
-                            add(i, j, &r, r.norm());
-                        }
+            // B_loc = B_ext + μ0 Σ_j H_dip,j over the pairs of the force sum.
+            let pairs: &[Pair] = match (ctx.magnetic_pairs, self.cutoff) {
+                (Some((range, pairs)), _) if range == self.cutoff => pairs,
+                (_, cutoff) => {
+                    match cutoff {
+                        Some(c) => self.verlet.pairs_within(&p.position, ctx.domain, c, c / 15.0, &mut self.pairs),
+                        None => CellList::default().pairs_within(&p.position, ctx.domain, None, &mut self.pairs),
                     }
+                    &self.pairs
                 }
+            };
+            let mut b_loc: Vec<Vec3> = p.position.iter().map(|x| self.b0 + self.gradient * x).collect();
+            for pair in pairs {
+                let (i, j) = (pair.i as usize, pair.j as usize);
+                b_loc[i] += MU0 * dipole_field(&p.moment[j], &pair.r, pair.dist);
+                b_loc[j] += MU0 * dipole_field(&p.moment[i], &(-pair.r), pair.dist);
             }
             for ((torque, m), b) in p.torque.iter_mut().zip(&p.permanent_moment).zip(&b_loc) {
                 *torque += m.cross(b);
