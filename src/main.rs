@@ -106,6 +106,10 @@ enum Command {
         /// the in-process callback every step.
         #[arg(long, value_name = "K")]
         exchange_every: Option<u64>,
+        /// Reference codes: run the engine's binary under `mpirun -np N` (magnetic scenes need
+        /// the files route, --exchange-every).
+        #[arg(long, value_name = "N", default_value_t = 1)]
+        mpi: usize,
         /// Continue an interrupted run from the output file's checkpoint.
         #[arg(long)]
         resume: bool,
@@ -201,6 +205,10 @@ enum Command {
         /// Largest particle count of the scaling study.
         #[arg(long, default_value_t = 100_000)]
         max_particles: usize,
+        /// Skip the MPI demonstration (LIGGGHTS and LAMMPS by the files route under
+        /// `mpirun -np 1` and `-np 2`, about 5 minutes).
+        #[arg(long)]
+        no_mpi: bool,
     },
 }
 
@@ -267,7 +275,7 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Command::Run { scene, output, engine, exchange_every, resume, timings, quiet, abort_after_frame } => {
+        Command::Run { scene, output, engine, exchange_every, mpi, resume, timings, quiet, abort_after_frame } => {
             let scene = match load(&scene) {
                 Ok(s) => s,
                 Err(code) => return code,
@@ -282,8 +290,13 @@ fn main() -> ExitCode {
                 let result = match exchange_every {
                     Some(every) => {
                         let magdem = std::env::current_exe().unwrap_or_else(|_| PathBuf::from("magdem"));
-                        reference::run_binary(engine, &scene, &dir, &output, &reference::deck::Coupling::Files { magdem, every })
+                        reference::run_binary(engine, &scene, &dir, &output, &reference::deck::Coupling::Files { magdem, every }, mpi)
                     }
+                    None if mpi > 1 && scene.magnetic_force_field().is_some() => {
+                        eprintln!("error: --mpi {mpi}: magnetic forces reach MPI processes only by the files route; add --exchange-every K");
+                        return ExitCode::from(2);
+                    }
+                    None if mpi > 1 => reference::run_binary(engine, &scene, &dir, &output, &reference::deck::Coupling::Callback, mpi),
                     None => reference::run(engine, &scene, &dir, &output),
                 };
                 return match result {
@@ -488,8 +501,8 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Command::Bench { out, work, repeats, max_particles } => {
-            let options = magdem::bench::Options { out, work, repeats: repeats.max(1), max_particles };
+        Command::Bench { out, work, repeats, max_particles, no_mpi } => {
+            let options = magdem::bench::Options { out, work, repeats: repeats.max(1), max_particles, mpi: !no_mpi };
             match magdem::bench::report::write(&options) {
                 Ok(path) => {
                     println!("wrote {}", path.display());

@@ -27,6 +27,9 @@ pub struct Options {
     pub repeats: usize,
     /// Largest N of the scaling study.
     pub max_particles: usize,
+    /// Run the MPI demonstration (the reference experiment's LIGGGHTS and LAMMPS points by the
+    /// files route under 1 and 2 MPI processes).
+    pub mpi: bool,
 }
 
 /// Contact-only packings: box edge for 300 particles (the edge grows as N^(1/3)).

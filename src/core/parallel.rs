@@ -25,8 +25,9 @@ pub fn collect_ordered<T: Copy + Default + Send + Sync>(n: usize, out: &mut Vec<
         let parts: Vec<Vec<T>> = (0..n.div_ceil(CHUNK))
             .into_par_iter()
             .map(|c| {
-                let mut part = vec![];
-                (c * CHUNK..n.min((c + 1) * CHUNK)).for_each(|k| f(k, &mut part));
+                let ks = c * CHUNK..n.min((c + 1) * CHUNK);
+                let mut part = Vec::with_capacity(ks.len());
+                ks.for_each(|k| f(k, &mut part));
                 part
             })
             .collect();

@@ -78,18 +78,27 @@ pub fn run(engine: Engine, scene: &Scene, dir: &Path, output: &Path) -> Result<R
     if scene.magnetic_force_field().is_some() {
         return library::run_coupled(engine, scene, dir, output);
     }
-    run_binary(engine, scene, dir, output, &deck::Coupling::Callback)
+    run_binary(engine, scene, dir, output, &deck::Coupling::Callback, 1)
 }
 
-/// Runs the engine's binary on the deck (with the files route for magnetic forces, if given).
-pub fn run_binary(engine: Engine, scene: &Scene, dir: &Path, output: &Path, coupling: &deck::Coupling) -> Result<ReferenceRun, ReferenceError> {
+/// Runs the engine's binary on the deck (with the files route for magnetic forces, if given),
+/// under `mpirun -np procs` when `procs` > 1: the deck is the same, each process holds part of
+/// the box, and the files route's `shell` exchange runs on the first process.
+pub fn run_binary(engine: Engine, scene: &Scene, dir: &Path, output: &Path, coupling: &deck::Coupling, procs: usize) -> Result<ReferenceRun, ReferenceError> {
     if !engine.available() {
         return Err(ReferenceError::NotInstalled { engine: engine.name(), binary: engine.binary() });
     }
     let start = std::time::Instant::now();
     std::fs::create_dir_all(dir)?;
     let written = deck::write_with(engine, scene, dir, coupling)?;
-    let result = Command::new(engine.binary()).arg("-in").arg(&written.input).arg("-log").arg("log.engine").current_dir(dir).output()?;
+    let mut command = if procs > 1 {
+        let mut mpirun = Command::new("mpirun");
+        mpirun.args(["--allow-run-as-root", "--oversubscribe", "-np", &procs.to_string(), engine.binary()]);
+        mpirun
+    } else {
+        Command::new(engine.binary())
+    };
+    let result = command.arg("-in").arg(&written.input).arg("-log").arg("log.engine").current_dir(dir).output()?;
     let log = output.with_extension(format!("{}.log", engine.name()));
     let engine_log = dir.join("log.engine");
     if engine_log.exists() {
@@ -108,7 +117,7 @@ pub fn run_binary(engine: Engine, scene: &Scene, dir: &Path, output: &Path, coup
     let frames = dump::read(engine, &dir.join(&written.dump), scene)?;
     let integrator = match coupling {
         deck::Coupling::Files { every, .. } if scene.magnetic_force_field().is_some() => {
-            format!("velocity-verlet (nve/sphere), magnetic forces from magdem by file exchange every {every} steps")
+            format!("velocity-verlet (nve/sphere), magnetic forces from magdem by file exchange every {every} steps, {procs} MPI process(es)")
         }
         _ => "velocity-verlet (nve/sphere)".to_string(),
     };

@@ -140,7 +140,7 @@ pub fn files_route_lag(engine: Engine, text: &str, work: &Path, magdem: &Path, k
     for &k in ks {
         let out = work.join(format!("files-{k}.{}.h5", engine.name()));
         let coupling = reference::deck::Coupling::Files { magdem: magdem.to_path_buf(), every: k };
-        let r = reference::run_binary(engine, &scene, &work.join(format!("files-{k}.{}", engine.name())), &out, &coupling)?;
+        let r = reference::run_binary(engine, &scene, &work.join(format!("files-{k}.{}", engine.name())), &out, &coupling, 1)?;
         let x = Trajectory::open(&out)?.all_vectors("position")?;
         let worst = x.iter().zip(reference_positions.iter()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
         rows.push((k, worst, r.wall_time.as_secs_f64()));
