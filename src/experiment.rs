@@ -129,10 +129,16 @@ pub fn run_experiments(experiments: &[Experiment], options: &ExperimentOptions) 
     bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} runs | {elapsed} | ETA {eta} | {msg}")?);
     let next = AtomicUsize::new(0);
     let done: Mutex<Vec<Vec<Option<PointResult>>>> = Mutex::new(experiments.iter().map(|e| e.points.iter().map(|_| None).collect()).collect());
-    let workers = options.jobs.unwrap_or_else(rayon::current_num_threads).max(1).min(queue.len().max(1));
+    let cores = rayon::current_num_threads();
+    let workers = options.jobs.unwrap_or(cores).max(1).min(queue.len().max(1));
+    // Each worker's runs get their own share of the cores (one thread each when the runs fill
+    // them): runs do not compete for one pool, and results do not depend on it.
+    let threads_per_run = (cores / workers).max(1);
     std::thread::scope(|scope| {
         for _ in 0..workers {
             scope.spawn(|| {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads_per_run).build().expect("a thread pool");
+                pool.install(|| {
                 while let Some(&(e, p)) = queue.get(next.fetch_add(1, Ordering::Relaxed)) {
                     let point = &experiments[e].points[p];
                     let file = experiments[e].output.join(format!("{}.h5", point.id));
@@ -143,6 +149,7 @@ pub fn run_experiments(experiments: &[Experiment], options: &ExperimentOptions) 
                     let result = PointResult { id: point.id.clone(), file, outcome, wall_time: start.elapsed().as_secs_f64() };
                     done.lock().expect("no worker panicked")[e][p] = Some(result);
                 }
+                });
             });
         }
     });

@@ -39,8 +39,14 @@ pub struct RunSummary {
     pub simulation: Simulation,
 }
 
-/// Runs `scene` into `output`, from t = 0 or (with `resume`) from the file's checkpoint.
+/// Runs `scene` into `output`, from t = 0 or (with `resume`) from the file's checkpoint. The run
+/// executes on a thread of the current rayon pool, so that a step's parallel loops start from
+/// inside the pool instead of handing work over from outside it at every step.
 pub fn run(scene: &Scene, output: &Path, options: &RunOptions) -> Result<RunSummary, RunFailure> {
+    rayon::scope(|_| run_in_pool(scene, output, options))
+}
+
+fn run_in_pool(scene: &Scene, output: &Path, options: &RunOptions) -> Result<RunSummary, RunFailure> {
     let start = Instant::now();
     let total = scene.total_steps();
     let per_frame = scene.steps_per_frame();

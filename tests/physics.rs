@@ -288,7 +288,7 @@ fn chain_moving_along_its_axis_has_drag_only_on_its_leading_sphere() {
     let domain = magdem::core::domain::Domain { lo: Vec3::repeat(-1e-3), hi: Vec3::repeat(1e-3), periodic: [false; 3] };
     let mut pairs = vec![];
     CellList::default().pairs_within(&state.particles.position, &domain, Some(11.0e-6 * 1.001), &mut pairs);
-    let ctx = ForceContext { domain: &domain, near_pairs: &pairs, dt: 1e-8, magnetic_pairs: None };
+    let ctx = ForceContext { domain: &domain, near_pairs: &pairs, near_rebuilt: None, dt: 1e-8, magnetic_pairs: None };
     for (shielding, expect_shielded) in [(Shielding::Paper, true), (Shielding::None, false)] {
         state.particles.force.iter_mut().for_each(|f| *f = Vec3::zeros());
         let mut drag = Drag::new(DragLaw::Stokes, shielding, false, 1000.0, 1.0e-3, Vec3::zeros(), 1e-3);

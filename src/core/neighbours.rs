@@ -190,8 +190,9 @@ impl VerletList {
 
     /// Fills `out` with the pairs closer than `range` in (i, j) order; `skin` is the extra
     /// candidate distance (a larger skin rebuilds less often but filters more candidates).
-    pub fn pairs_within(&mut self, positions: &[Vec3], domain: &Domain, range: f64, skin: f64, out: &mut Vec<Pair>) {
-        self.update(positions, domain, range, skin);
+    /// Returns whether the candidates were rebuilt.
+    pub fn pairs_within(&mut self, positions: &[Vec3], domain: &Domain, range: f64, skin: f64, out: &mut Vec<Pair>) -> bool {
+        let rebuilt = self.update(positions, domain, range, skin);
         let range2 = range * range;
         let candidates = &self.candidates;
         parallel::collect_ordered(candidates.len(), out, |k, out| {
@@ -202,6 +203,7 @@ impl VerletList {
                 out.push(Pair { i, j, r, dist: d2.sqrt() });
             }
         });
+        rebuilt
     }
 }
 

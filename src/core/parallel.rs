@@ -1,8 +1,9 @@
 //! When the core uses more than one thread. Loops over particles or pairs go parallel (rayon) only
-//! when they are long enough to pay for the hand-off and the pool has more than one thread, and
-//! every parallel loop gives the same bits as the serial one: per-particle work is elementwise,
-//! pair results are gathered in pair order and summed serially, and reductions are exact (max,
-//! first match). A run's result therefore does not depend on the thread count.
+//! inside a step of a system large enough to pay for it ([`with_warm_pool`], which keeps the
+//! pool's other threads awake for the step) and only when the loop itself is long enough; every
+//! parallel loop gives the same bits as the serial one: per-particle work is elementwise, pair
+//! results are gathered in pair order and summed serially, and reductions are exact (max, first
+//! match). A run's result therefore does not depend on the thread count.
 
 /// Shortest loop worth splitting across threads (about 20 µs of per-particle work).
 pub const MIN_PARALLEL_LEN: usize = 4096;
@@ -10,10 +11,16 @@ pub const MIN_PARALLEL_LEN: usize = 4096;
 /// Chunk length for parallel loops: long enough that the hand-off stays small.
 pub const CHUNK: usize = 1024;
 
-/// Whether a loop of `len` items should run in parallel.
+thread_local! {
+    /// Set on the thread running a step inside [`with_warm_pool`].
+    static WARM: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Whether a loop of `len` items should run in parallel: long enough, and inside a warm step
+/// (outside one, or with one thread, the pool's threads would have to be woken for each loop).
 #[inline]
 pub fn worth_it(len: usize) -> bool {
-    len >= MIN_PARALLEL_LEN && rayon::current_num_threads() > 1
+    len >= MIN_PARALLEL_LEN && WARM.with(|w| w.get())
 }
 
 /// Calls `f(k, out)` for k in 0..n, which may push items; the items end up in `out` in k order
@@ -61,7 +68,7 @@ pub fn map_ordered<T: Send>(n: usize, out: &mut Vec<T>, f: impl Fn(usize) -> T +
 /// loops: waking a sleeping thread costs about 25 µs on the 2-core machines this runs on, more
 /// than a loop over 30 000 particles takes. Without parallel work to share, just `f()`.
 pub fn with_warm_pool<R: Send>(len: usize, f: impl FnOnce() -> R + Send) -> R {
-    if !worth_it(len) {
+    if len < MIN_PARALLEL_LEN || rayon::current_num_threads() < 2 {
         return f();
     }
     use std::sync::atomic::{AtomicBool, Ordering};
@@ -76,7 +83,9 @@ pub fn with_warm_pool<R: Send>(len: usize, f: impl FnOnce() -> R + Send) -> R {
                 }
             });
         }
+        let was_warm = WARM.with(|w| w.replace(true));
         let result = f();
+        WARM.with(|w| w.set(was_warm));
         done.store(true, Ordering::Release);
         result
     })

@@ -74,10 +74,13 @@ impl ForceField {
             std::mem::swap(&mut p.force, &mut p.slow_force);
             std::mem::swap(&mut p.torque, &mut p.slow_torque);
         }
+        let mut near_rebuilt = None;
         if let Some(range) = self.near_range.filter(|_| group != ForceGroup::Slow) {
             // Skin 0.2 of the contact range (0.2 diameters), as in the reference decks.
-            let (near, pairs) = (&mut self.near, &mut self.near_pairs);
-            self.timers.time("neighbours", || near.pairs_within(&p.position, &self.domain, range, 0.2 * range, pairs));
+            let (near, pairs, skin) = (&mut self.near, &mut self.near_pairs, 0.2 * range);
+            if self.timers.time("neighbours", || near.pairs_within(&p.position, &self.domain, range, skin, pairs)) {
+                near_rebuilt = Some(skin);
+            }
         }
         p.force.iter_mut().for_each(|f| *f = Vec3::zeros());
         p.torque.iter_mut().for_each(|t| *t = Vec3::zeros());
@@ -90,6 +93,7 @@ impl ForceField {
         let ctx = ForceContext {
             domain: &self.domain,
             near_pairs: &self.near_pairs,
+            near_rebuilt,
             dt,
             magnetic_pairs: self.magnetisation.as_ref().and_then(|m| m.pairs()),
         };
@@ -152,16 +156,19 @@ impl Simulation {
 
     /// Advances one step and checks it.
     pub fn step(&mut self) -> Result<(), RunError> {
-        let start = Instant::now();
-        let eval_before = self.field.evaluation_time;
-        let (field, dt, state, integrator) = (&mut self.field, self.dt, &mut self.state, &mut self.integrator);
-        parallel::with_warm_pool(state.particles.len(), || integrator.step(state, dt, &mut |s, group, h| field.evaluate_group(s, h, group)));
-        let integrate = start.elapsed().saturating_sub(self.field.evaluation_time - eval_before);
-        self.field.timers.add("integrate", integrate);
-        let t0 = Instant::now();
-        let result = self.check();
-        self.field.timers.add("monitor", t0.elapsed());
-        result
+        let n = self.state.particles.len();
+        parallel::with_warm_pool(n, || {
+            let start = Instant::now();
+            let eval_before = self.field.evaluation_time;
+            let (field, dt) = (&mut self.field, self.dt);
+            self.integrator.step(&mut self.state, dt, &mut |s, group, h| field.evaluate_group(s, h, group));
+            let integrate = start.elapsed().saturating_sub(self.field.evaluation_time - eval_before);
+            self.field.timers.add("integrate", integrate);
+            let t0 = Instant::now();
+            let result = self.check();
+            self.field.timers.add("monitor", t0.elapsed());
+            result
+        })
     }
 
     fn check(&mut self) -> Result<(), RunError> {

@@ -217,6 +217,85 @@ pub fn fitted_order(points: &[(f64, f64)]) -> f64 {
 }
 
 /// Every problem × scheme × dt; writes `dir/README.md` and one figure per problem.
+/// The experiment behind the observable section (run separately; read when present).
+pub const OBSERVABLE_EXPERIMENT: &str = "experiments/accuracy/case1-observable.toml";
+
+/// Work–precision on the case-1 mean aggregate length at 5 ms, from the runs of
+/// [`OBSERVABLE_EXPERIMENT`]: per variant the paired relative difference to the reference run of
+/// the same seed, its CI95 over seeds, and the median wall time per run.
+fn observable_section(dir: &Path) -> Result<String, Box<dyn std::error::Error>> {
+    use crate::analysis::stats::{ci95_half_width, summary};
+    let runs = crate::report::runs::load_runs(&[std::path::PathBuf::from(OBSERVABLE_EXPERIMENT)], 1e-3)?;
+    let reference: Vec<_> = runs.iter().filter(|r| r.variant == "reference" && r.completed()).collect();
+    if reference.is_empty() {
+        return Ok(format!(
+            "## The paper's observable\n\nNot run yet: `magdem experiment {OBSERVABLE_EXPERIMENT}` (about 12 minutes on 2 cores), then this study again.\n\n"
+        ));
+    }
+    let mut md = format!(
+        "## The paper's observable: case-1 mean aggregate length at 5 ms\n\nFrom the runs of `{OBSERVABLE_EXPERIMENT}` (0.563 mg/ml, every term of the paper, seeds {}): each integrator at its working step against the reference ensemble (exponential Verlet at dt = 2.5e-9 s). The observable is chaotic seed by seed, so the error is the **paired** difference (L − L_ref)/L_ref of runs with the same seed (the same initial positions), averaged over seeds with its 95% confidence interval; wall time is per run (median, min–max), both cores busy with two runs at a time.\n\n\
+         | variant | integrator, dt | runs | mean length (µm) ± CI95 | paired difference to the reference (%) ± CI95 | seeds needed to resolve 1% | wall time per run (s) |\n|---|---|---|---|---|---|---|\n",
+        reference.iter().map(|r| r.seed.to_string()).collect::<Vec<_>>().join(", ")
+    );
+    let mut variants: Vec<&str> = vec![];
+    for r in &runs {
+        if !variants.contains(&r.variant.as_str()) {
+            variants.push(&r.variant);
+        }
+    }
+    let mut points = vec![];
+    for variant in variants {
+        let mine: Vec<_> = runs.iter().filter(|r| r.variant == variant).collect();
+        let done: Vec<_> = mine.iter().filter(|r| r.completed()).collect();
+        let setting = mine.first().map_or(String::new(), |r| r.variant_overrides.join(", "));
+        if done.is_empty() {
+            let why = mine.iter().find(|r| !r.message.is_empty()).map_or(mine.first().map_or("missing".into(), |r| r.status.clone()), |r| r.message.clone());
+            let _ = writeln!(md, "| {variant} | {setting} | 0 of {} | – | – | – | {why} |", mine.len());
+            continue;
+        }
+        let lengths: Vec<f64> = done.iter().map(|r| r.mean_length_um()).collect();
+        let paired: Vec<f64> = done
+            .iter()
+            .filter_map(|r| reference.iter().find(|q| q.seed == r.seed).map(|q| 100.0 * (r.mean_length_um() - q.mean_length_um()) / q.mean_length_um()))
+            .collect();
+        let times: Vec<f64> = done.iter().map(|r| r.wall_time).filter(|t| t.is_finite()).collect();
+        let wall = crate::bench::Spread::of(&times);
+        let (diff, ci) = (summary(&paired).mean, ci95_half_width(&paired));
+        let needed = if variant == "reference" { "–".to_string() } else { format!("{:.0}", (1.96 * summary(&paired).sample_std / 1.0).powi(2).ceil()) };
+        let _ = writeln!(
+            md,
+            "| {variant} | {setting} | {} of {} | {:.1} ± {:.1} | {} | {needed} | {:.1} ({:.1}–{:.1}) |",
+            done.len(),
+            mine.len(),
+            summary(&lengths).mean,
+            ci95_half_width(&lengths),
+            if variant == "reference" { "0 (by definition)".to_string() } else { format!("{diff:+.1} ± {ci:.1}") },
+            wall.median,
+            wall.min,
+            wall.max
+        );
+        if variant != "reference" {
+            points.push((variant.to_string(), wall.median, diff, ci));
+        }
+    }
+    let series: Vec<Series> = points
+        .iter()
+        .enumerate()
+        .map(|(k, (v, t, d, ci))| Series::markers(v.clone(), vec![(t.log10(), *d)], crate::plot::palette(k), 6).with_errors(vec![*ci]))
+        .collect();
+    line_chart_with_legend(
+        &dir.join("work-precision-case1.png"),
+        "Case-1 mean length at 5 ms: paired difference to the reference against run time",
+        "log10 wall time per run (s)",
+        "paired difference to the reference (%), CI95",
+        &series,
+        SeriesLabelPosition::UpperRight,
+    )?;
+    md += "\n![work-precision on the case-1 observable](work-precision-case1.png)\n\n";
+    md += "\"Seeds needed to resolve 1%\" is (1.96 s/1%)² with s the sample standard deviation of the paired differences: how many seeds a CI95 of ±1% on the difference would take. A difference whose CI contains 0 is not distinguishable from the reference at this ensemble size.\n\n";
+    Ok(md)
+}
+
 pub fn study(dir: &Path) -> Result<String, Box<dyn std::error::Error>> {
     std::fs::create_dir_all(dir)?;
     let mut md = String::from("# Accuracy against time step\n\n");
@@ -268,6 +347,8 @@ pub fn study(dir: &Path) -> Result<String, Box<dyn std::error::Error>> {
         }
     }
     md += &work.unwrap_or_default();
+    md += &observable_section(dir)?;
+    md += "Cost per step against N, per force term (criterion: `cargo bench --bench kernels`) and against LIGGGHTS and LAMMPS: [../performance.md](../performance.md).\n\n";
     md += "## Reading it\n\n\
 - **Velocity Verlet is first order here**, not second: the drag is evaluated with the half-step velocity (as \
 LAMMPS' and LIGGGHTS' `nve/sphere` do with `fix viscous`), which is O(dt) off, and wherever drag matters — every \

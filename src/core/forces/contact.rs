@@ -116,6 +116,9 @@ pub struct Contact {
     n_species: usize,
     walls: bool,
     touching: Vec<(u32, Vec3)>,
+    /// Particles that may touch a wall before the near list's next rebuild (`None`: not known
+    /// yet, test every particle).
+    wall_candidates: Option<Vec<u32>>,
     wall_found: Vec<WallTouch>,
     wall_touching: Vec<(WallTouch, Vec3)>,
     outcomes: Vec<ContactOutcome>,
@@ -143,6 +146,7 @@ impl Contact {
             n_species: n,
             walls,
             touching: vec![],
+            wall_candidates: None,
             wall_found: vec![],
             wall_touching: vec![],
             outcomes: vec![],
@@ -239,14 +243,28 @@ impl Contact {
         let lo = Vec3::from_fn(|k, _| if domain.periodic[k] { f64::NEG_INFINITY } else { domain.lo[k] });
         let hi = Vec3::from_fn(|k, _| if domain.periodic[k] { f64::INFINITY } else { domain.hi[k] });
         let p = &state.particles;
+        let near = |i: usize, margin: f64| {
+            let (a, x) = (p.radius[i] + margin, p.position[i]);
+            (x.x - lo.x < a) | (x.y - lo.y < a) | (x.z - lo.z < a) | (hi.x - x.x < a) | (hi.y - x.y < a) | (hi.z - x.z < a)
+        };
+        // After a rebuild of the near list no particle moves more than skin/2 before the next
+        // one: only particles within a radius plus the skin of a wall can touch it until then.
+        if let Some(skin) = ctx.near_rebuilt {
+            let mut candidates = self.wall_candidates.take().unwrap_or_default();
+            parallel::collect_ordered(p.len(), &mut candidates, |i, out| {
+                if near(i, skin) {
+                    out.push(i as u32);
+                }
+            });
+            self.wall_candidates = Some(candidates);
+        }
         let history = std::mem::take(&mut state.contacts.walls);
         let mut found = std::mem::take(&mut self.wall_found);
-        parallel::collect_ordered(p.len(), &mut found, |i, out| {
-            let (a, x) = (p.radius[i], p.position[i]);
-            let near = (x.x - lo.x < a) | (x.y - lo.y < a) | (x.z - lo.z < a) | (hi.x - x.x < a) | (hi.y - x.y < a) | (hi.z - x.z < a);
-            if !near {
+        let touches = |i: usize, out: &mut Vec<WallTouch>| {
+            if !near(i, 0.0) {
                 return;
             }
+            let (a, x) = (p.radius[i], p.position[i]);
             for axis in 0..3 {
                 for (upper, gap) in [(false, x[axis] - lo[axis]), (true, hi[axis] - x[axis])] {
                     if gap < a {
@@ -255,7 +273,11 @@ impl Contact {
                     }
                 }
             }
-        });
+        };
+        match &self.wall_candidates {
+            Some(candidates) => parallel::collect_ordered(candidates.len(), &mut found, |k, out| touches(candidates[k] as usize, out)),
+            None => parallel::collect_ordered(p.len(), &mut found, touches),
+        }
         let mut cursor = 0;
         self.wall_touching.clear();
         self.wall_touching.extend(found.iter().map(|&t| (t, spring(&history, &mut cursor, (t.i, t.face)))));

@@ -109,12 +109,24 @@ impl Rows {
 /// Partner coordinates and moments of one row, contiguous: x, y, z, mx, my, mz.
 type Partners<'a> = [&'a [f64]; 6];
 
-/// Gathers the columns of the particles `js` into `buffer` (one row's partners).
-fn gather<'a>(c: &Columns, js: &[u32], buffer: &'a mut [Vec<f64>; 6]) -> Partners<'a> {
+/// Gathers the columns of those particles of `js` closer to i than the cut-off into `buffer`
+/// (one row's partners) and their indices into `kept`. Only the partners in range enter the row,
+/// so a row's terms, and the lanes of its sum, do not depend on when the candidates were built
+/// (a resumed run stays bitwise equal).
+fn gather<'a>(c: &Columns, image: &Image, i: usize, js: &[u32], cutoff2: f64, buffer: &'a mut [Vec<f64>; 6], kept: &mut Vec<u32>) -> Partners<'a> {
+    let xi = [c.x[0][i], c.x[1][i], c.x[2][i]];
+    kept.clear();
+    kept.extend(js.iter().copied().filter(|&j| {
+        let d = [0, 1, 2].map(|k| {
+            let d = xi[k] - c.x[k][j as usize];
+            d - image.length[k] * (d * image.inverse[k]).round_ties_even()
+        });
+        d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < cutoff2
+    }));
     let sources = [&c.x[0], &c.x[1], &c.x[2], &c.m[0], &c.m[1], &c.m[2]];
     for (b, source) in buffer.iter_mut().zip(sources) {
         b.clear();
-        b.extend(js.iter().map(|&j| source[j as usize]));
+        b.extend(kept.iter().map(|&j| source[j as usize]));
     }
     let [x, y, z, mx, my, mz] = buffer;
     [x, y, z, mx, my, mz]
@@ -180,17 +192,17 @@ fn row_sum(out: &[Vec<f64>; 3]) -> Vec3 {
 fn add_row_sums(c: &Columns, image: &Image, rows: Option<&Rows>, cutoff2: f64, force: &mut [Vec3]) {
     let n = force.len();
     if n < parallel::MIN_PARALLEL_LEN {
-        let (mut out, mut buffer): ([Vec<f64>; 3], [Vec<f64>; 6]) = Default::default();
+        let (mut out, mut buffer, mut kept): ([Vec<f64>; 3], [Vec<f64>; 6], Vec<u32>) = Default::default();
         for i in 0..n {
             let partners = match rows {
-                Some(rows) => gather(c, rows.row(i), &mut buffer),
+                Some(rows) => gather(c, image, i, rows.row(i), cutoff2, &mut buffer, &mut kept),
                 None => slice(c, i + 1..n),
             };
             row_forces(c, image, i, partners, cutoff2, &mut out);
             force[i] += row_sum(&out);
             let mut subtract = |q: usize, j: usize| force[j] -= Vec3::new(out[0][q], out[1][q], out[2][q]);
             match rows {
-                Some(rows) => rows.row(i).iter().enumerate().for_each(|(q, &j)| subtract(q, j as usize)),
+                Some(_) => kept.iter().enumerate().for_each(|(q, &j)| subtract(q, j as usize)),
                 None => (0..n - i - 1).for_each(|q| subtract(q, i + 1 + q)),
             }
         }
@@ -200,10 +212,10 @@ fn add_row_sums(c: &Columns, image: &Image, rows: Option<&Rows>, cutoff2: f64, f
             .into_par_iter()
             .with_min_len(64)
             .map_init(
-                || <([Vec<f64>; 3], [Vec<f64>; 6])>::default(),
-                |(out, buffer), i| match rows {
+                || <([Vec<f64>; 3], [Vec<f64>; 6], Vec<u32>)>::default(),
+                |(out, buffer, kept), i| match rows {
                     Some(rows) => {
-                        row_forces(c, image, i, gather(c, rows.row(i), buffer), cutoff2, out);
+                        row_forces(c, image, i, gather(c, image, i, rows.row(i), cutoff2, buffer, kept), cutoff2, out);
                         row_sum(out)
                     }
                     None => {
@@ -287,7 +299,9 @@ impl ForceTerm for DipoleForce {
                 (Some((range, pairs)), _) if range == self.cutoff => pairs,
                 (_, cutoff) => {
                     match cutoff {
-                        Some(c) => self.verlet.pairs_within(&p.position, ctx.domain, c, c / 15.0, &mut self.pairs),
+                        Some(c) => {
+                            self.verlet.pairs_within(&p.position, ctx.domain, c, c / 15.0, &mut self.pairs);
+                        }
                         None => CellList::default().pairs_within(&p.position, ctx.domain, None, &mut self.pairs),
                     }
                     &self.pairs

@@ -18,6 +18,9 @@ pub struct ForceContext<'a> {
     /// Pairs within contact range (touching or overlapping within the touch tolerance), in
     /// (i, j) order.
     pub near_pairs: &'a [Pair],
+    /// `Some(skin)` when the near-pair candidates were rebuilt in this evaluation: until the next
+    /// rebuild no particle moves more than skin/2 from where it is now.
+    pub near_rebuilt: Option<f64>,
     /// Time step, for history-dependent terms (tangential spring).
     pub dt: f64,
     /// Pairs the moments phase found this evaluation, with their range (`None` = all pairs),
