@@ -229,7 +229,7 @@ fn observable_section(dir: &Path) -> Result<String, Box<dyn std::error::Error>> 
     let reference: Vec<_> = runs.iter().filter(|r| r.variant == "reference" && r.completed()).collect();
     if reference.is_empty() {
         return Ok(format!(
-            "## The paper's observable\n\nNot run yet: `magdem experiment {OBSERVABLE_EXPERIMENT}` (about 12 minutes on 2 cores), then this study again.\n\n"
+            "## The paper's observable\n\nNot run yet: `magdem experiment {OBSERVABLE_EXPERIMENT}` (about 11 minutes on 2 cores), then this study again.\n\n"
         ));
     }
     let mut md = format!(
