@@ -490,29 +490,11 @@ fn main() -> ExitCode {
         }
         Command::Report(Report::Paper { experiments, reference, out, gap, wall_time }) => {
             let options = magdem::report::paper::PaperReportOptions { experiments, reference, out, gap, wall_time };
-            match magdem::report::paper::write_report(&options) {
-                Ok(path) => {
-                    println!("wrote {}", path.display());
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    ExitCode::from(1)
-                }
-            }
+            report_written(magdem::report::paper::write_report(&options))
         }
         Command::Bench { out, work, repeats, max_particles, no_mpi } => {
             let options = magdem::bench::Options { out, work, repeats: repeats.max(1), max_particles, mpi: !no_mpi };
-            match magdem::bench::report::write(&options) {
-                Ok(path) => {
-                    println!("wrote {}", path.display());
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    ExitCode::from(1)
-                }
-            }
+            report_written(magdem::bench::report::write(&options))
         }
         Command::Info { file } => match info(&file) {
             Ok(()) => ExitCode::SUCCESS,
@@ -521,6 +503,20 @@ fn main() -> ExitCode {
                 ExitCode::from(2)
             }
         },
+    }
+}
+
+/// Exit status of a command that writes a report: its path on success, the error otherwise.
+fn report_written<E: std::fmt::Display>(result: Result<PathBuf, E>) -> ExitCode {
+    match result {
+        Ok(path) => {
+            println!("wrote {}", path.display());
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(1)
+        }
     }
 }
 

@@ -10,7 +10,7 @@
 //! cut-off): below [`parallel::MIN_PARALLEL_LEN`] particles half rows with F_ji = −F_ij; above
 //! it full rows, each particle summing its own (twice the pair work, but rows run in parallel
 //! and in the same order for any thread count). The loop over a row works on coordinate arrays
-//! so that it compiles to SIMD, and so does its sum, in a fixed order of eight lanes. When the moments phase has already listed the pairs (the paper's
+//! so that it compiles to SIMD; its sum runs in eight lanes by partner index, a fixed order. When the moments phase has already listed the pairs (the paper's
 //! induction), the term sums over that list instead.
 
 use super::{ForceContext, ForceTerm};
@@ -109,24 +109,12 @@ impl Rows {
 /// Partner coordinates and moments of one row, contiguous: x, y, z, mx, my, mz.
 type Partners<'a> = [&'a [f64]; 6];
 
-/// Gathers the columns of those particles of `js` closer to i than the cut-off into `buffer`
-/// (one row's partners) and their indices into `kept`. Only the partners in range enter the row,
-/// so a row's terms, and the lanes of its sum, do not depend on when the candidates were built
-/// (a resumed run stays bitwise equal).
-fn gather<'a>(c: &Columns, image: &Image, i: usize, js: &[u32], cutoff2: f64, buffer: &'a mut [Vec<f64>; 6], kept: &mut Vec<u32>) -> Partners<'a> {
-    let xi = [c.x[0][i], c.x[1][i], c.x[2][i]];
-    kept.clear();
-    kept.extend(js.iter().copied().filter(|&j| {
-        let d = [0, 1, 2].map(|k| {
-            let d = xi[k] - c.x[k][j as usize];
-            d - image.length[k] * (d * image.inverse[k]).round_ties_even()
-        });
-        d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < cutoff2
-    }));
+/// Gathers the columns of the particles `js` into `buffer` (one row's partners).
+fn gather<'a>(c: &Columns, js: &[u32], buffer: &'a mut [Vec<f64>; 6]) -> Partners<'a> {
     let sources = [&c.x[0], &c.x[1], &c.x[2], &c.m[0], &c.m[1], &c.m[2]];
     for (b, source) in buffer.iter_mut().zip(sources) {
         b.clear();
-        b.extend(kept.iter().map(|&j| source[j as usize]));
+        b.extend(js.iter().map(|&j| source[j as usize]));
     }
     let [x, y, z, mx, my, mz] = buffer;
     [x, y, z, mx, my, mz]
@@ -166,10 +154,25 @@ fn row_forces(c: &Columns, image: &Image, i: usize, partners: Partners, cutoff2:
     }
 }
 
-/// Σ of one row's forces: eight running sums over the row's positions mod 8, then those eight
-/// in order. A fixed order (the same for any thread count) that compiles to SIMD adds.
-fn row_sum(out: &[Vec<f64>; 3]) -> Vec3 {
-    let sum = |v: &[f64]| {
+/// Σ of one row's forces in eight running sums, the term of partner j in sum j mod 8, then the
+/// eight in order: a fixed order for any thread count, in which the zero terms of candidates
+/// beyond the cut-off change nothing (so the sum does not depend on when the candidates were
+/// built, and a resumed run stays bitwise equal).
+fn row_sum(out: &[Vec<f64>; 3], js: &[u32]) -> Vec3 {
+    let mut lanes = [[0.0; 3]; 8];
+    for (q, &j) in js.iter().enumerate() {
+        let lane = &mut lanes[j as usize % 8];
+        for k in 0..3 {
+            lane[k] += out[k][q];
+        }
+    }
+    Vec3::from_fn(|k, _| lanes.iter().fold(0.0, |a, lane| a + lane[k]))
+}
+
+/// [`row_sum`] for the contiguous partners `start..`: the same sums, vectorised (lane j mod 8 of
+/// partner q = j − start is lane q mod 8 turned by start).
+fn contiguous_row_sum(out: &[Vec<f64>; 3], start: usize) -> Vec3 {
+    let lanes_of = |v: &[f64]| {
         let mut lanes = [0.0; 8];
         let chunks = v.chunks_exact(8);
         let rest = chunks.remainder();
@@ -181,9 +184,10 @@ fn row_sum(out: &[Vec<f64>; 3]) -> Vec3 {
         for (l, x) in rest.iter().enumerate() {
             lanes[l] += x;
         }
-        lanes.iter().fold(0.0, |a, b| a + b)
+        // Lane q mod 8 holds the partners j = start + q: in j order it is lane (l − start) mod 8.
+        (0..8).fold(0.0, |a, l| a + lanes[(l + 8 - start % 8) % 8])
     };
-    Vec3::new(sum(&out[0]), sum(&out[1]), sum(&out[2]))
+    Vec3::new(lanes_of(&out[0]), lanes_of(&out[1]), lanes_of(&out[2]))
 }
 
 /// Adds Σ_j F_ij to `force` with partners from `rows` (`None` = all other particles) within
@@ -192,18 +196,24 @@ fn row_sum(out: &[Vec<f64>; 3]) -> Vec3 {
 fn add_row_sums(c: &Columns, image: &Image, rows: Option<&Rows>, cutoff2: f64, force: &mut [Vec3]) {
     let n = force.len();
     if n < parallel::MIN_PARALLEL_LEN {
-        let (mut out, mut buffer, mut kept): ([Vec<f64>; 3], [Vec<f64>; 6], Vec<u32>) = Default::default();
+        let (mut out, mut buffer): ([Vec<f64>; 3], [Vec<f64>; 6]) = Default::default();
         for i in 0..n {
-            let partners = match rows {
-                Some(rows) => gather(c, image, i, rows.row(i), cutoff2, &mut buffer, &mut kept),
-                None => slice(c, i + 1..n),
-            };
-            row_forces(c, image, i, partners, cutoff2, &mut out);
-            force[i] += row_sum(&out);
-            let mut subtract = |q: usize, j: usize| force[j] -= Vec3::new(out[0][q], out[1][q], out[2][q]);
             match rows {
-                Some(_) => kept.iter().enumerate().for_each(|(q, &j)| subtract(q, j as usize)),
-                None => (0..n - i - 1).for_each(|q| subtract(q, i + 1 + q)),
+                Some(rows) => {
+                    let js = rows.row(i);
+                    row_forces(c, image, i, gather(c, js, &mut buffer), cutoff2, &mut out);
+                    force[i] += row_sum(&out, js);
+                    for (q, &j) in js.iter().enumerate() {
+                        force[j as usize] -= Vec3::new(out[0][q], out[1][q], out[2][q]);
+                    }
+                }
+                None => {
+                    row_forces(c, image, i, slice(c, i + 1..n), cutoff2, &mut out);
+                    force[i] += contiguous_row_sum(&out, i + 1);
+                    for q in 0..n - i - 1 {
+                        force[i + 1 + q] -= Vec3::new(out[0][q], out[1][q], out[2][q]);
+                    }
+                }
             }
         }
     } else {
@@ -212,17 +222,18 @@ fn add_row_sums(c: &Columns, image: &Image, rows: Option<&Rows>, cutoff2: f64, f
             .into_par_iter()
             .with_min_len(64)
             .map_init(
-                || <([Vec<f64>; 3], [Vec<f64>; 6], Vec<u32>)>::default(),
-                |(out, buffer, kept), i| match rows {
+                || <([Vec<f64>; 3], [Vec<f64>; 6])>::default(),
+                |(out, buffer), i| match rows {
                     Some(rows) => {
-                        row_forces(c, image, i, gather(c, image, i, rows.row(i), cutoff2, buffer, kept), cutoff2, out);
-                        row_sum(out)
+                        let js = rows.row(i);
+                        row_forces(c, image, i, gather(c, js, buffer), cutoff2, out);
+                        row_sum(out, js)
                     }
                     None => {
                         row_forces(c, image, i, slice(c, 0..i), cutoff2, out);
-                        let before = row_sum(out);
+                        let before = contiguous_row_sum(out, 0);
                         row_forces(c, image, i, slice(c, i + 1..n), cutoff2, out);
-                        before + row_sum(out)
+                        before + contiguous_row_sum(out, i + 1)
                     }
                 },
             )
