@@ -10,7 +10,7 @@ use std::process::ExitCode;
 
 /// Magnetic particle DEM research harness.
 /// Counts heap bytes for `magdem bench`'s memory per particle (two relaxed atomic adds per
-/// allocation; the step loops do not allocate).
+/// allocation; serial steps do not allocate, parallel ones a few chunk buffers).
 #[global_allocator]
 static GLOBAL: &stats_alloc::StatsAlloc<std::alloc::System> = &stats_alloc::INSTRUMENTED_SYSTEM;
 
