@@ -8,12 +8,12 @@ use magdem::scene::Scene;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-/// Magnetic particle DEM research harness.
 /// Counts heap bytes for `magdem bench`'s memory per particle (two relaxed atomic adds per
 /// allocation; serial steps do not allocate, parallel ones a few chunk buffers).
 #[global_allocator]
 static GLOBAL: &stats_alloc::StatsAlloc<std::alloc::System> = &stats_alloc::INSTRUMENTED_SYSTEM;
 
+/// Magnetic particle DEM research harness.
 #[derive(Parser)]
 #[command(name = "magdem", version, about, long_about = None)]
 struct Cli {
