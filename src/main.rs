@@ -323,7 +323,7 @@ fn main() -> ExitCode {
                 }
             }
             let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed));
-            let options = RunOptions { resume, progress: !quiet, abort_after_frame };
+            let options = RunOptions { resume, progress: !quiet, timings, abort_after_frame };
             match run(&scene, &output, &options) {
                 Ok(summary) => {
                     if summary.already_complete {

@@ -259,9 +259,9 @@ fn five_sphere_chain_moments_match_a_direct_solve() {
 
 #[test]
 fn lens_area_matches_the_closed_form_at_several_offsets() {
-    // Unequal circles: compare with numerical integration of the overlap along the centre line.
-    let (r1, r2) = (1.0, 0.7);
-    for s in [0.35, 0.6, 1.0, 1.4, 1.65] {
+    // Unequal and equal circles (two code paths): compare with numerical integration of the
+    // overlap along the centre line.
+    for (r1, r2, s) in [0.35, 0.6, 1.0, 1.4, 1.65].into_iter().map(|s| (1.0, 0.7, s)).chain([0.1, 0.9, 1.8].map(|s| (1.0, 1.0, s))) {
         let n = 200_000;
         let (lo, hi) = (s - r2, r1);
         let h = (hi - lo) / n as f64;

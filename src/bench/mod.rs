@@ -9,6 +9,7 @@
 pub mod report;
 
 use crate::core::simulation::Simulation;
+use crate::core::timers::PhaseTimers;
 use crate::reference::{deck, dipole_check, Engine};
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};
@@ -135,11 +136,16 @@ pub enum Work {
 
 /// Runs `scene` in magdem on `threads` threads and times its loop of `work` over the scene's
 /// number of steps.
-pub fn time_magdem(scene: &Scene, threads: usize, work: Work) -> Result<MagdemRun, Error> {
+/// Runs `scene` on `threads` threads and times its step loop; `timings` switches on the phase
+/// timers (for a profile; they cost a few per cent, so timed runs leave them off).
+pub fn time_magdem(scene: &Scene, threads: usize, work: Work, timings: bool) -> Result<MagdemRun, Error> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
     pool.install(|| {
         let before = heap_bytes();
         let mut simulation = scene.simulation(None);
+        if timings {
+            simulation.field.timers = PhaseTimers::enabled();
+        }
         simulation.initialise()?;
         let start = Instant::now();
         match work {

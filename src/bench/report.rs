@@ -69,7 +69,7 @@ impl Bench<'_> {
         let mut times = vec![];
         let mut last = None;
         for _ in 0..self.options.repeats {
-            let run = time_magdem(scene, threads, work)?;
+            let run = time_magdem(scene, threads, work, false)?;
             times.push(run.seconds);
             last = Some(run);
         }
@@ -77,7 +77,8 @@ impl Bench<'_> {
         let particles = run.simulation.state.particles.len();
         self.measurements.push(Measurement { case: case.into(), engine: "magdem", threads, particles, steps: scene.total_steps(), seconds: Spread::of(&times) });
         if profile {
-            let timers = run.simulation.timers();
+            let profiled = time_magdem(scene, threads, work, true)?;
+            let timers = profiled.simulation.timers();
             let total: f64 = timers.phases().iter().map(|(_, d)| d.as_secs_f64()).sum();
             let shares = timers.phases().iter().map(|(n, d)| (*n, d.as_secs_f64() / total)).collect();
             self.profiles.push((case.into(), shares));

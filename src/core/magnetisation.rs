@@ -42,11 +42,14 @@ pub struct InductionError {
     pub tolerance: f64,
 }
 
-/// Field at x_i of a dipole `m` at x_j, with r = x_i − x_j: [3(m·r̂)r̂ − m]/(4π r³) (A/m).
+/// Fields of a pair's dipoles on each other, with r = x_i − x_j: on i from m_j and on j from m_i,
+/// H = [3(m·r̂)r̂ − m]/(4π r³) (A/m; even in r̂, so both share r̂ and 1/(4π r³)).
 #[inline]
-pub fn dipole_field(m: &Vec3, r: &Vec3, dist: f64) -> Vec3 {
-    let rhat = r / dist;
-    (3.0 * m.dot(&rhat) * rhat - m) / (4.0 * PI * dist.powi(3))
+pub fn pair_dipole_fields(m_i: &Vec3, m_j: &Vec3, pair: &Pair) -> (Vec3, Vec3) {
+    let rhat = pair.r / pair.dist;
+    let scale = 1.0 / (4.0 * PI * pair.dist.powi(3));
+    let field = |m: &Vec3| (3.0 * m.dot(&rhat) * rhat - m) * scale;
+    (field(m_j), field(m_i))
 }
 
 pub struct Magnetisation {
@@ -128,10 +131,7 @@ impl Magnetisation {
         field.clear();
         field.extend(p.position.iter().map(|x| self.external_field(x)));
         let pairs = &self.pairs;
-        let pair_fields = |pair: &Pair| {
-            let (i, j) = (pair.i as usize, pair.j as usize);
-            (dipole_field(&p.moment[j], &pair.r, pair.dist), dipole_field(&p.moment[i], &(-pair.r), pair.dist))
-        };
+        let pair_fields = |pair: &Pair| pair_dipole_fields(&p.moment[pair.i as usize], &p.moment[pair.j as usize], pair);
         if parallel::worth_it(pairs.len()) {
             let mut buffer = std::mem::take(&mut self.pair_fields);
             parallel::map_ordered(pairs.len(), &mut buffer, |k| pair_fields(&pairs[k]));

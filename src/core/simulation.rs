@@ -11,7 +11,7 @@ use super::parallel;
 use super::stability::{Instability, Monitor, StepEstimate};
 use super::state::{State, Vec3};
 use super::timers::PhaseTimers;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// Which forces an evaluation computes (multiple time stepping splits them).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -64,7 +64,7 @@ impl ForceField {
 
     /// Computes one group of forces (see [`ForceGroup`]).
     pub fn evaluate_group(&mut self, state: &mut State, dt: f64, group: ForceGroup) {
-        let start = Instant::now();
+        let started = self.timers.start();
         let p = &mut state.particles;
         if self.domain.periodic.contains(&true) {
             p.position.iter_mut().for_each(|x| self.domain.wrap(x));
@@ -104,9 +104,9 @@ impl ForceField {
                 ForceGroup::Slow => term.is_slow(),
             };
             if wanted {
-                let t0 = Instant::now();
+                let t0 = self.timers.start();
                 term.apply(&ctx, state);
-                self.timers.add(term.name(), t0.elapsed());
+                self.timers.stop(term.name(), t0);
             }
         }
         if group == ForceGroup::Slow {
@@ -114,7 +114,9 @@ impl ForceField {
             std::mem::swap(&mut p.force, &mut p.slow_force);
             std::mem::swap(&mut p.torque, &mut p.slow_torque);
         }
-        self.evaluation_time += start.elapsed();
+        if let Some(t0) = started {
+            self.evaluation_time += t0.elapsed();
+        }
     }
 }
 
@@ -158,15 +160,18 @@ impl Simulation {
     pub fn step(&mut self) -> Result<(), RunError> {
         let n = self.state.particles.len();
         parallel::with_warm_pool(n, || {
-            let start = Instant::now();
+            let started = self.field.timers.start();
             let eval_before = self.field.evaluation_time;
             let (field, dt) = (&mut self.field, self.dt);
             self.integrator.step(&mut self.state, dt, &mut |s, group, h| field.evaluate_group(s, h, group));
-            let integrate = start.elapsed().saturating_sub(self.field.evaluation_time - eval_before);
-            self.field.timers.add("integrate", integrate);
-            let t0 = Instant::now();
+            if let Some(t0) = started {
+                // The integrator's own work: the step's time less its force evaluations.
+                let evaluations = self.field.evaluation_time - eval_before;
+                self.field.timers.add("integrate", t0.elapsed().saturating_sub(evaluations));
+            }
+            let t0 = self.field.timers.start();
             let result = self.check();
-            self.field.timers.add("monitor", t0.elapsed());
+            self.field.timers.stop("monitor", t0);
             result
         })
     }

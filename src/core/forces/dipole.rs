@@ -14,7 +14,7 @@
 //! induction), the term sums over that list instead.
 
 use super::{ForceContext, ForceTerm};
-use crate::core::magnetisation::{dipole_field, MU0};
+use crate::core::magnetisation::{pair_dipole_fields, MU0};
 use crate::core::domain::Domain;
 use crate::core::neighbours::{CellList, Pair, VerletList};
 use crate::core::parallel;
@@ -321,8 +321,9 @@ impl ForceTerm for DipoleForce {
             let mut b_loc: Vec<Vec3> = p.position.iter().map(|x| self.b0 + self.gradient * x).collect();
             for pair in pairs {
                 let (i, j) = (pair.i as usize, pair.j as usize);
-                b_loc[i] += MU0 * dipole_field(&p.moment[j], &pair.r, pair.dist);
-                b_loc[j] += MU0 * dipole_field(&p.moment[i], &(-pair.r), pair.dist);
+                let (on_i, on_j) = pair_dipole_fields(&p.moment[i], &p.moment[j], pair);
+                b_loc[i] += MU0 * on_i;
+                b_loc[j] += MU0 * on_j;
             }
             for ((torque, m), b) in p.torque.iter_mut().zip(&p.permanent_moment).zip(&b_loc) {
                 *torque += m.cross(b);

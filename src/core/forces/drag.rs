@@ -39,6 +39,7 @@ pub struct Drag {
     /// integrator applies exactly; only the shielding and Schiller–Naumann corrections remain.
     pub exclude_linear: bool,
     shadow: Vec<f64>,
+    flow_direction: Vec<Vec3>,
 }
 
 impl Drag {
@@ -51,7 +52,7 @@ impl Drag {
         fluid_velocity: Vec3,
         touch_tolerance: f64,
     ) -> Self {
-        Self { law, shielding, rotational, fluid_density, viscosity, fluid_velocity, touch_tolerance, exclude_linear: false, shadow: vec![] }
+        Self { law, shielding, rotational, fluid_density, viscosity, fluid_velocity, touch_tolerance, exclude_linear: false, shadow: vec![], flow_direction: vec![] }
     }
 
     /// Linear drag coefficient 6π μ a (kg/s) of an unshielded sphere in Stokes flow.
@@ -59,9 +60,16 @@ impl Drag {
         6.0 * PI * viscosity * radius
     }
 
-    /// Largest shadow each particle receives from a touching upstream neighbour.
+    /// Largest shadow each particle receives from a touching upstream neighbour, with each
+    /// particle's flow direction computed once (not once per touching pair).
     fn compute_shadows(&mut self, ctx: &ForceContext, state: &State) {
         let p = &state.particles;
+        self.flow_direction.clear();
+        self.flow_direction.extend(p.velocity.iter().map(|v| {
+            let u = v - self.fluid_velocity;
+            let speed = u.norm();
+            if speed > 0.0 { u / speed } else { Vec3::zeros() }
+        }));
         self.shadow.clear();
         self.shadow.resize(p.len(), 0.0);
         for pair in ctx.near_pairs {
@@ -70,20 +78,23 @@ impl Drag {
             if pair.dist - a_i - a_j > self.touch_tolerance * a_i.min(a_j) {
                 continue;
             }
-            // pair.r = x_i − x_j: offset of j seen from i is −r, of i seen from j is +r.
+            // pair.r = x_i − x_j: offset of j seen from i is −r, of i seen from j is +r. A zero
+            // flow direction (particle at rest in the fluid) casts no shadow: `along` is 0.
             for (me, other, offset) in [(i, j, -pair.r), (j, i, pair.r)] {
-                let u = p.velocity[me] - self.fluid_velocity;
-                let speed = u.norm();
-                if speed == 0.0 {
-                    continue;
-                }
-                let area = shadow_area(p.radius[me], p.radius[other], &offset, &(u / speed));
+                let area = shadow_area(p.radius[me], p.radius[other], &offset, &self.flow_direction[me]);
                 if area > self.shadow[me] {
                     self.shadow[me] = area;
                 }
             }
         }
     }
+}
+
+/// Schiller–Naumann correction 1 + 0.15 Re^0.687, with the power as exp(0.687 ln Re): about half
+/// the cost of `powf` here, relative error ≲ 1e-15 (|0.687 ln Re| ε), zero-safe (ln 0 = −∞).
+#[inline]
+fn schiller_naumann(re: f64) -> f64 {
+    1.0 + 0.15 * (0.687 * re.ln()).exp()
 }
 
 impl ForceTerm for Drag {
@@ -109,8 +120,7 @@ impl ForceTerm for Drag {
             let correction = match self.law {
                 DragLaw::Stokes => 1.0,
                 DragLaw::SchillerNaumann => {
-                    let re = self.fluid_density * u.norm() * 2.0 * a / self.viscosity;
-                    1.0 + 0.15 * re.powf(0.687)
+                    schiller_naumann(self.fluid_density * u.norm() * 2.0 * a / self.viscosity)
                 }
             };
             let linear = if self.exclude_linear { Self::stokes_coefficient(self.viscosity, a) } else { 0.0 };

@@ -16,6 +16,10 @@ pub fn lens_area(r1: f64, r2: f64, s: f64) -> f64 {
     if s <= (r1 - r2).abs() {
         return PI * r1.min(r2).powi(2);
     }
+    if r1 == r2 {
+        // Equal circles (one species): A = 2 r² acos(s/2r) − (s/2) √(4r² − s²), one acos.
+        return 2.0 * r1 * r1 * (s / (2.0 * r1)).acos() - 0.5 * s * (4.0 * r1 * r1 - s * s).sqrt();
+    }
     let alpha = ((s * s + r1 * r1 - r2 * r2) / (2.0 * s * r1)).clamp(-1.0, 1.0).acos();
     let beta = ((s * s + r2 * r2 - r1 * r1) / (2.0 * s * r2)).clamp(-1.0, 1.0).acos();
     let k = (-s + r1 + r2) * (s + r1 - r2) * (s - r1 + r2) * (s + r1 + r2);
