@@ -93,6 +93,37 @@ fn resume_after_kill_is_bitwise_equal_with_the_adaptive_step() {
     resume_after_kill("resume-adaptive", &text.replace("induction = \"paper\"", "induction = \"none\""));
 }
 
+/// The phase timers (`--timings`) only read the clock: the trajectory is bitwise the same, and
+/// every phase of this scene is reported with a share, the shares adding to 100%.
+#[test]
+fn timings_do_not_change_the_trajectory() {
+    let dir = workdir("timings");
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, scene_text().replace("end_time = 3.0e-4", "end_time = 1.0e-4")).unwrap();
+    let (plain, timed) = (dir.join("plain.h5"), dir.join("timed.h5"));
+    let out = magdem(&["run", path(&scene), "-q", "-o", path(&plain)]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(!String::from_utf8_lossy(&out.stdout).contains("phase timings"));
+    let out = magdem(&["run", path(&scene), "-q", "--timings", "-o", path(&timed)]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let shares: Vec<(String, f64)> = stdout
+        .lines()
+        .skip_while(|l| !l.starts_with("phase timings"))
+        .skip(1)
+        .map(|l| {
+            let words: Vec<&str> = l.split_whitespace().collect();
+            (words[0].to_string(), words[3].trim_end_matches('%').parse().unwrap())
+        })
+        .collect();
+    for phase in ["neighbours", "moments", "contact", "dipole", "drag", "gravity", "integrate", "monitor"] {
+        assert!(shares.iter().any(|(name, _)| name == phase), "no {phase} in {stdout}");
+    }
+    let total: f64 = shares.iter().map(|s| s.1).sum();
+    assert!((total - 100.0).abs() < 0.5, "shares add to {total}%");
+    assert_identical(&plain, &timed);
+}
+
 fn resume_after_kill(name: &str, text: &str) {
     let dir = workdir(name);
     std::fs::write(dir.join("scene.toml"), text).unwrap();

@@ -366,10 +366,8 @@ fn case2_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Resu
     // Per run: mean and population std of size and tracked x velocity, over all aggregates and
     // over aggregates of two or more particles.
     let per_run = |r: &Run, min_size: usize| {
-        let aggs: Vec<(usize, f64, bool)> =
-            r.last.iter().zip(&r.tracked_vx).zip(&r.at_x_wall).filter(|((a, _), _)| a.size() >= min_size).map(|((a, v), &w)| (a.size(), v * 1e6, w)).collect();
-        let size = summary(&aggs.iter().map(|a| a.0 as f64).collect::<Vec<_>>());
-        let vx = summary(&aggs.iter().filter(|a| !a.2).map(|a| a.1).collect::<Vec<_>>());
+        let size = summary(&r.last.iter().map(|a| a.size()).filter(|&n| n >= min_size).map(|n| n as f64).collect::<Vec<_>>());
+        let vx = summary(&r.free_velocities_um_per_s(min_size));
         [size.mean, size.population_std, vx.mean, vx.population_std]
     };
     let instantaneous = mean(&here.iter().flat_map(|r| r.last.iter().map(|a| a.com_velocity.x * 1e6)).collect::<Vec<_>>());

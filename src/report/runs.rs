@@ -56,6 +56,18 @@ impl Run {
     pub fn mean_length_um(&self) -> f64 {
         summary(&self.lengths_um()).mean
     }
+
+    /// Tracked x velocities (µm/s) of the last frame's aggregates of `min_size` or more particles
+    /// that no x wall holds: the case-2 velocity of Table 2.
+    pub fn free_velocities_um_per_s(&self, min_size: usize) -> Vec<f64> {
+        self.last
+            .iter()
+            .zip(&self.tracked_vx)
+            .zip(&self.at_x_wall)
+            .filter(|((a, _), &held)| a.size() >= min_size && !held)
+            .map(|((_, v), _)| v * 1e6)
+            .collect()
+    }
 }
 
 /// Experiment files in `dir` (sorted), and in `dir/opt-in` when `opt_in`.

@@ -216,26 +216,63 @@ pub fn fitted_order(points: &[(f64, f64)]) -> f64 {
     pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum::<f64>() / pts.iter().map(|p| (p.0 - mx).powi(2)).sum::<f64>()
 }
 
-/// Every problem × scheme × dt; writes `dir/README.md` and one figure per problem.
-/// The experiment behind the observable section (run separately; read when present).
-pub const OBSERVABLE_EXPERIMENT: &str = "experiments/accuracy/case1-observable.toml";
+/// One of the paper's observables, measured per run, and the experiment that runs it per
+/// integrator and step against a reference ensemble (run separately; read when present).
+struct Observable {
+    experiment: &'static str,
+    /// Section heading after "The paper's observable: ".
+    title: &'static str,
+    /// The runs' setting and the reference, after "From the runs of `experiment` (".
+    setting: &'static str,
+    /// Column heading of the value, with its unit.
+    quantity: &'static str,
+    minutes: u32,
+    figure: &'static str,
+    value: fn(&crate::report::runs::Run) -> f64,
+}
 
-/// Work–precision on the case-1 mean aggregate length at 5 ms, from the runs of
-/// [`OBSERVABLE_EXPERIMENT`]: per variant the paired relative difference to the reference run of
-/// the same seed, its CI95 over seeds, and the median wall time per run.
-fn observable_section(dir: &Path) -> Result<String, Box<dyn std::error::Error>> {
+const OBSERVABLES: [Observable; 2] = [
+    Observable {
+        experiment: "experiments/accuracy/case1-observable.toml",
+        title: "case-1 mean aggregate length at 5 ms",
+        setting: "0.563 mg/ml, every term of the paper; reference: exponential Verlet at dt = 2.5e-9 s, a quarter of the working step",
+        quantity: "mean length (µm)",
+        minutes: 11,
+        figure: "work-precision-case1.png",
+        value: |r| r.mean_length_um(),
+    },
+    Observable {
+        experiment: "experiments/accuracy/case2-observable.toml",
+        title: "case-2 mean aggregate velocity at 1.25 s",
+        setting: "55 spheres of 5.5 µm, every term of the paper; velocity along the gradient tracked over the last tenth of the run, free aggregates only, as in the Table 2 reproduction; reference: r-RESPA K = 10 at dt = 1.25e-8 s, a quarter of the working step",
+        quantity: "mean velocity (µm/s)",
+        minutes: 30,
+        figure: "work-precision-case2.png",
+        value: |r| crate::analysis::stats::summary(&r.free_velocities_um_per_s(1)).mean,
+    },
+];
+
+/// Work–precision on one observable from the runs of its experiment: per variant the paired
+/// relative difference to the reference run of the same seed, its CI95 over seeds, and the
+/// median wall time per run.
+fn observable_section(dir: &Path, o: &Observable) -> Result<String, Box<dyn std::error::Error>> {
     use crate::analysis::stats::{ci95_half_width, summary};
-    let runs = crate::report::runs::load_runs(&[std::path::PathBuf::from(OBSERVABLE_EXPERIMENT)], 1e-3)?;
+    let runs = crate::report::runs::load_runs(&[std::path::PathBuf::from(o.experiment)], 1e-3)?;
     let reference: Vec<_> = runs.iter().filter(|r| r.variant == "reference" && r.completed()).collect();
     if reference.is_empty() {
         return Ok(format!(
-            "## The paper's observable\n\nNot run yet: `magdem experiment {OBSERVABLE_EXPERIMENT}` (about 11 minutes on 2 cores), then this study again.\n\n"
+            "## The paper's observable: {}\n\nNot run yet: `magdem experiment {}` (about {} minutes on 2 cores), then this study again.\n\n",
+            o.title, o.experiment, o.minutes
         ));
     }
     let mut md = format!(
-        "## The paper's observable: case-1 mean aggregate length at 5 ms\n\nFrom the runs of `{OBSERVABLE_EXPERIMENT}` (0.563 mg/ml, every term of the paper, seeds {}): each integrator at its working step against the reference ensemble (exponential Verlet at dt = 2.5e-9 s). The observable varies from seed to seed, so the error is the **paired** difference (L − L_ref)/L_ref of runs with the same seed (the same initial positions), averaged over seeds with its 95% confidence interval; wall time is per run (median, min–max), both cores busy with two runs at a time.\n\n\
-         | variant | integrator, dt | runs | mean length (µm) ± CI95 | paired difference to the reference (%) ± CI95 | seeds needed to resolve 1% | wall time per run (s) |\n|---|---|---|---|---|---|---|\n",
-        reference.iter().map(|r| r.seed.to_string()).collect::<Vec<_>>().join(", ")
+        "## The paper's observable: {}\n\nFrom the runs of `{}` ({}; seeds {}): each integrator at its working step against the reference ensemble. The observable varies from seed to seed, so the error is the **paired** difference (X − X_ref)/X_ref of runs with the same seed (the same initial positions), averaged over seeds with its 95% confidence interval; wall time is per run (median, min–max), both cores busy with two runs at a time.\n\n\
+         | variant | integrator, dt | runs | {} ± CI95 | paired difference to the reference (%) ± CI95 | seeds needed to resolve 1% | wall time per run (s) |\n|---|---|---|---|---|---|---|\n",
+        o.title,
+        o.experiment,
+        o.setting,
+        reference.iter().map(|r| r.seed.to_string()).collect::<Vec<_>>().join(", "),
+        o.quantity
     );
     let mut variants: Vec<&str> = vec![];
     for r in &runs {
@@ -253,10 +290,10 @@ fn observable_section(dir: &Path) -> Result<String, Box<dyn std::error::Error>> 
             let _ = writeln!(md, "| {variant} | {setting} | 0 of {} | – | – | – | {why} |", mine.len());
             continue;
         }
-        let lengths: Vec<f64> = done.iter().map(|r| r.mean_length_um()).collect();
+        let values: Vec<f64> = done.iter().map(|r| (o.value)(r)).collect();
         let paired: Vec<f64> = done
             .iter()
-            .filter_map(|r| reference.iter().find(|q| q.seed == r.seed).map(|q| 100.0 * (r.mean_length_um() - q.mean_length_um()) / q.mean_length_um()))
+            .filter_map(|r| reference.iter().find(|q| q.seed == r.seed).map(|q| 100.0 * ((o.value)(r) - (o.value)(q)) / (o.value)(q)))
             .collect();
         let times: Vec<f64> = done.iter().map(|r| r.wall_time).filter(|t| t.is_finite()).collect();
         let wall = crate::bench::Spread::of(&times);
@@ -267,8 +304,8 @@ fn observable_section(dir: &Path) -> Result<String, Box<dyn std::error::Error>> 
             "| {variant} | {setting} | {} of {} | {:.1} ± {:.1} | {} | {needed} | {:.1} ({:.1}–{:.1}) |",
             done.len(),
             mine.len(),
-            summary(&lengths).mean,
-            ci95_half_width(&lengths),
+            summary(&values).mean,
+            ci95_half_width(&values),
             if variant == "reference" { "0 (by definition)".to_string() } else { format!("{diff:+.1} ± {ci:.1}") },
             wall.median,
             wall.min,
@@ -284,18 +321,20 @@ fn observable_section(dir: &Path) -> Result<String, Box<dyn std::error::Error>> 
         .map(|(k, (v, t, d, ci))| Series::markers(v.clone(), vec![(t.log10(), *d)], crate::plot::palette(k), 6).with_errors(vec![*ci]))
         .collect();
     line_chart_with_legend(
-        &dir.join("work-precision-case1.png"),
-        "Case-1 mean length at 5 ms: paired difference to the reference against run time",
+        &dir.join(o.figure),
+        &format!("{}: paired difference to the reference against run time", o.title),
         "log10 wall time per run (s)",
         "paired difference to the reference (%), CI95",
         &series,
         SeriesLabelPosition::UpperRight,
     )?;
-    md += "\n![work-precision on the case-1 observable](work-precision-case1.png)\n\n";
-    md += "\"Seeds needed to resolve 1%\" is (1.96 s/1%)² with s the sample standard deviation of the paired differences: how many seeds a CI95 of ±1% on the difference would take. A difference whose CI contains 0 is not distinguishable from the reference at this ensemble size. A paired difference of exactly 0 at every seed means the run ended with the reference's aggregates: at this concentration which particles chain up does not hinge on small integration errors, so the observable is not chaotic seed by seed and a few seeds measure an integrator's bias.\n\n";
+    let _ = writeln!(md, "\n![work-precision on the {}]({})\n", o.title, o.figure);
+    md += "\"Seeds needed to resolve 1%\" is (1.96 s/1%)² with s the sample standard deviation of the paired differences: how many seeds a CI95 of ±1% on the difference would take. A difference whose CI contains 0 is not distinguishable from the reference at this ensemble size. A paired difference of exactly 0 at every seed means the runs ended with the reference's aggregates: there the observable does not hinge on small integration errors seed by seed, and a few seeds measure an integrator's bias.\n\n";
     Ok(md)
 }
 
+/// Every problem × scheme × dt, then the observables' work–precision; writes `dir/README.md` and
+/// one figure per problem and observable.
 pub fn study(dir: &Path) -> Result<String, Box<dyn std::error::Error>> {
     std::fs::create_dir_all(dir)?;
     let mut md = String::from("# Accuracy against time step\n\n");
@@ -347,7 +386,9 @@ pub fn study(dir: &Path) -> Result<String, Box<dyn std::error::Error>> {
         }
     }
     md += &work.unwrap_or_default();
-    md += &observable_section(dir)?;
+    for observable in &OBSERVABLES {
+        md += &observable_section(dir, observable)?;
+    }
     md += "Cost per step against N, per force term (criterion: `cargo bench --bench kernels`) and against LIGGGHTS and LAMMPS: [../performance.md](../performance.md).\n\n";
     md += "## Reading it\n\n\
 - **Velocity Verlet is first order here**, not second: the drag is evaluated with the half-step velocity (as \
