@@ -194,12 +194,15 @@ pub fn bar_panels(path: &Path, title: &str, panels: &[BarPanel], columns: usize,
             .flat_map(|g| g.values.iter().enumerate().map(move |(k, v)| v + g.errors.get(k).copied().filter(|e| e.is_finite()).unwrap_or(0.0)))
             .filter(|v| v.is_finite())
             .fold(0.0_f64, f64::max);
+        // Room above the bars for the legend, when there is one.
+        let labelled = panel.groups.iter().any(|g| !g.label.is_empty());
+        let headroom = if labelled { 1.3 } else { 1.1 };
         let mut chart = ChartBuilder::on(&area)
             .caption(&panel.title, ("sans-serif", 20))
             .margin(15)
             .x_label_area_size(if panel.categories.iter().any(|c| c.len() > 6) { 70 } else { 40 })
             .y_label_area_size(70)
-            .build_cartesian_2d(-0.5..n as f64 - 0.5, 0.0..top * 1.1 + 1e-300)?;
+            .build_cartesian_2d(-0.5..n as f64 - 0.5, 0.0..top * headroom + 1e-300)?;
         let step = n.div_ceil(20).max(1);
         let names = panel.categories.clone();
         chart
@@ -230,7 +233,7 @@ pub fn bar_panels(path: &Path, title: &str, panels: &[BarPanel], columns: usize,
                 PathElement::new(vec![(x, v - e), (x, v + e)], BLACK.stroke_width(2))
             }))?;
         }
-        if panel.groups.iter().any(|g| !g.label.is_empty()) {
+        if labelled {
             chart.configure_series_labels().label_font(("sans-serif", 14)).background_style(WHITE.mix(0.85)).border_style(BLACK).position(SeriesLabelPosition::UpperRight).draw()?;
         }
     }
