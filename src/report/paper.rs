@@ -840,7 +840,7 @@ fn reference_ensemble(runs: &[Run], out: &Path, tables: &Path) -> Result<String,
         for (engine, &(m, ci)) in ENGINES.iter().zip(&per_engine).skip(1) {
             if m.is_finite() && m0.is_finite() {
                 let within = (m - m0).abs() <= (ci * ci + ci0 * ci0).sqrt();
-                comparisons.push(format!("{c} mg/ml {engine} {:+.0}% ({})", 100.0 * (m - m0) / m0, if within { "within the CI95" } else { "outside the CI95" }));
+                comparisons.push(format!("{c} mg/ml {engine} {:+.1} µm ({:+.1}%, {})", m - m0 + 0.0, 100.0 * (m - m0) / m0 + 0.0, if within { "within the CI95" } else { "outside the CI95" }));
             }
         }
     }
