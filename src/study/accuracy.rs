@@ -267,7 +267,7 @@ fn observable_section(dir: &Path, o: &Observable) -> Result<String, Box<dyn std:
     }
     let mut md = format!(
         "## The paper's observable: {}\n\nFrom the runs of `{}` ({}; seeds {}): each integrator at its working step against the reference ensemble. The observable varies from seed to seed, so the error is the **paired** difference (X − X_ref)/X_ref of runs with the same seed (the same initial positions), averaged over seeds with its 95% confidence interval; wall time is per run (median, min–max), both cores busy with two runs at a time.\n\n\
-         | variant | integrator, dt | runs | {} ± CI95 | paired difference to the reference (%) ± CI95 | seeds needed to resolve 1% | wall time per run (s) |\n|---|---|---|---|---|---|---|\n",
+         | variant | integrator, dt | runs | {} ± CI95 | paired difference to the reference (%) ± CI95 | per seed (%) | seeds needed to resolve 1% | wall time per run (s) |\n|---|---|---|---|---|---|---|---|\n",
         o.title,
         o.experiment,
         o.setting,
@@ -287,7 +287,7 @@ fn observable_section(dir: &Path, o: &Observable) -> Result<String, Box<dyn std:
         let setting = mine.first().map_or(String::new(), |r| r.variant_overrides.join(", "));
         if done.is_empty() {
             let why = mine.iter().find(|r| !r.message.is_empty()).map_or(mine.first().map_or("missing".into(), |r| r.status.clone()), |r| r.message.clone());
-            let _ = writeln!(md, "| {variant} | {setting} | 0 of {} | – | – | – | {why} |", mine.len());
+            let _ = writeln!(md, "| {variant} | {setting} | 0 of {} | – | – | – | – | {why} |", mine.len());
             continue;
         }
         let values: Vec<f64> = done.iter().map(|r| (o.value)(r)).collect();
@@ -301,12 +301,13 @@ fn observable_section(dir: &Path, o: &Observable) -> Result<String, Box<dyn std:
         let needed = if variant == "reference" { "–".to_string() } else { format!("{:.0}", (1.96 * summary(&paired).sample_std / 1.0).powi(2).ceil()) };
         let _ = writeln!(
             md,
-            "| {variant} | {setting} | {} of {} | {:.1} ± {:.1} | {} | {needed} | {:.1} ({:.1}–{:.1}) |",
+            "| {variant} | {setting} | {} of {} | {:.1} ± {:.1} | {} | {} | {needed} | {:.1} ({:.1}–{:.1}) |",
             done.len(),
             mine.len(),
             summary(&values).mean,
             ci95_half_width(&values),
             if variant == "reference" { "0 (by definition)".to_string() } else { format!("{diff:+.1} ± {ci:.1}") },
+            if variant == "reference" { "–".to_string() } else { paired.iter().map(|d| format!("{d:+.1}")).collect::<Vec<_>>().join(", ") },
             wall.median,
             wall.min,
             wall.max
@@ -329,7 +330,7 @@ fn observable_section(dir: &Path, o: &Observable) -> Result<String, Box<dyn std:
         SeriesLabelPosition::UpperRight,
     )?;
     let _ = writeln!(md, "\n![work-precision on the {}]({})\n", o.title, o.figure);
-    md += "\"Seeds needed to resolve 1%\" is (1.96 s/1%)² with s the sample standard deviation of the paired differences: how many seeds a CI95 of ±1% on the difference would take. A difference whose CI contains 0 is not distinguishable from the reference at this ensemble size. A paired difference of exactly 0 at every seed means the runs ended with the reference's aggregates: there the observable does not hinge on small integration errors seed by seed, and a few seeds measure an integrator's bias.\n\n";
+    md += "\"Seeds needed to resolve 1%\" is (1.96 s/1%)² with s the sample standard deviation of the paired differences: how many seeds a CI95 of ±1% on the difference would take. A difference whose CI contains 0 is not distinguishable from the reference at this ensemble size. A per-seed difference of exactly 0 means the run ended with the reference's aggregates: where that holds the observable does not hinge on small integration errors, and a few seeds measure an integrator's bias. Where per-seed differences scatter far beyond the mean difference, a change of integrator or step changes which aggregates form (the observable is chaotic seed by seed): paired runs then do not isolate a bias, and the settings can only be told apart by many more seeds.\n\n";
     Ok(md)
 }
 
