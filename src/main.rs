@@ -8,10 +8,9 @@ use magdem::scene::Scene;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-/// Counts heap bytes for `magdem bench`'s memory per particle (two relaxed atomic adds per
-/// allocation; serial steps do not allocate, parallel ones a few chunk buffers).
+/// The system allocator, counting heap bytes only for `magdem bench`'s memory per particle.
 #[global_allocator]
-static GLOBAL: &stats_alloc::StatsAlloc<std::alloc::System> = &stats_alloc::INSTRUMENTED_SYSTEM;
+static GLOBAL: magdem::bench::SwitchableCounter = magdem::bench::SwitchableCounter;
 
 /// Magnetic particle DEM research harness.
 #[derive(Parser)]

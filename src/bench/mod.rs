@@ -12,7 +12,10 @@ use crate::core::simulation::Simulation;
 use crate::core::timers::PhaseTimers;
 use crate::reference::{deck, dipole_check, Engine};
 use crate::scene::Scene;
+use stats_alloc::INSTRUMENTED_SYSTEM;
+use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::process::Command;
 use std::time::Instant;
 
@@ -117,10 +120,39 @@ pub struct MagdemRun {
     pub memory: u64,
 }
 
-/// Bytes live on the heap, as counted by `stats_alloc` when the binary installs its
-/// instrumented allocator (the `magdem` binary does; elsewhere this stays 0).
+/// The `magdem` binary's allocator: the system allocator, counted by `stats_alloc` only while
+/// [`count_allocations`] is on. The counters are atomics shared by all threads; counting always,
+/// as a plain instrumented allocator does, made threads that allocate often (the dense induction
+/// solve of `magdem study stability`) spend two thirds of their time on those cache lines.
+pub struct SwitchableCounter;
+
+static COUNTING: AtomicBool = AtomicBool::new(false);
+
+/// Switches the heap counting of [`SwitchableCounter`] on or off.
+pub fn count_allocations(on: bool) {
+    COUNTING.store(on, Ordering::Relaxed);
+}
+
+// Both branches allocate from `System`, so a block may be freed by either.
+unsafe impl GlobalAlloc for SwitchableCounter {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        if COUNTING.load(Ordering::Relaxed) { INSTRUMENTED_SYSTEM.alloc(layout) } else { System.alloc(layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        if COUNTING.load(Ordering::Relaxed) { INSTRUMENTED_SYSTEM.alloc_zeroed(layout) } else { System.alloc_zeroed(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        if COUNTING.load(Ordering::Relaxed) { INSTRUMENTED_SYSTEM.dealloc(ptr, layout) } else { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        if COUNTING.load(Ordering::Relaxed) { INSTRUMENTED_SYSTEM.realloc(ptr, layout, new_size) } else { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+/// Bytes live on the heap, as counted while [`count_allocations`] is on in a binary that
+/// installs [`SwitchableCounter`] (the `magdem` binary does; elsewhere this stays 0).
 fn heap_bytes() -> u64 {
-    let s = stats_alloc::INSTRUMENTED_SYSTEM.stats();
+    let s = INSTRUMENTED_SYSTEM.stats();
     (s.bytes_allocated as i64 - s.bytes_deallocated as i64 + s.bytes_reallocated as i64).max(0) as u64
 }
 
@@ -140,7 +172,9 @@ pub enum Work {
 /// timers (for a profile; they cost a few per cent, so timed runs leave them off).
 pub fn time_magdem(scene: &Scene, threads: usize, work: Work, timings: bool) -> Result<MagdemRun, Error> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-    pool.install(|| {
+    // Memory is measured on one thread (counting on two would time the counters' contention).
+    count_allocations(threads == 1);
+    let result = pool.install(|| {
         let before = heap_bytes();
         let mut simulation = scene.simulation(None);
         if timings {
@@ -163,7 +197,9 @@ pub fn time_magdem(scene: &Scene, threads: usize, work: Work, timings: bool) -> 
         let seconds = start.elapsed().as_secs_f64();
         let memory = heap_bytes().saturating_sub(before);
         Ok(MagdemRun { seconds, simulation, memory })
-    })
+    });
+    count_allocations(false);
+    result
 }
 
 /// The "Loop time of X" a LIGGGHTS or LAMMPS log reports (s).
