@@ -323,7 +323,7 @@ fn observable_section(dir: &Path, o: &Observable) -> Result<String, Box<dyn std:
         .collect();
     line_chart_with_legend(
         &dir.join(o.figure),
-        &format!("{}: paired difference to the reference against run time", o.title),
+        &format!("Work–precision: {}", o.title),
         "log10 wall time per run (s)",
         "paired difference to the reference (%), CI95",
         &series,
