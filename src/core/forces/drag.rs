@@ -90,8 +90,8 @@ impl Drag {
     }
 }
 
-/// Schiller–Naumann correction 1 + 0.15 Re^0.687, with the power as exp(0.687 ln Re): about half
-/// the cost of `powf` here, relative error ≲ 1e-15 (|0.687 ln Re| ε), zero-safe (ln 0 = −∞).
+/// Schiller–Naumann correction 1 + 0.15 Re^0.687, with the power as exp(0.687 ln Re): two thirds
+/// of `powf`'s time here (perf), relative error ≲ 1e-15 (|0.687 ln Re| ε), zero-safe (ln 0 = −∞).
 #[inline]
 fn schiller_naumann(re: f64) -> f64 {
     1.0 + 0.15 * (0.687 * re.ln()).exp()
@@ -133,6 +133,22 @@ impl ForceTerm for Drag {
             force.par_iter_mut().zip(torque.par_iter_mut()).enumerate().with_min_len(parallel::CHUNK).for_each(drag);
         } else {
             force.iter_mut().zip(torque.iter_mut()).enumerate().for_each(drag);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::schiller_naumann;
+
+    /// The exp–ln form equals the power law to round-off from creeping flow (Re → 0, where the
+    /// correction must vanish) to the top of the law's range (Re ≈ 800).
+    #[test]
+    fn schiller_naumann_matches_its_power_law() {
+        assert_eq!(schiller_naumann(0.0), 1.0);
+        for re in [1e-9, 1e-6, 1e-3, 0.1, 1.0, 10.0, 100.0, 800.0] {
+            let power = 1.0 + 0.15 * f64::powf(re, 0.687);
+            assert!((schiller_naumann(re) - power).abs() <= 4e-15 * power, "Re = {re}: {} vs {power}", schiller_naumann(re));
         }
     }
 }
