@@ -167,9 +167,8 @@ pub enum Work {
 }
 
 /// Runs `scene` in magdem on `threads` threads and times its loop of `work` over the scene's
-/// number of steps.
-/// Runs `scene` on `threads` threads and times its step loop; `timings` switches on the phase
-/// timers (for a profile; they cost a few per cent, so timed runs leave them off).
+/// number of steps; `timings` switches on the phase timers (for a profile; they cost a few per
+/// cent, so timed runs leave them off).
 pub fn time_magdem(scene: &Scene, threads: usize, work: Work, timings: bool) -> Result<MagdemRun, Error> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
     // Memory is measured on one thread (counting on two would time the counters' contention).

@@ -828,13 +828,14 @@ fn reference_ensemble(runs: &[Run], out: &Path, tables: &Path) -> Result<String,
         for engine in ENGINES {
             let done: Vec<&&Run> = all.iter().filter(|r| r.completed() && r.engine == engine && same(r.concentration, c)).collect();
             let means: Vec<f64> = done.iter().map(|r| r.mean_length_um()).collect();
+            let (m, ci) = (mean(&means), ci95_half_width(&means));
             c_col.push(c);
             e_col.push(engine.to_string());
             n_col.push(done.len() as u64);
-            m_col.push(mean(&means));
-            ci_col.push(ci95_half_width(&means));
+            m_col.push(m);
+            ci_col.push(ci);
             s_col.push(mean(&done.iter().map(|r| summary(&r.lengths_um()).population_std).collect::<Vec<_>>()));
-            per_engine.push((mean(&means), ci95_half_width(&means)));
+            per_engine.push((m, ci));
         }
         let (m0, ci0) = per_engine[0];
         for (engine, &(m, ci)) in ENGINES.iter().zip(&per_engine).skip(1) {
