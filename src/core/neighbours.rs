@@ -21,11 +21,11 @@ pub struct CellList {
     cell_start: Vec<u32>,
     cell_particles: Vec<u32>,
     particle_cell: Vec<u32>,
-    neighbour_cells: Vec<u32>,
 }
 
 impl CellList {
-    /// Fills `out` with every pair closer than `range`, each once. `range = None` means all pairs.
+    /// Fills `out` with every pair (i < j) closer than `range`, in (i, j) order. `range = None`
+    /// means all pairs.
     pub fn pairs_within(
         &mut self,
         positions: &[Vec3],
@@ -82,64 +82,59 @@ impl CellList {
             fill[c as usize] += 1;
         }
 
+        // Row by row, each particle with its partners of higher index in the cells around it
+        // (rows in parallel when worth it): the pairs come out in (i, j) order.
         let range2 = range * range;
-        for c in 0..ncells as u32 {
-            let (s0, s1) = (self.cell_start[c as usize], self.cell_start[c as usize + 1]);
-            if s0 == s1 {
-                continue;
-            }
-            let c_us = c as usize;
-            let idx = [c_us % dims[0], (c_us / dims[0]) % dims[1], c_us / (dims[0] * dims[1])];
-            self.collect_neighbour_cells(idx, dims, domain);
-            for a in s0..s1 {
-                let i = self.cell_particles[a as usize];
-                for &c2 in &self.neighbour_cells {
-                    if c2 < c {
-                        continue;
-                    }
-                    let (t0, t1) = (self.cell_start[c2 as usize], self.cell_start[c2 as usize + 1]);
-                    let from = if c2 == c { a + 1 } else { t0 };
-                    for b in from..t1 {
-                        let j = self.cell_particles[b as usize];
-                        let r = domain.displacement(&positions[i as usize], &positions[j as usize]);
+        let this = &*self;
+        parallel::collect_ordered(n, out, |i, out| {
+            let row = out.len();
+            let c = this.particle_cell[i] as usize;
+            let idx = [c % dims[0], (c / dims[0]) % dims[1], c / (dims[0] * dims[1])];
+            let (cells, count) = neighbour_cells(idx, dims, domain);
+            for &c2 in &cells[..count] {
+                let members = this.cell_start[c2 as usize] as usize..this.cell_start[c2 as usize + 1] as usize;
+                for &j in &this.cell_particles[members] {
+                    if (j as usize) > i {
+                        let r = domain.displacement(&positions[i], &positions[j as usize]);
                         let d2 = r.norm_squared();
                         if d2 < range2 {
-                            let (i, j, r) = if i < j { (i, j, r) } else { (j, i, -r) };
-                            out.push(Pair { i, j, r, dist: d2.sqrt() });
+                            out.push(Pair { i: i as u32, j, r, dist: d2.sqrt() });
                         }
                     }
                 }
             }
-        }
+            out[row..].sort_unstable_by_key(|p| p.j);
+        });
     }
+}
 
-    /// The distinct cells within one cell of `idx` (wrapped on periodic axes), sorted.
-    fn collect_neighbour_cells(&mut self, idx: [usize; 3], dims: [usize; 3], domain: &Domain) {
-        self.neighbour_cells.clear();
-        // Up to three distinct indices per axis (fewer at walls or in short periodic axes).
-        let axis = |k: usize| -> ([usize; 3], usize) {
-            let (mut v, mut len) = ([0usize; 3], 0);
-            for off in [-1i64, 0, 1] {
-                let n = dims[k] as i64;
-                let c = idx[k] as i64 + off;
-                let c = if domain.periodic[k] { c.rem_euclid(n) } else { c };
-                if (0..n).contains(&c) && !v[..len].contains(&(c as usize)) {
-                    v[len] = c as usize;
-                    len += 1;
-                }
-            }
-            (v, len)
-        };
-        let ((ax, nx), (ay, ny), (az, nz)) = (axis(0), axis(1), axis(2));
-        for &z in &az[..nz] {
-            for &y in &ay[..ny] {
-                for &x in &ax[..nx] {
-                    self.neighbour_cells.push(((z * dims[1] + y) * dims[0] + x) as u32);
-                }
+/// The distinct cells within one cell of `idx` (wrapped on periodic axes), and how many.
+fn neighbour_cells(idx: [usize; 3], dims: [usize; 3], domain: &Domain) -> ([u32; 27], usize) {
+    // Up to three distinct indices per axis (fewer at walls or in short periodic axes).
+    let axis = |k: usize| -> ([usize; 3], usize) {
+        let (mut v, mut len) = ([0usize; 3], 0);
+        for off in [-1i64, 0, 1] {
+            let n = dims[k] as i64;
+            let c = idx[k] as i64 + off;
+            let c = if domain.periodic[k] { c.rem_euclid(n) } else { c };
+            if (0..n).contains(&c) && !v[..len].contains(&(c as usize)) {
+                v[len] = c as usize;
+                len += 1;
             }
         }
-        self.neighbour_cells.sort_unstable();
+        (v, len)
+    };
+    let ((ax, nx), (ay, ny), (az, nz)) = (axis(0), axis(1), axis(2));
+    let (mut cells, mut count) = ([0u32; 27], 0);
+    for &z in &az[..nz] {
+        for &y in &ay[..ny] {
+            for &x in &ax[..nx] {
+                cells[count] = ((z * dims[1] + y) * dims[0] + x) as u32;
+                count += 1;
+            }
+        }
     }
+    (cells, count)
 }
 
 /// Pairs within a fixed range, found through a Verlet list: candidates within range + skin are
@@ -166,15 +161,14 @@ impl VerletList {
         let stale = self.reference.len() != positions.len() || self.built_for != Some((range, skin));
         let moved_too_far = stale
             || if parallel::worth_it(positions.len()) {
-                positions.par_iter().zip(&self.reference).with_min_len(parallel::CHUNK).any(moved)
+                positions.par_iter().zip(&self.reference).with_min_len(parallel::CHUNK).map(moved).reduce(|| false, |a, b| a | b)
             } else {
-                positions.iter().zip(&self.reference).any(moved)
+                positions.iter().zip(&self.reference).fold(false, |any, pair| any | moved(pair))
             };
         if moved_too_far {
             self.cells.pairs_within(positions, domain, Some(range + skin), &mut self.scratch);
             self.candidates.clear();
             self.candidates.extend(self.scratch.iter().map(|p| (p.i, p.j)));
-            self.candidates.par_sort_unstable();
             self.reference.clear();
             self.reference.extend_from_slice(positions);
             self.built_for = Some((range, skin));

@@ -26,7 +26,6 @@ pub fn worth_it(len: usize) -> bool {
 /// Calls `f(k, out)` for k in 0..n, which may push items; the items end up in `out` in k order
 /// (in parallel chunks when worth it, the chunks' items then copied into place in parallel).
 pub fn collect_ordered<T: Copy + Default + Send + Sync>(n: usize, out: &mut Vec<T>, f: impl Fn(usize, &mut Vec<T>) + Sync) {
-    out.clear();
     if worth_it(n) {
         use rayon::prelude::*;
         let parts: Vec<Vec<T>> = (0..n.div_ceil(CHUNK))
@@ -38,6 +37,8 @@ pub fn collect_ordered<T: Copy + Default + Send + Sync>(n: usize, out: &mut Vec<
                 part
             })
             .collect();
+        // Resized from its last length (a buffer reused step after step hardly changes length),
+        // so that only the difference is written serially before the parallel copy.
         out.resize(parts.iter().map(Vec::len).sum(), T::default());
         let mut slots = Vec::with_capacity(parts.len());
         let mut rest = out.as_mut_slice();
@@ -48,6 +49,7 @@ pub fn collect_ordered<T: Copy + Default + Send + Sync>(n: usize, out: &mut Vec<
         }
         slots.into_par_iter().zip(&parts).for_each(|(slot, part)| slot.copy_from_slice(part));
     } else {
+        out.clear();
         (0..n).for_each(|k| f(k, out));
     }
 }
@@ -89,4 +91,24 @@ pub fn with_warm_pool<R: Send>(len: usize, f: impl FnOnce() -> R + Send) -> R {
         done.store(true, Ordering::Release);
         result
     })
+}
+
+/// `out[i] = value` for every i (in parallel chunks when worth it).
+pub fn fill<T: Copy + Send + Sync>(out: &mut [T], value: T) {
+    if worth_it(out.len()) {
+        use rayon::prelude::*;
+        out.par_chunks_mut(CHUNK).for_each(|chunk| chunk.fill(value));
+    } else {
+        out.fill(value);
+    }
+}
+
+/// `out.copy_from_slice(from)` (in parallel chunks when worth it).
+pub fn copy<T: Copy + Send + Sync>(from: &[T], out: &mut [T]) {
+    if worth_it(out.len()) {
+        use rayon::prelude::*;
+        out.par_chunks_mut(CHUNK).zip(from.par_chunks(CHUNK)).for_each(|(o, f)| o.copy_from_slice(f));
+    } else {
+        out.copy_from_slice(from);
+    }
 }

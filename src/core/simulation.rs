@@ -3,7 +3,7 @@
 //! then integrate and monitor; each is timed.
 
 use super::domain::Domain;
-use super::forces::{ForceContext, ForceTerm};
+use super::forces::{ConstantForce, ForceContext, ForceTerm};
 use super::integrators::Integrator;
 use super::magnetisation::{InductionError, Magnetisation};
 use super::neighbours::{Pair, VerletList};
@@ -42,7 +42,14 @@ pub struct ForceField {
 
 impl ForceField {
     /// `near_range`: largest contact distance times (1 + touch tolerance).
-    pub fn new(domain: Domain, magnetisation: Option<Magnetisation>, terms: Vec<Box<dyn ForceTerm>>, near_range: f64) -> Self {
+    pub fn new(domain: Domain, magnetisation: Option<Magnetisation>, given: Vec<Box<dyn ForceTerm>>, near_range: f64) -> Self {
+        // Constant terms first, so that one can seed each evaluation's force; otherwise in order.
+        let (mut terms, mut others) = (vec![], vec![]);
+        for mut term in given {
+            let constant = term.constant_force(&Default::default()).is_some();
+            if constant { &mut terms } else { &mut others }.push(term);
+        }
+        terms.append(&mut others);
         let needs = terms.iter().any(|t| t.needs_near_pairs());
         Self {
             domain,
@@ -82,8 +89,29 @@ impl ForceField {
                 near_rebuilt = Some(skin);
             }
         }
-        p.force.iter_mut().for_each(|f| *f = Vec3::zeros());
-        p.torque.iter_mut().for_each(|t| *t = Vec3::zeros());
+        let wanted = |term: &dyn ForceTerm| match group {
+            ForceGroup::All => true,
+            ForceGroup::Fast => !term.is_slow(),
+            ForceGroup::Slow => term.is_slow(),
+        };
+        // The first term, if wanted and constant, seeds the force (the constant terms come first).
+        let t0 = self.timers.start();
+        let seed = match self.terms.first_mut() {
+            Some(first) if wanted(first.as_ref()) => Some(first.name()).zip(first.constant_force(p)),
+            _ => None,
+        };
+        let seeded = seed.is_some();
+        match seed {
+            Some((name, constant)) => {
+                match constant {
+                    ConstantForce::PerParticle(weights) => parallel::copy(weights, &mut p.force),
+                    ConstantForce::Uniform(weight) => parallel::fill(&mut p.force, weight),
+                }
+                self.timers.stop(name, t0);
+            }
+            None => parallel::fill(&mut p.force, Vec3::zeros()),
+        }
+        parallel::fill(&mut p.torque, Vec3::zeros());
         if let Some(mag) = self.magnetisation.as_mut().filter(|_| group != ForceGroup::Fast) {
             let result = self.timers.time("moments", || mag.update(p, &self.domain));
             if let Err(e) = result {
@@ -97,13 +125,8 @@ impl ForceField {
             dt,
             magnetic_pairs: self.magnetisation.as_ref().and_then(|m| m.pairs()),
         };
-        for term in self.terms.iter_mut() {
-            let wanted = match group {
-                ForceGroup::All => true,
-                ForceGroup::Fast => !term.is_slow(),
-                ForceGroup::Slow => term.is_slow(),
-            };
-            if wanted {
+        for term in self.terms.iter_mut().skip(seeded as usize) {
+            if wanted(term.as_ref()) {
                 let t0 = self.timers.start();
                 term.apply(&ctx, state);
                 self.timers.stop(term.name(), t0);

@@ -176,13 +176,13 @@ struct QuickTest {
 impl QuickTest {
     #[inline(always)]
     fn fails(&self, x: &Vec3, v: &Vec3, a: f64) -> bool {
-        // One sum is finite exactly when all its terms are (short of overflow, itself a blow-up);
-        // a force that is not finite has already made the velocity so in the last kick.
-        let finite = (x.x + x.y + x.z + v.x + v.y + v.z).is_finite();
+        // Every comparison with NaN is false, so a NaN velocity fails the speed test and a NaN
+        // position the wall test (infinite bounds included); an infinite velocity fails the
+        // speed test, and an infinite position needs one a step earlier.
         let limit = self.travel * a;
-        let escaped = (x.x < self.lo.x - a) | (x.y < self.lo.y - a) | (x.z < self.lo.z - a)
-            | (x.x > self.hi.x + a) | (x.y > self.hi.y + a) | (x.z > self.hi.z + a);
-        !finite | (v.norm_squared() > limit * limit) | escaped
+        let inside = (x.x >= self.lo.x - a) & (x.y >= self.lo.y - a) & (x.z >= self.lo.z - a)
+            & (x.x <= self.hi.x + a) & (x.y <= self.hi.y + a) & (x.z <= self.hi.z + a);
+        !(v.norm_squared() <= limit * limit) | !inside
     }
 }
 

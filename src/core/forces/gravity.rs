@@ -1,8 +1,8 @@
 //! Weight minus buoyancy, F = V (ρ_p − ρ_f) g (paper eq. 11).
 
-use super::{ForceContext, ForceTerm};
+use super::{ConstantForce, ForceContext, ForceTerm};
 use crate::core::parallel;
-use crate::core::state::{State, Vec3};
+use crate::core::state::{Particles, State, Vec3};
 use rayon::prelude::*;
 
 #[derive(Debug, Clone)]
@@ -11,11 +11,13 @@ pub struct GravityBuoyancy {
     pub fluid_density: f64,
     /// Each particle's force, computed once (masses and radii do not change).
     weights: Vec<Vec3>,
+    /// The weight, when it is the same for every particle.
+    uniform: Option<Vec3>,
 }
 
 impl GravityBuoyancy {
     pub fn new(gravity: Vec3, fluid_density: f64) -> Self {
-        Self { gravity, fluid_density, weights: vec![] }
+        Self { gravity, fluid_density, weights: vec![], uniform: None }
     }
 }
 
@@ -23,8 +25,7 @@ impl ForceTerm for GravityBuoyancy {
     fn name(&self) -> &'static str {
         "gravity"
     }
-    fn apply(&mut self, _ctx: &ForceContext, state: &mut State) {
-        let p = &mut state.particles;
+    fn constant_force(&mut self, p: &Particles) -> Option<ConstantForce<'_>> {
         if self.weights.len() != p.len() {
             self.weights = (0..p.len())
                 .map(|i| {
@@ -32,7 +33,16 @@ impl ForceTerm for GravityBuoyancy {
                     (p.mass[i] - volume * self.fluid_density) * self.gravity
                 })
                 .collect();
+            self.uniform = self.weights.split_first().filter(|(w, rest)| rest.iter().all(|r| r == *w)).map(|(w, _)| *w);
         }
+        Some(match self.uniform {
+            Some(weight) => ConstantForce::Uniform(weight),
+            None => ConstantForce::PerParticle(&self.weights),
+        })
+    }
+    fn apply(&mut self, _ctx: &ForceContext, state: &mut State) {
+        self.constant_force(&state.particles);
+        let p = &mut state.particles;
         let add = |(f, w): (&mut Vec3, &Vec3)| *f += w;
         if parallel::worth_it(p.len()) {
             p.force.par_iter_mut().zip(&self.weights).with_min_len(parallel::CHUNK).for_each(add);

@@ -10,7 +10,7 @@ pub mod shielding;
 
 use super::domain::Domain;
 use super::neighbours::Pair;
-use super::state::State;
+use super::state::{Particles, State, Vec3};
 
 /// What a term may read besides the state during one force evaluation.
 pub struct ForceContext<'a> {
@@ -28,6 +28,14 @@ pub struct ForceContext<'a> {
     pub magnetic_pairs: Option<(Option<f64>, &'a [Pair])>,
 }
 
+/// A force that does not change during a run (see [`ForceTerm::constant_force`]).
+pub enum ConstantForce<'a> {
+    /// The same on every particle.
+    Uniform(Vec3),
+    /// Particle by particle.
+    PerParticle(&'a [Vec3]),
+}
+
 /// One physical contribution to the force and torque on every particle.
 pub trait ForceTerm: Send {
     /// Name used in timers and messages.
@@ -40,6 +48,12 @@ pub trait ForceTerm: Send {
     /// Whether the term needs `ForceContext::near_pairs`.
     fn needs_near_pairs(&self) -> bool {
         false
+    }
+    /// The term's force when it depends on nothing but fixed particle properties (mass, radius)
+    /// and exerts no torque: the force field then starts each evaluation from it instead of
+    /// from zero, saving a pass over the particles.
+    fn constant_force(&mut self, _particles: &Particles) -> Option<ConstantForce<'_>> {
+        None
     }
     /// Adds this term's force and torque into `state.particles.force/torque`.
     fn apply(&mut self, ctx: &ForceContext, state: &mut State);
