@@ -10,7 +10,8 @@
 //! cut-off): below [`parallel::MIN_PARALLEL_LEN`] particles half rows with F_ji = −F_ij; above
 //! it full rows, each particle summing its own (twice the pair work, but rows run in parallel
 //! and in the same order for any thread count). The loop over a row works on coordinate arrays
-//! so that it compiles to SIMD; its sum runs in eight lanes by partner index, a fixed order. When the moments phase has already listed the pairs (the paper's
+//! so that it compiles to SIMD; its sum runs in eight lanes by partner index, a fixed order.
+//! Walled boxes skip the minimum-image arithmetic. When the moments phase has already listed the pairs (the paper's
 //! induction), the term sums over that list instead.
 
 use super::{ForceContext, ForceTerm};
@@ -109,14 +110,18 @@ impl Rows {
 /// Partner coordinates and moments of one row, contiguous: x, y, z, mx, my, mz.
 type Partners<'a> = [&'a [f64]; 6];
 
-/// Gathers the columns of the particles `js` into `buffer` (one row's partners).
+/// Gathers the columns of the particles `js` into `buffer` (one row's partners), in one pass.
 fn gather<'a>(c: &Columns, js: &[u32], buffer: &'a mut [Vec<f64>; 6]) -> Partners<'a> {
-    let sources = [&c.x[0], &c.x[1], &c.x[2], &c.m[0], &c.m[1], &c.m[2]];
-    for (b, source) in buffer.iter_mut().zip(sources) {
-        b.clear();
-        b.extend(js.iter().map(|&j| source[j as usize]));
+    for b in buffer.iter_mut() {
+        b.resize(js.len(), 0.0);
     }
     let [x, y, z, mx, my, mz] = buffer;
+    let partners = x.iter_mut().zip(y.iter_mut()).zip(z.iter_mut()).zip(mx.iter_mut().zip(my.iter_mut()).zip(mz.iter_mut()));
+    for ((((x, y), z), ((mx, my), mz)), &j) in partners.zip(js) {
+        let j = j as usize;
+        (*x, *y, *z) = (c.x[0][j], c.x[1][j], c.x[2][j]);
+        (*mx, *my, *mz) = (c.m[0][j], c.m[1][j], c.m[2][j]);
+    }
     [x, y, z, mx, my, mz]
 }
 
@@ -128,6 +133,16 @@ fn slice(c: &Columns, range: std::ops::Range<usize>) -> Partners<'_> {
 /// Writes F_ij into `out[k][q]` (k = x, y, z) for each partner q of particle i, zero beyond
 /// the cut-off (squared distance `cutoff2`). The vectorisable part: contiguous arrays, no sums.
 fn row_forces(c: &Columns, image: &Image, i: usize, partners: Partners, cutoff2: f64, out: &mut [Vec<f64>; 3]) {
+    // Without periodic axes the image term is d − 0 = d: the same bits without its arithmetic.
+    if image.length == [0.0; 3] {
+        row_forces_in::<false>(c, image, i, partners, cutoff2, out)
+    } else {
+        row_forces_in::<true>(c, image, i, partners, cutoff2, out)
+    }
+}
+
+#[inline(always)]
+fn row_forces_in<const PERIODIC: bool>(c: &Columns, image: &Image, i: usize, partners: Partners, cutoff2: f64, out: &mut [Vec<f64>; 3]) {
     let (xi, mi) = ([c.x[0][i], c.x[1][i], c.x[2][i]], [c.m[0][i], c.m[1][i], c.m[2][i]]);
     let len = partners[0].len();
     for o in out.iter_mut() {
@@ -138,7 +153,7 @@ fn row_forces(c: &Columns, image: &Image, i: usize, partners: Partners, cutoff2:
     let [xs, ys, zs, mxs, mys, mzs] = partners.map(|p| &p[..len]);
     for q in 0..len {
         let d = [xi[0] - xs[q], xi[1] - ys[q], xi[2] - zs[q]];
-        let d = [0, 1, 2].map(|k| d[k] - image.length[k] * (d[k] * image.inverse[k]).round_ties_even());
+        let d = if PERIODIC { [0, 1, 2].map(|k| d[k] - image.length[k] * (d[k] * image.inverse[k]).round_ties_even()) } else { d };
         let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
         let inv = 1.0 / r2.sqrt();
         let rhat = [d[0] * inv, d[1] * inv, d[2] * inv];
@@ -159,12 +174,20 @@ fn row_forces(c: &Columns, image: &Image, i: usize, partners: Partners, cutoff2:
 /// beyond the cut-off change nothing (so the sum does not depend on when the candidates were
 /// built, and a resumed run stays bitwise equal).
 fn row_sum(out: &[Vec<f64>; 3], js: &[u32]) -> Vec3 {
+    row_sum_and_scatter(out, js, |_, _| ())
+}
+
+/// [`row_sum`], calling `each(j, F_ij)` for every partner on the way (the half rows' reaction).
+#[inline(always)]
+fn row_sum_and_scatter(out: &[Vec<f64>; 3], js: &[u32], mut each: impl FnMut(usize, Vec3)) -> Vec3 {
     let mut lanes = [[0.0; 3]; 8];
-    for (q, &j) in js.iter().enumerate() {
+    let terms = out[0].iter().zip(&out[1]).zip(&out[2]);
+    for (((&fx, &fy), &fz), &j) in terms.zip(js) {
         let lane = &mut lanes[j as usize % 8];
-        for k in 0..3 {
-            lane[k] += out[k][q];
-        }
+        lane[0] += fx;
+        lane[1] += fy;
+        lane[2] += fz;
+        each(j as usize, Vec3::new(fx, fy, fz));
     }
     Vec3::from_fn(|k, _| lanes.iter().fold(0.0, |a, lane| a + lane[k]))
 }
@@ -202,10 +225,8 @@ fn add_row_sums(c: &Columns, image: &Image, rows: Option<&Rows>, cutoff2: f64, f
                 Some(rows) => {
                     let js = rows.row(i);
                     row_forces(c, image, i, gather(c, js, &mut buffer), cutoff2, &mut out);
-                    force[i] += row_sum(&out, js);
-                    for (q, &j) in js.iter().enumerate() {
-                        force[j as usize] -= Vec3::new(out[0][q], out[1][q], out[2][q]);
-                    }
+                    let sum = row_sum_and_scatter(&out, js, |j, f| force[j] -= f);
+                    force[i] += sum;
                 }
                 None => {
                     row_forces(c, image, i, slice(c, i + 1..n), cutoff2, &mut out);
