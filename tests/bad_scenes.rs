@@ -64,6 +64,8 @@ fn bad_scenes_are_refused_with_a_message_naming_the_cause() {
         ("restitution zero", edit("restitution = 0.5", "restitution = 0.0"), &["species[0].restitution = 0", "(0, 1]"]),
         ("permeability below one", edit("relative_permeability = 12.3", "relative_permeability = 0.5"), &["relative_permeability = 0.5", "≥ 1"]),
         ("unknown species", edit("species = \"p\"", "species = \"q\""), &["particles[0].species = q", "no such species"]),
+        ("numbering explicit particles", edit("species = \"p\"\npositions", "species = \"p\"\norder = \"spatial\"\npositions"), &["particles[0].order = spatial", "explicit positions"]),
+        ("unknown numbering", edit("species = \"p\"\npositions", "species = \"p\"\norder = \"hilbert\"\npositions"), &["unknown variant `hilbert`", "placement", "spatial"]),
         ("empty box", edit("hi = [1.0e-4, 1.0e-4, 1.0e-4]", "hi = [1.0e-4, 0.0, 1.0e-4]"), &["domain.hi", "must exceed domain.lo"]),
         ("wrong version", edit("version = 1", "version = 2"), &["version = 2", "scene version 1"]),
         (

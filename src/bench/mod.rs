@@ -70,7 +70,7 @@ pub fn contact_scene(packing: Packing, n: usize, steps: u64) -> String {
     let end = steps as f64 * 1e-8;
     format!(
         "version = 1\nname = \"bench-contact-{}-{n}\"\nseed = 1\n[domain]\nlo = [0.0, 0.0, 0.0]\nhi = [{edge:e}, {edge:e}, {edge:e}]\n\
-         [fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n{SPECIES}[[particles]]\nspecies = \"fe3o4\"\ncount = {n}\n\
+         [fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n{SPECIES}[[particles]]\nspecies = \"fe3o4\"\ncount = {n}\norder = \"spatial\"\n\
          [forces.contact]\nwalls = true\n[forces.gravity]\ng = [0.0, 0.0, -9.81]\n\
          [integration]\nscheme = \"velocity-verlet\"\ndt = 1.0e-8\nend_time = {end:e}\n[output]\ninterval = {end:e}\n",
         packing.name()
@@ -89,7 +89,7 @@ pub fn magnetic_scene(n: usize, cutoff: Option<f64>, steps: u64) -> String {
     let cutoff = cutoff.map_or(String::new(), |c| format!("cutoff_diameters = {c:?}\n"));
     format!(
         "version = 1\nname = \"bench-dipole-{n}\"\nseed = 1\n[domain]\nlo = [0.0, 0.0, 0.0]\nhi = [{lx:e}, {lx:e}, {lz:e}]\n\
-         [fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n[field]\nb0 = [0.4, 0.0, 0.0]\n{SPECIES}[[particles]]\nspecies = \"fe3o4\"\ncount = {n}\n\
+         [fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n[field]\nb0 = [0.4, 0.0, 0.0]\n{SPECIES}[[particles]]\nspecies = \"fe3o4\"\ncount = {n}\norder = \"spatial\"\n\
          [forces.dipole]\ninduction = \"none\"\n{cutoff}\
          [integration]\nscheme = \"velocity-verlet\"\ndt = 1.0e-8\nend_time = {end:e}\n[output]\ninterval = {end:e}\n"
     )

@@ -377,7 +377,7 @@ fn markdown(bench: &Bench, agreement: &[(String, f64)]) -> String {
         o.work.display()
     );
 
-    s += "## Contact only: Hertz + history + walls + gravity\n\n11 µm spheres (E = 1e9 Pa, e = 0.5, μ = 0.5), 300 / 3 000 / 30 000 particles placed at random, sparse (0.5 mm cube for 300, solid fraction 0.0017) and dense (0.1 mm cube for 300, solid fraction 0.21), the box edge scaled with N^(1/3); 3e7 particle-steps per run.\n\n";
+    s += "## Contact only: Hertz + history + walls + gravity\n\n11 µm spheres (E = 1e9 Pa, e = 0.5, μ = 0.5), 300 / 3 000 / 30 000 particles placed at random and numbered along a Morton curve (`order = \"spatial\"`, as every bench scene: the engines read them in that order too), sparse (0.5 mm cube for 300, solid fraction 0.0017) and dense (0.1 mm cube for 300, solid fraction 0.21), the box edge scaled with N^(1/3); 3e7 particle-steps per run.\n\n";
     s += "| case | steps | magdem 1 thread (s) | magdem 2 threads (s) | LIGGGHTS (s) | LAMMPS (s) | magdem ÷ LIGGGHTS speed | magdem ÷ LAMMPS speed | 2 threads ÷ 1 | 1 and 2 threads bitwise equal |\n|---|---|---|---|---|---|---|---|---|---|\n";
     let cases: Vec<String> = bench.measurements.iter().filter(|m| m.case.starts_with("contact ")).map(|m| m.case.clone()).fold(vec![], |mut v, c| {
         if !v.contains(&c) {

@@ -472,6 +472,9 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
             return Err(invalid(format!("particles[{g}]"), &group.species, "give exactly one of positions, count, concentration"));
         }
         if let Some(positions) = &group.positions {
+            if group.order != ParticleOrder::Placement {
+                return Err(invalid(key("order"), "spatial", "explicit positions keep their given order; order applies to count or concentration"));
+            }
             let velocities = group.velocities.clone().unwrap_or_else(|| vec![[0.0; 3]; positions.len()]);
             let spins = group.angular_velocities.clone().unwrap_or_else(|| vec![[0.0; 3]; positions.len()]);
             for (name, len) in [("velocities", velocities.len()), ("angular_velocities", spins.len())] {
@@ -536,6 +539,10 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
                 ),
             )
         })?;
+        let placed = match group.order {
+            ParticleOrder::Placement => placed,
+            ParticleOrder::Spatial => placement::morton_order(placed, 2.0 * s.radius, domain),
+        };
         for x in placed {
             particles.push(si as u16, s, x, Vec3::zeros());
         }

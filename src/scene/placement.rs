@@ -79,6 +79,19 @@ pub fn place_random(
 }
 
 /// The position and its periodic images one box length away along periodic axes.
+/// `positions` sorted along a Morton (Z-order) curve through cubic cells of edge `cell` from the
+/// box's low corner (ties keep their order): neighbours in space become neighbours in memory.
+pub fn morton_order(mut positions: Vec<Vec3>, cell: f64, domain: &Domain) -> Vec<Vec3> {
+    // Spreads the low 21 bits of v to every third bit.
+    let spread = |v: u64| (0..21).fold(0u64, |out, b| out | ((v >> b) & 1) << (3 * b));
+    let key = |x: &Vec3| {
+        let c = |k: usize| (((x[k] - domain.lo[k]) / cell).max(0.0) as u64).min((1 << 21) - 1);
+        spread(c(0)) | spread(c(1)) << 1 | spread(c(2)) << 2
+    };
+    positions.sort_by_cached_key(key);
+    positions
+}
+
 fn periodic_images(x: &Vec3, domain: &Domain) -> Vec<Vec3> {
     let mut images = vec![*x];
     let len = domain.length();
