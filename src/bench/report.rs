@@ -358,6 +358,60 @@ fn reproduce_wall_time() -> Option<u64> {
     text[..at].rsplit(' ').next()?.parse().ok()
 }
 
+/// The issue's targets against this run's medians: one line each, met or not.
+fn targets(bench: &Bench) -> String {
+    let speedup = |case: &str, fast: (&str, usize), slow: (&str, usize)| {
+        Some(bench.find(case, slow.0, slow.1)?.seconds.median / bench.find(case, fast.0, fast.1)?.seconds.median)
+    };
+    let verdict = |x: f64, target: f64| if x >= target { "met" } else { "not met" };
+    let mut lines = vec![];
+    let contact: Vec<(String, f64)> = bench
+        .measurements
+        .iter()
+        .filter(|m| m.case.starts_with("contact ") && m.engine == "magdem" && m.threads == 1)
+        .filter_map(|m| Some((m.case.clone(), speedup(&m.case, ("magdem", 1), ("liggghts", 1))?)))
+        .collect();
+    if let Some((case, worst)) = contact.iter().min_by(|a, b| a.1.total_cmp(&b.1)) {
+        lines.push(format!("contact only, one thread ÷ LIGGGHTS ≥ 2× in every case: smallest {worst:.2}× ({case}) — {}", verdict(*worst, 2.0)));
+    }
+    for case in ["dipole all pairs 307", "dipole cut-off 15 d 307"] {
+        if let Some(x) = speedup(case, ("magdem", 1), ("lammps", 1)) {
+            lines.push(format!("{case}, one thread ÷ LAMMPS ≥ 5×: {x:.2}× — {}", verdict(x, 5.0)));
+        }
+    }
+    for case in ["contact sparse 30000", "contact dense 30000"] {
+        if let Some(x) = speedup(case, ("magdem", 2), ("magdem", 1)) {
+            lines.push(format!("{case}, two threads ÷ one ≥ 1.7×: {x:.2}× — {}", verdict(x, 1.7)));
+        }
+    }
+    for case in ["scaling contact sparse", "scaling contact dense", "scaling dipole cut-off 15 d"] {
+        let runs: Vec<&Measurement> = bench.measurements.iter().filter(|m| m.case == case && m.threads == 1).collect();
+        let pairs = |m: &Measurement| bench.dipole_pairs.iter().find(|(n, _)| *n == m.particles && case.contains("dipole"));
+        let cost = |m: &Measurement| match pairs(m) {
+            Some((_, pairs)) => m.seconds.median / (m.steps as f64 * *pairs as f64),
+            None => m.ns_per_particle_step(),
+        };
+        if let (Some(small), Some(large)) = (runs.iter().min_by_key(|m| m.particles), runs.iter().max_by_key(|m| m.particles)) {
+            let unit = if case.contains("dipole") { "per pair" } else { "per particle-step" };
+            lines.push(format!(
+                "{}: cost {unit} at N = {} ÷ at N = {}: {:.2} (1 for exactly linear growth; see the table below)",
+                case.trim_start_matches("scaling "),
+                large.particles,
+                small.particles,
+                cost(large) / cost(small)
+            ));
+        }
+    }
+    if lines.is_empty() {
+        return String::new();
+    }
+    format!("## Against the targets
+
+{}
+
+", lines.iter().map(|l| format!("- {l}")).collect::<Vec<_>>().join("\n"))
+}
+
 fn markdown(bench: &Bench, agreement: &[(String, f64)]) -> String {
     let o = bench.options;
     let mut s = String::new();
@@ -377,6 +431,7 @@ fn markdown(bench: &Bench, agreement: &[(String, f64)]) -> String {
         o.work.display()
     );
 
+    s += &targets(bench);
     s += "## Contact only: Hertz + history + walls + gravity\n\n11 µm spheres (E = 1e9 Pa, e = 0.5, μ = 0.5), 300 / 3 000 / 30 000 particles placed at random and numbered along a Morton curve (`order = \"spatial\"`, as every bench scene: the engines read them in that order too), sparse (0.5 mm cube for 300, solid fraction 0.0017) and dense (0.1 mm cube for 300, solid fraction 0.21), the box edge scaled with N^(1/3); 3e7 particle-steps per run.\n\n";
     s += "| case | steps | magdem 1 thread (s) | magdem 2 threads (s) | LIGGGHTS (s) | LAMMPS (s) | magdem ÷ LIGGGHTS speed | magdem ÷ LAMMPS speed | 2 threads ÷ 1 | 1 and 2 threads bitwise equal |\n|---|---|---|---|---|---|---|---|---|---|\n";
     let cases: Vec<String> = bench.measurements.iter().filter(|m| m.case.starts_with("contact ")).map(|m| m.case.clone()).fold(vec![], |mut v, c| {
