@@ -346,7 +346,7 @@ fn scaling_figure(path: &Path, rows: &[Measurement]) -> Result<(), Error> {
         "log10 N (particles)",
         "log10 ns per particle-step",
         &series,
-        SeriesLabelPosition::MiddleRight,
+        SeriesLabelPosition::MiddleLeft,
     )
     .map_err(|e| e.to_string().into())
 }
