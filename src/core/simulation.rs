@@ -44,6 +44,7 @@ impl ForceField {
     /// `near_range`: largest contact distance times (1 + touch tolerance).
     pub fn new(domain: Domain, magnetisation: Option<Magnetisation>, given: Vec<Box<dyn ForceTerm>>, near_range: f64) -> Self {
         // Constant terms first, so that one can seed each evaluation's force; otherwise in order.
+        // (Asking a term for its force on no particles tells whether it has a constant one.)
         let (mut terms, mut others) = (vec![], vec![]);
         for mut term in given {
             let constant = term.constant_force(&Default::default()).is_some();

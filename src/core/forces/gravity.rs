@@ -19,13 +19,9 @@ impl GravityBuoyancy {
     pub fn new(gravity: Vec3, fluid_density: f64) -> Self {
         Self { gravity, fluid_density, weights: vec![], uniform: None }
     }
-}
 
-impl ForceTerm for GravityBuoyancy {
-    fn name(&self) -> &'static str {
-        "gravity"
-    }
-    fn constant_force(&mut self, p: &Particles) -> Option<ConstantForce<'_>> {
+    /// Computes the weights once per particle set (masses and radii do not change).
+    fn weigh(&mut self, p: &Particles) {
         if self.weights.len() != p.len() {
             self.weights = (0..p.len())
                 .map(|i| {
@@ -35,13 +31,22 @@ impl ForceTerm for GravityBuoyancy {
                 .collect();
             self.uniform = self.weights.split_first().filter(|(w, rest)| rest.iter().all(|r| r == *w)).map(|(w, _)| *w);
         }
+    }
+}
+
+impl ForceTerm for GravityBuoyancy {
+    fn name(&self) -> &'static str {
+        "gravity"
+    }
+    fn constant_force(&mut self, p: &Particles) -> Option<ConstantForce<'_>> {
+        self.weigh(p);
         Some(match self.uniform {
             Some(weight) => ConstantForce::Uniform(weight),
             None => ConstantForce::PerParticle(&self.weights),
         })
     }
     fn apply(&mut self, _ctx: &ForceContext, state: &mut State) {
-        self.constant_force(&state.particles);
+        self.weigh(&state.particles);
         let p = &mut state.particles;
         let add = |(f, w): (&mut Vec3, &Vec3)| *f += w;
         if parallel::worth_it(p.len()) {
