@@ -104,8 +104,8 @@ fn bad_scenes_are_refused_with_a_message_naming_the_cause() {
 
 #[test]
 fn cli_exits_with_code_2_and_one_line_on_a_bad_scene() {
-    let dir = std::env::temp_dir().join(format!("magdem-bad-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let work = tempfile::Builder::new().prefix("magdem-bad-").tempdir().unwrap();
+    let dir = work.path();
     let path = dir.join("bad.toml");
     std::fs::write(&path, edit("dt = 1.0e-8", "dt = 0.0")).unwrap();
     let (scene, output) = (path.to_str().unwrap(), dir.join("x.h5"));

@@ -8,6 +8,7 @@ use magdem::experiment::{run_experiment, ExperimentOptions, Outcome};
 use magdem::scene::experiment::Experiment;
 use std::path::PathBuf;
 use std::process::Command;
+use tempfile::TempDir;
 
 fn base() -> String {
     common::scene(
@@ -35,19 +36,20 @@ interval = 2.0e-6
     )
 }
 
-fn setup(name: &str, sweep: &str) -> (PathBuf, PathBuf) {
-    let dir = std::env::temp_dir().join(format!("magdem-exp-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+/// An experiment file over one base scene in a fresh directory, removed when the guard drops.
+fn setup(name: &str, sweep: &str) -> (TempDir, PathBuf, PathBuf) {
+    let work = tempfile::Builder::new().prefix(&format!("magdem-exp-{name}-")).tempdir().unwrap();
+    let dir = work.path();
     std::fs::write(dir.join("base.toml"), base()).unwrap();
     let out = dir.join("runs");
     let file = dir.join("experiment.toml");
     std::fs::write(&file, format!("name = \"{name}\"\nbases = [\"base.toml\"]\noutput = \"{}\"\n[sweep]\n{sweep}", out.display())).unwrap();
-    (file, out)
+    (work, file, out)
 }
 
 #[test]
 fn sweeps_run_once_skip_when_done_and_never_overwrite_changed_runs_silently() {
-    let (file, out) = setup("sweep", "seed = [1, 2]\n\"integration.dt\" = [1.0e-8, 2.0e-8]\n\"particles.0.count\" = [12]\n");
+    let (_work, file, out) = setup("sweep", "seed = [1, 2]\n\"integration.dt\" = [1.0e-8, 2.0e-8]\n\"particles.0.count\" = [12]\n");
     let exp = Experiment::from_file(&file).unwrap();
     assert_eq!(exp.points.len(), 4);
     let ids: Vec<&str> = exp.points.iter().map(|p| p.id.as_str()).collect();
@@ -77,7 +79,7 @@ fn sweeps_run_once_skip_when_done_and_never_overwrite_changed_runs_silently() {
 
 #[test]
 fn an_interrupted_point_is_resumed() {
-    let (file, out) = setup("resume", "seed = [3]\n");
+    let (_work, file, out) = setup("resume", "seed = [3]\n");
     let exp = Experiment::from_file(&file).unwrap();
     let point = &exp.points[0];
     // Produce the point's file as a killed run would leave it.
@@ -105,7 +107,7 @@ fn bad_sweeps_name_the_key() {
         ("engine = [\"gromacs\"]\n", "sweep.engine"),
         ("\"integration.dt\" = [-1.0]\n", "integration.dt"),
     ] {
-        let (file, _) = setup("bad", sweep);
+        let (_work, file, _) = setup("bad", sweep);
         let err = Experiment::from_file(&file).err().expect(sweep).to_string();
         assert!(err.contains(fragment), "{sweep}: {err}");
     }
@@ -113,7 +115,7 @@ fn bad_sweeps_name_the_key() {
 
 #[test]
 fn variants_cross_the_sweep_and_an_unstable_run_is_a_recorded_result() {
-    let (file, out) = setup("variants", "seed = [1, 2]\n");
+    let (_work, file, out) = setup("variants", "seed = [1, 2]\n");
     let text = std::fs::read_to_string(&file).unwrap();
     // `fast` overrides two keys; `blows-up` uses explicit Euler at a step far above its bound
     // (1e-6 s against ~7e-9 s in contact), which the solver must stop with its message.
@@ -154,7 +156,7 @@ fn bad_variants_name_the_key() {
         ("[variants]\nx = 3\n", "variants.x"),
         ("[variants.\"a b\"]\nseed = 2\n", "names use letters"),
     ] {
-        let (file, _) = setup("badvariant", "seed = [1]\n");
+        let (_work, file, _) = setup("badvariant", "seed = [1]\n");
         let text = std::fs::read_to_string(&file).unwrap();
         std::fs::write(&file, format!("{text}\n{variant}")).unwrap();
         let err = Experiment::from_file(&file).err().expect(variant).to_string();

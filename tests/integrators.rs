@@ -135,7 +135,8 @@ fn exponential_verlet_converges_at_second_order() {
 /// drag, as LAMMPS/LIGGGHTS) is first order and exponential Verlet second; explicit Euler first.
 #[test]
 fn accuracy_study_observes_the_orders() {
-    let dir = std::env::temp_dir().join(format!("magdem-accuracy-{}", std::process::id()));
+    let work = tempfile::Builder::new().prefix("magdem-accuracy-").tempdir().unwrap();
+    let dir = work.path();
     let md = magdem::study::accuracy::study(&dir).unwrap();
     let order = |section: &str, scheme: &str| -> String {
         let part = md.split("## ").find(|s| s.starts_with(section)).unwrap();

@@ -5,7 +5,7 @@
 use magdem::reference::{self, Engine};
 use magdem::scene::Scene;
 use magdem::verify::contacts::{cases, relative, run_case};
-use std::path::PathBuf;
+use tempfile::TempDir;
 
 fn engines() -> Option<Vec<Engine>> {
     let wanted = [Engine::Liggghts, Engine::Lammps];
@@ -19,16 +19,16 @@ fn engines() -> Option<Vec<Engine>> {
     panic!("liggghts/lmp not on the PATH: run scripts/setup.sh as root (or set MAGDEM_NO_REFERENCE=1)");
 }
 
-fn workdir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("magdem-ref-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// A fresh directory, removed when the returned guard drops (also when a test fails).
+fn workdir(name: &str) -> TempDir {
+    tempfile::Builder::new().prefix(&format!("magdem-ref-{name}-")).tempdir().unwrap()
 }
 
 #[test]
 fn single_contacts_agree_with_liggghts_and_lammps() {
     let Some(engines) = engines() else { return };
-    let dir = workdir("contacts");
+    let work = workdir("contacts");
+    let dir = work.path();
     let wanted = ["elastic pair", "elastic wall", "pair e = 0.5", "oblique 25°", "oblique 65°", "spin, normal", "unequal 1:2, elastic"];
     for case in cases().into_iter().filter(|c| wanted.contains(&c.name.as_str())) {
         let outcomes = run_case(&case, &dir, &engines).unwrap();
@@ -99,7 +99,8 @@ interval = 1.0e-6
 #[test]
 fn multi_particle_decks_run_and_match_magdem() {
     let Some(engines) = engines() else { return };
-    let dir = workdir("settling");
+    let work = workdir("settling");
+    let dir = work.path();
     let scene = Scene::parse(SETTLING, "settling").unwrap();
     let native = dir.join("magdem.h5");
     if let Err(e) = magdem::run::run(&scene, &native, &Default::default()) {
@@ -136,7 +137,8 @@ fn decks_carry_the_magnetic_fix_and_refuse_what_the_codes_cannot_express() {
     let scene = Scene::parse(&magnetic, "magnetic").unwrap();
     for engine in [Engine::Liggghts, Engine::Lammps] {
         // Magnetic terms are not refused: the deck carries the fix external magdem drives.
-        let dir = workdir(&format!("magnetic-{}", engine.name()));
+        let work = workdir(&format!("magnetic-{}", engine.name()));
+        let dir = work.path();
         let deck = reference::deck::write(engine, &scene, &dir).unwrap();
         let text = std::fs::read_to_string(dir.join(deck.input)).unwrap();
         assert!(text.contains("include fix.magnetic") && text.contains("include fix.contact"), "{text}");
@@ -144,13 +146,13 @@ fn decks_carry_the_magnetic_fix_and_refuse_what_the_codes_cannot_express() {
         assert!(fix.contains("fix magnetic all external pf/callback 1 1"), "{fix}");
     }
     let sn = Scene::parse(&SETTLING.replace("law = \"stokes\"", "law = \"schiller-naumann\""), "sn").unwrap();
-    let err = reference::deck::write(Engine::Lammps, &sn, &workdir("refuse1")).unwrap_err().to_string();
+    let err = reference::deck::write(Engine::Lammps, &sn, workdir("refuse1").path()).unwrap_err().to_string();
     assert!(err.contains("lammps cannot express forces.drag.law"), "{err}");
     let shielded = Scene::parse(&SETTLING.replace("shielding = \"none\"", "shielding = \"paper\""), "s").unwrap();
-    let err = reference::deck::write(Engine::Liggghts, &shielded, &workdir("refuse2")).unwrap_err().to_string();
+    let err = reference::deck::write(Engine::Liggghts, &shielded, workdir("refuse2").path()).unwrap_err().to_string();
     assert!(err.contains("forces.drag.shielding"), "{err}");
     let rotational = Scene::parse(&SETTLING.replace("rotational = false", "rotational = true"), "r").unwrap();
-    let err = reference::deck::write(Engine::Lammps, &rotational, &workdir("refuse3")).unwrap_err().to_string();
+    let err = reference::deck::write(Engine::Lammps, &rotational, workdir("refuse3").path()).unwrap_err().to_string();
     assert!(err.contains("rotational"), "{err}");
 }
 
@@ -163,7 +165,8 @@ fn magnetic_forces_in_lock_step_reproduce_magdem() {
     let Some(engines) = engines() else { return };
     let text = magdem::verify::magnetic::PAIR;
     let scene = Scene::parse(text, "pair").unwrap();
-    let dir = workdir("lockstep");
+    let work = workdir("lockstep");
+    let dir = work.path();
     let native = dir.join("magdem.h5");
     magdem::run::run(&scene, &native, &Default::default()).unwrap();
     let t = magdem::io::trajectory::Trajectory::open(&native).unwrap();
@@ -200,7 +203,7 @@ fn magnetic_forces_in_lock_step_reproduce_magdem() {
 fn case1_in_lock_step_tracks_magdem() {
     let Some(engines) = engines() else { return };
     let text = magdem::verify::magnetic::case1_scene(2.0e-5).unwrap();
-    let (diffs, _) = magdem::verify::magnetic::compare(&text, "case1", &workdir("case1"), &engines).unwrap();
+    let (diffs, _) = magdem::verify::magnetic::compare(&text, "case1", workdir("case1").path(), &engines).unwrap();
     for d in diffs {
         let worst = d.max.iter().fold(0.0_f64, |a, &b| a.max(b));
         println!("{}: largest position difference {worst:.3e} m", d.engine);
@@ -220,7 +223,7 @@ fn dipole_forces_match_lammps_lj_cut_dipole_cut() {
         let path = format!("{}/experiments/scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"));
         let text = std::fs::read_to_string(path).unwrap().replace("cutoff_diameters = 15.0", cutoff);
         let scene = Scene::parse(&text, name).unwrap();
-        let check = reference::dipole_check::check(&scene, &workdir(&format!("dipole-{name}"))).unwrap();
+        let check = reference::dipole_check::check(&scene, workdir(&format!("dipole-{name}")).path()).unwrap();
         println!("{name} ({}): {} particles, largest force {:.3e} N, max error {:.3e} relative", if cutoff.is_empty() { "all pairs" } else { "15 d" }, check.particles, check.largest_force, check.max_relative_error);
         assert!(check.max_relative_error < 1e-9, "{name}: {check:?}");
     }
@@ -234,13 +237,13 @@ fn files_route_agrees_with_the_callback_route_to_first_order_in_the_lag() {
     let Some(engines) = engines() else { return };
     let magdem_bin = std::path::Path::new(env!("CARGO_BIN_EXE_magdem"));
     let text = magdem::verify::magnetic::files_route_scene();
-    let rows = magdem::verify::magnetic::files_route_lag(Engine::Liggghts, &text, &workdir("files"), magdem_bin, &[30, 100]).unwrap();
+    let rows = magdem::verify::magnetic::files_route_lag(Engine::Liggghts, &text, workdir("files").path(), magdem_bin, &[30, 100]).unwrap();
     println!("liggghts files route: {rows:?}");
     let ratio = rows[1].1 / rows[0].1;
     assert!(rows[0].1 < 2e-7 && (2.5..4.5).contains(&ratio), "{rows:?}");
     // LAMMPS' binary accepts the same files-route deck.
     if engines.contains(&Engine::Lammps) {
-        let rows = magdem::verify::magnetic::files_route_lag(Engine::Lammps, &text, &workdir("files-lammps"), magdem_bin, &[300]).unwrap();
+        let rows = magdem::verify::magnetic::files_route_lag(Engine::Lammps, &text, workdir("files-lammps").path(), magdem_bin, &[300]).unwrap();
         println!("lammps files route: {rows:?}");
         assert!(rows[0].1 < 2e-6, "{rows:?}");
     }

@@ -50,7 +50,8 @@ fn read_csv(path: &Path) -> DataFrame {
 
 #[test]
 fn report_tables_are_the_analysis_of_the_runs() {
-    let dir = std::env::temp_dir().join(format!("magdem-report-{}", std::process::id()));
+    let work = tempfile::Builder::new().prefix("magdem-report-").tempdir().unwrap();
+    let dir = work.path();
     let experiments = dir.join("experiments");
     std::fs::create_dir_all(&experiments).unwrap();
     std::fs::write(dir.join("case1-c0.563.toml"), scene()).unwrap();

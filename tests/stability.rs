@@ -83,8 +83,8 @@ fn velocity_verlet_below_its_bound_survives_the_same_collision() {
 
 #[test]
 fn cli_reports_instability_with_exit_code_3_and_keeps_the_file() {
-    let dir = std::env::temp_dir().join(format!("magdem-unstable-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let work = tempfile::Builder::new().prefix("magdem-unstable-").tempdir().unwrap();
+    let dir = work.path();
     let (scene, out) = (dir.join("s.toml"), dir.join("s.h5"));
     std::fs::write(&scene, collision("explicit-euler", 2.0e-8)).unwrap();
     let run = Command::new(env!("CARGO_BIN_EXE_magdem")).args(["run", scene.to_str().unwrap(), "-q", "-o", out.to_str().unwrap()]).output().unwrap();

@@ -4,8 +4,9 @@
 mod common;
 
 use magdem::io::trajectory::Trajectory;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
+use tempfile::TempDir;
 
 /// 60 magnetic particles at high concentration with contacts, walls, drag and gravity: contact
 /// history, stored moments and forces all matter for the continuation.
@@ -37,11 +38,11 @@ forces = true
     )
 }
 
-fn workdir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("magdem-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join("scene.toml"), scene_text()).unwrap();
-    dir
+/// A fresh directory holding scene.toml, removed when the returned guard drops.
+fn workdir(name: &str) -> TempDir {
+    let work = tempfile::Builder::new().prefix(&format!("magdem-{name}-")).tempdir().unwrap();
+    std::fs::write(work.path().join("scene.toml"), scene_text()).unwrap();
+    work
 }
 
 fn magdem(args: &[&str]) -> std::process::Output {
@@ -97,7 +98,8 @@ fn resume_after_kill_is_bitwise_equal_with_the_adaptive_step() {
 /// every phase of this scene is reported with a share, the shares adding to 100%.
 #[test]
 fn timings_do_not_change_the_trajectory() {
-    let dir = workdir("timings");
+    let work = workdir("timings");
+    let dir = work.path();
     let scene = dir.join("scene.toml");
     std::fs::write(&scene, scene_text().replace("end_time = 3.0e-4", "end_time = 1.0e-4")).unwrap();
     let (plain, timed) = (dir.join("plain.h5"), dir.join("timed.h5"));
@@ -125,7 +127,8 @@ fn timings_do_not_change_the_trajectory() {
 }
 
 fn resume_after_kill(name: &str, text: &str) {
-    let dir = workdir(name);
+    let work = workdir(name);
+    let dir = work.path();
     std::fs::write(dir.join("scene.toml"), text).unwrap();
     let scene = dir.join("scene.toml");
     let (full, killed) = (dir.join("full.h5"), dir.join("killed.h5"));
@@ -157,7 +160,8 @@ fn resume_after_kill(name: &str, text: &str) {
 
 #[test]
 fn ctrl_c_checkpoints_and_the_run_resumes_to_the_same_end() {
-    let dir = workdir("sigint");
+    let work = workdir("sigint");
+    let dir = work.path();
     let scene = dir.join("scene.toml");
     let (full, interrupted) = (dir.join("full.h5"), dir.join("interrupted.h5"));
     let long = scene_text().replace("end_time = 3.0e-4", "end_time = 1.5e-3");
@@ -192,7 +196,8 @@ fn ctrl_c_checkpoints_and_the_run_resumes_to_the_same_end() {
 /// The file opens in h5py with the documented layout (h5dump when Python/h5py is absent).
 #[test]
 fn trajectory_is_readable_from_python() {
-    let dir = workdir("h5py");
+    let work = workdir("h5py");
+    let dir = work.path();
     let scene = dir.join("scene.toml");
     let file = dir.join("run.h5");
     std::fs::write(&scene, scene_text().replace("end_time = 3.0e-4", "end_time = 4.0e-5")).unwrap();
