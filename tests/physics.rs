@@ -68,6 +68,41 @@ fn hertz_elastic_impact_matches_closed_form() {
     assert!((rebound / v - 1.0).abs() < 1e-3, "rebound {rebound} vs {v}");
 }
 
+/// Unlike spheres (densities 1087 and 5000 kg/m³) meeting head-on, elastic: each keeps its own
+/// mass through the kicks, so the momentum is conserved to round-off and the rebound velocities
+/// are those of a 1-D elastic collision, v1' = ((m1 − m2) v1 + 2 m2 v2)/(m1 + m2).
+#[test]
+fn unlike_spheres_rebound_as_an_elastic_collision_of_their_masses() {
+    let (a, v1, v2): (f64, f64, f64) = (5.5e-6, 0.05, -0.02);
+    let heavy = species("restitution = 1.0").replace("\"p\"", "\"q\"").replace("1087.0", "5000.0");
+    let s = scene(&format!(
+        "{}{heavy}[[particles]]\nspecies = \"p\"\npositions = [[-{x:e}, 0, 0]]\nvelocities = [[{v1}, 0, 0]]\n\
+         [[particles]]\nspecies = \"q\"\npositions = [[{x:e}, 0, 0]]\nvelocities = [[{v2}, 0, 0]]\n\
+         [forces.contact]\n[integration]\ndt = 1.0e-11\nend_time = 1.0\n",
+        species("restitution = 1.0"),
+        x = a + 1e-9
+    ));
+    let (m1, m2) = (s.species[0].mass(), s.species[1].mass());
+    assert!(m2 > 4.0 * m1);
+    let mut sim = s.simulation(None);
+    sim.initialise().unwrap();
+    let separated = |p: &Particles| (p.position[1] - p.position[0]).norm() > 2.0 * a + 2e-9;
+    let mut touched = false;
+    while !(touched && separated(&sim.state.particles)) {
+        sim.step().unwrap();
+        touched |= !separated(&sim.state.particles);
+    }
+    let u = &sim.state.particles.velocity;
+    let momentum = m1 * u[0].x + m2 * u[1].x;
+    let before = m1 * v1 + m2 * v2;
+    assert!((momentum / before - 1.0).abs() < 1e-9, "momentum {momentum:e} vs {before:e}");
+    let expected = [((m1 - m2) * v1 + 2.0 * m2 * v2) / (m1 + m2), ((m2 - m1) * v2 + 2.0 * m1 * v1) / (m1 + m2)];
+    println!("rebound {:.6} {:.6} m/s (elastic collision {:.6} {:.6})", u[0].x, u[1].x, expected[0], expected[1]);
+    for k in 0..2 {
+        assert!((u[k].x - expected[k]).abs() < 1e-3 * (v1 - v2), "particle {k}: {} vs {}", u[k].x, expected[k]);
+    }
+}
+
 fn two_dipoles(induction: &str, r0: f64, density: f64) -> Scene {
     scene(&format!(
         "{WATER}[field]\nb0 = [0.4, 0, 0]\n{}[[particles]]\nspecies = \"p\"\npositions = [[-{h:e}, 0, 0], [{h:e}, 0, 0]]\n\

@@ -18,7 +18,7 @@ pub use velocity_verlet::VelocityVerlet;
 
 use super::simulation::ForceGroup;
 use super::parallel;
-use super::state::{Particles, State, Vec3};
+use super::state::{InverseMasses, Particles, State, Vec3};
 use rayon::prelude::*;
 
 /// Re-evaluates one group of forces and torques for the state as it stands, at the end of a
@@ -59,25 +59,33 @@ pub fn by_name(name: &str, slow_every: u64, tolerance: f64) -> Option<Box<dyn In
 
 /// v += F/m h, ω += T/I h.
 fn kick(p: &mut Particles, h: f64) {
-    kick_by(&mut p.velocity, &mut p.angular_velocity, &p.force, &p.torque, &p.inv_mass, &p.inv_inertia, h);
+    kick_by(&mut p.velocity, &mut p.angular_velocity, &p.force, &p.torque, &p.inverse_masses, h);
 }
 
 /// v += F_slow/m h, ω += T_slow/I h.
 fn slow_kick(p: &mut Particles, h: f64) {
-    kick_by(&mut p.velocity, &mut p.angular_velocity, &p.slow_force, &p.slow_torque, &p.inv_mass, &p.inv_inertia, h);
+    kick_by(&mut p.velocity, &mut p.angular_velocity, &p.slow_force, &p.slow_torque, &p.inverse_masses, h);
 }
 
-fn kick_by(velocity: &mut [Vec3], spin: &mut [Vec3], force: &[Vec3], torque: &[Vec3], inv_mass: &[f64], inv_inertia: &[f64], h: f64) {
-    let kick = |(((v, w), (f, t)), (inv_m, inv_i)): (((&mut Vec3, &mut Vec3), (&Vec3, &Vec3)), (&f64, &f64))| {
+fn kick_by(velocity: &mut [Vec3], spin: &mut [Vec3], force: &[Vec3], torque: &[Vec3], inverse: &InverseMasses, h: f64) {
+    let kick = |((v, w), (f, t)): ((&mut Vec3, &mut Vec3), (&Vec3, &Vec3)), inv_m: f64, inv_i: f64| {
         *v += f * (h * inv_m);
         *w += t * (h * inv_i);
     };
     if parallel::worth_it(velocity.len()) {
         let state = velocity.par_iter_mut().zip(spin).zip(force.par_iter().zip(torque));
-        state.zip(inv_mass.par_iter().zip(inv_inertia)).with_min_len(parallel::CHUNK).for_each(kick);
+        match inverse {
+            InverseMasses::Uniform { mass, inertia } => state.with_min_len(parallel::CHUNK).for_each(|s| kick(s, *mass, *inertia)),
+            InverseMasses::PerParticle { mass, inertia } => {
+                state.zip(mass.par_iter().zip(inertia)).with_min_len(parallel::CHUNK).for_each(|(s, (m, i))| kick(s, *m, *i))
+            }
+        }
     } else {
         let state = velocity.iter_mut().zip(spin).zip(force.iter().zip(torque));
-        state.zip(inv_mass.iter().zip(inv_inertia)).for_each(kick);
+        match inverse {
+            InverseMasses::Uniform { mass, inertia } => state.for_each(|s| kick(s, *mass, *inertia)),
+            InverseMasses::PerParticle { mass, inertia } => state.zip(mass.iter().zip(inertia)).for_each(|(s, (m, i))| kick(s, *m, *i)),
+        }
     }
 }
 
@@ -89,22 +97,28 @@ fn drift(p: &mut Particles, h: f64) {
 /// A kick by `kick` then a drift by `drift` in one pass over the particles (the same arithmetic
 /// as [`kick`] followed by [`drift`]).
 fn kick_drift(p: &mut Particles, kick: f64, drift: f64) {
-    type Item<'a> = (((((&'a mut Vec3, &'a mut Vec3), &'a mut Vec3), &'a Vec3), &'a Vec3), (&'a f64, &'a f64));
-    let step = |(((((x, v), w), f), t), (inv_m, inv_i)): Item| {
+    type Item<'a> = ((((&'a mut Vec3, &'a mut Vec3), &'a mut Vec3), &'a Vec3), &'a Vec3);
+    let step = |((((x, v), w), f), t): Item, inv_m: f64, inv_i: f64| {
         if kick != 0.0 {
             *v += f * (kick * inv_m);
             *w += t * (kick * inv_i);
         }
         *x += *v * drift;
     };
-    let per_particle = p.inv_mass.iter().zip(&p.inv_inertia);
     if parallel::worth_it(p.len()) {
-        let per_particle = p.inv_mass.par_iter().zip(&p.inv_inertia);
         let arrays = p.position.par_iter_mut().zip(&mut p.velocity).zip(&mut p.angular_velocity).zip(&p.force).zip(&p.torque);
-        arrays.zip(per_particle).with_min_len(parallel::CHUNK).for_each(step);
+        match &p.inverse_masses {
+            InverseMasses::Uniform { mass, inertia } => arrays.with_min_len(parallel::CHUNK).for_each(|a| step(a, *mass, *inertia)),
+            InverseMasses::PerParticle { mass, inertia } => {
+                arrays.zip(mass.par_iter().zip(inertia)).with_min_len(parallel::CHUNK).for_each(|(a, (m, i))| step(a, *m, *i))
+            }
+        }
     } else {
         let arrays = p.position.iter_mut().zip(&mut p.velocity).zip(&mut p.angular_velocity).zip(&p.force).zip(&p.torque);
-        arrays.zip(per_particle).for_each(step);
+        match &p.inverse_masses {
+            InverseMasses::Uniform { mass, inertia } => arrays.for_each(|a| step(a, *mass, *inertia)),
+            InverseMasses::PerParticle { mass, inertia } => arrays.zip(mass.iter().zip(inertia)).for_each(|(a, (m, i))| step(a, *m, *i)),
+        }
     }
     if p.has_permanent_moments {
         let turn = |(m, w): (&mut Vec3, &Vec3)| {
