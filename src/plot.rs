@@ -96,6 +96,31 @@ pub fn line_chart_with_legend(
     series: &[Series],
     legend: SeriesLabelPosition,
 ) -> Result<(), Box<dyn std::error::Error>> {
+    draw_line_chart(path, title, x_label, y_label, series, legend, 0.0)
+}
+
+/// [`line_chart`] with the y axis extended above the data by `headroom` times their range, for a
+/// legend that would cover data anywhere else.
+pub fn line_chart_with_headroom(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+    headroom: f64,
+) -> Result<(), Box<dyn std::error::Error>> {
+    draw_line_chart(path, title, x_label, y_label, series, SeriesLabelPosition::UpperLeft, headroom)
+}
+
+fn draw_line_chart(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+    legend: SeriesLabelPosition,
+    headroom: f64,
+) -> Result<(), Box<dyn std::error::Error>> {
     register_font()?;
     let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
     for s in series {
@@ -112,7 +137,7 @@ pub fn line_chart_with_legend(
         (lo - 0.05 * d, hi + 0.05 * d)
     };
     let (x0, x1) = pad(x0, x1);
-    let (y0, y1) = pad(y0, y1);
+    let (y0, y1) = pad(y0, y1 + headroom * (y1 - y0));
     let root = BitMapBackend::new(path, (960, 640)).into_drawing_area();
     root.fill(&WHITE)?;
     let mut chart = ChartBuilder::on(&root)
