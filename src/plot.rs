@@ -87,6 +87,26 @@ pub fn line_chart(path: &Path, title: &str, x_label: &str, y_label: &str, series
     line_chart_with_legend(path, title, x_label, y_label, series, SeriesLabelPosition::UpperLeft)
 }
 
+/// Where a chart's legend goes: a corner or edge, and how far the y axis extends above the data
+/// (as a fraction of their range) to make room for it.
+pub struct Legend {
+    pub position: SeriesLabelPosition,
+    pub headroom: f64,
+}
+
+impl Legend {
+    /// Upper left, above the data: for a chart whose every corner holds points.
+    pub fn above_data(headroom: f64) -> Self {
+        Legend { position: SeriesLabelPosition::UpperLeft, headroom }
+    }
+}
+
+impl From<SeriesLabelPosition> for Legend {
+    fn from(position: SeriesLabelPosition) -> Self {
+        Legend { position, headroom: 0.0 }
+    }
+}
+
 /// [`line_chart`] with the legend where the data leave room.
 pub fn line_chart_with_legend(
     path: &Path,
@@ -94,34 +114,10 @@ pub fn line_chart_with_legend(
     x_label: &str,
     y_label: &str,
     series: &[Series],
-    legend: SeriesLabelPosition,
-) -> Result<(), Box<dyn std::error::Error>> {
-    draw_line_chart(path, title, x_label, y_label, series, legend, 0.0)
-}
-
-/// [`line_chart`] with the y axis extended above the data by `headroom` times their range, for a
-/// legend that would cover data anywhere else.
-pub fn line_chart_with_headroom(
-    path: &Path,
-    title: &str,
-    x_label: &str,
-    y_label: &str,
-    series: &[Series],
-    headroom: f64,
-) -> Result<(), Box<dyn std::error::Error>> {
-    draw_line_chart(path, title, x_label, y_label, series, SeriesLabelPosition::UpperLeft, headroom)
-}
-
-fn draw_line_chart(
-    path: &Path,
-    title: &str,
-    x_label: &str,
-    y_label: &str,
-    series: &[Series],
-    legend: SeriesLabelPosition,
-    headroom: f64,
+    legend: impl Into<Legend>,
 ) -> Result<(), Box<dyn std::error::Error>> {
     register_font()?;
+    let legend = legend.into();
     let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
     for s in series {
         for (k, &(x, y)) in s.points.iter().enumerate() {
@@ -137,7 +133,7 @@ fn draw_line_chart(
         (lo - 0.05 * d, hi + 0.05 * d)
     };
     let (x0, x1) = pad(x0, x1);
-    let (y0, y1) = pad(y0, y1 + headroom * (y1 - y0));
+    let (y0, y1) = pad(y0, y1 + legend.headroom * (y1 - y0));
     let root = BitMapBackend::new(path, (960, 640)).into_drawing_area();
     root.fill(&WHITE)?;
     let mut chart = ChartBuilder::on(&root)
@@ -180,7 +176,7 @@ fn draw_line_chart(
         .label_font(("sans-serif", 16))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
-        .position(legend)
+        .position(legend.position)
         .draw()?;
     root.present()?;
     Ok(())

@@ -1,7 +1,7 @@
 //! The measurements of `magdem bench` and `reports/performance.md`.
 
 use super::*;
-use crate::plot::{line_chart_with_headroom, palette, RGBColor, Series};
+use crate::plot::{line_chart_with_legend, palette, Legend, RGBColor, Series};
 use crate::reference::dipole_check;
 use std::fmt::Write as _;
 
@@ -341,7 +341,7 @@ fn scaling_figure(path: &Path, rows: &[Measurement]) -> Result<(), Error> {
     }
     series.retain(|s| !s.points.is_empty());
     // The legend above the data: every other corner of this chart holds points.
-    line_chart_with_headroom(path, "Cost per particle and step against N (flat = linear in N)", "log10 N (particles)", "log10 ns per particle-step", &series, 0.5)
+    line_chart_with_legend(path, "Cost per particle and step against N (flat = linear in N)", "log10 N (particles)", "log10 ns per particle-step", &series, Legend::above_data(0.5))
     .map_err(|e| e.to_string().into())
 }
 
