@@ -107,6 +107,13 @@ impl Bench<'_> {
         self.measurements.iter().find(|m| m.case == case && m.engine == engine && m.threads == threads)
     }
 
+    /// Nanoseconds per force evaluation and pair within the cut-off (each counted once) at the
+    /// median, for a run of the dipole scaling scene whose pairs were counted.
+    fn ns_per_pair(&self, m: &Measurement) -> Option<f64> {
+        let (_, pairs) = self.dipole_pairs.iter().find(|(n, _)| *n == m.particles)?;
+        Some(m.seconds.median / (m.steps as f64 * *pairs as f64) * 1e9)
+    }
+
     fn contact_cases(&mut self, progress: &indicatif::ProgressBar) -> Result<(), Error> {
         for packing in [Packing::Sparse, Packing::Dense] {
             for n in [300, 3000, 30000] {
@@ -380,19 +387,17 @@ fn targets(bench: &Bench) -> String {
     }
     for case in ["scaling contact sparse", "scaling contact dense", "scaling dipole cut-off 15 d"] {
         let runs: Vec<&Measurement> = bench.measurements.iter().filter(|m| m.case == case && m.threads == 1).collect();
-        let pairs = |m: &Measurement| bench.dipole_pairs.iter().find(|(n, _)| *n == m.particles && case.contains("dipole"));
-        let cost = |m: &Measurement| match pairs(m) {
-            Some((_, pairs)) => m.seconds.median / (m.steps as f64 * *pairs as f64),
-            None => m.ns_per_particle_step(),
-        };
-        if let (Some(small), Some(large)) = (runs.iter().min_by_key(|m| m.particles), runs.iter().max_by_key(|m| m.particles)) {
-            let unit = if case.contains("dipole") { "per pair" } else { "per particle-step" };
+        let dipoles = case.contains("dipole");
+        let cost = |m: &Measurement| if dipoles { bench.ns_per_pair(m) } else { Some(m.ns_per_particle_step()) };
+        let (Some(small), Some(large)) = (runs.iter().min_by_key(|m| m.particles), runs.iter().max_by_key(|m| m.particles)) else { continue };
+        if let (Some(small_cost), Some(large_cost)) = (cost(small), cost(large)) {
+            let unit = if dipoles { "per pair" } else { "per particle-step" };
             lines.push(format!(
                 "{}: cost {unit} at N = {} ÷ at N = {}: {:.2} (1 for exactly linear growth; see the table below)",
                 case.trim_start_matches("scaling "),
                 large.particles,
                 small.particles,
-                cost(large) / cost(small)
+                large_cost / small_cost
             ));
         }
     }
@@ -491,11 +496,7 @@ fn markdown(bench: &Bench, agreement: &[(String, f64)]) -> String {
     let _ = write!(s, "| dipole cut-off 15 d: ns per pair | 1 |");
     for n in &sizes {
         let m = bench.measurements.iter().find(|m| m.case == "scaling dipole cut-off 15 d" && m.particles == *n);
-        let pairs = bench.dipole_pairs.iter().find(|(k, _)| k == n);
-        let _ = write!(s, " {} |", match (m, pairs) {
-            (Some(m), Some((_, p))) => format!("{:.1} ns", m.seconds.median / (m.steps as f64 * *p as f64) * 1e9),
-            _ => "–".into(),
-        });
+        let _ = write!(s, " {} |", m.and_then(|m| bench.ns_per_pair(m)).map_or("–".into(), |ns| format!("{ns:.1} ns")));
     }
     s += "\n";
     for (case, threads) in [("scaling contact sparse", 1), ("scaling contact dense", 1), ("scaling dipole cut-off 15 d", 1)] {

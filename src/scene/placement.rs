@@ -78,7 +78,6 @@ pub fn place_random(
     Ok(placed)
 }
 
-/// The position and its periodic images one box length away along periodic axes.
 /// `positions` sorted along a Morton (Z-order) curve through cubic cells of edge `cell` from the
 /// box's low corner (ties keep their order): neighbours in space become neighbours in memory.
 pub fn morton_order(mut positions: Vec<Vec3>, cell: f64, domain: &Domain) -> Vec<Vec3> {
@@ -92,6 +91,7 @@ pub fn morton_order(mut positions: Vec<Vec3>, cell: f64, domain: &Domain) -> Vec
     positions
 }
 
+/// The position and its periodic images one box length away along periodic axes.
 fn periodic_images(x: &Vec3, domain: &Domain) -> Vec<Vec3> {
     let mut images = vec![*x];
     let len = domain.length();
