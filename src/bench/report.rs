@@ -64,43 +64,75 @@ struct MpiRun {
     max_difference: Option<f64>,
 }
 
-impl Bench<'_> {
-    fn magdem(&mut self, case: &str, scene: &Scene, threads: usize, work: Work, profile: bool) -> Result<MagdemRun, Error> {
-        let mut times = vec![];
-        let mut last = None;
-        for _ in 0..self.options.repeats {
+/// One contender of a case: who runs, on how many threads, and one timed run (seconds).
+struct Contender<'a> {
+    engine: &'static str,
+    threads: usize,
+    run: Box<dyn FnMut() -> Result<f64, Error> + 'a>,
+}
+
+impl<'a> Contender<'a> {
+    /// magdem on `threads` threads; each run's finished simulation goes to `last`.
+    fn magdem(scene: &'a Scene, threads: usize, work: Work, last: &'a mut Option<MagdemRun>) -> Self {
+        let run = move || {
             let run = time_magdem(scene, threads, work, false)?;
-            times.push(run.seconds);
-            last = Some(run);
-        }
-        let run = last.expect("at least one repeat");
-        let particles = run.simulation.state.particles.len();
-        self.measurements.push(Measurement { case: case.into(), engine: "magdem", threads, particles, steps: scene.total_steps(), seconds: Spread::of(&times) });
-        if profile {
-            let profiled = time_magdem(scene, threads, work, true)?;
-            let timers = profiled.simulation.timers();
-            let total: f64 = timers.phases().iter().map(|(_, d)| d.as_secs_f64()).sum();
-            let shares = timers.phases().iter().map(|(n, d)| (*n, d.as_secs_f64() / total)).collect();
-            self.profiles.push((case.into(), shares));
-        }
-        Ok(run)
+            let seconds = run.seconds;
+            *last = Some(run);
+            Ok(seconds)
+        };
+        Contender { engine: "magdem", threads, run: Box::new(run) }
     }
 
-    fn engine(&mut self, case: &str, engine: Engine, particles: usize, steps: u64, mut run: impl FnMut() -> Result<f64, Error>) {
-        if !engine.available() {
-            return;
-        }
-        let mut times = vec![];
+    /// A reference engine (one process), if installed.
+    fn engine(engine: Engine, run: impl FnMut() -> Result<f64, Error> + 'a) -> Option<Self> {
+        engine.available().then(|| Contender { engine: engine.name(), threads: 1, run: Box::new(run) })
+    }
+}
+
+impl Bench<'_> {
+    /// Times the contenders of `case` in turns, one run of each per turn, so that a shared
+    /// machine's changing load falls on all of them alike rather than on whichever ran last. A
+    /// reference engine that fails is noted and left out; a magdem failure ends the bench.
+    fn compare(&mut self, case: &str, particles: usize, steps: u64, contenders: Vec<Contender>) -> Result<(), Error> {
+        let mut contenders: Vec<(Contender, Vec<f64>)> = contenders.into_iter().map(|c| (c, vec![])).collect();
         for _ in 0..self.options.repeats {
-            match run() {
-                Ok(t) => times.push(t),
-                Err(e) => {
-                    self.notes.push(format!("{} on {case}: {e}", engine.name()));
-                    return;
+            let mut k = 0;
+            while k < contenders.len() {
+                let (contender, times) = &mut contenders[k];
+                match (contender.run)() {
+                    Ok(t) => times.push(t),
+                    Err(e) if contender.engine == "magdem" => return Err(e),
+                    Err(e) => {
+                        self.notes.push(format!("{} on {case}: {e}", contender.engine));
+                        contenders.remove(k);
+                        continue;
+                    }
                 }
+                k += 1;
             }
         }
-        self.measurements.push(Measurement { case: case.into(), engine: engine.name(), threads: 1, particles, steps, seconds: Spread::of(&times) });
+        for (c, times) in contenders {
+            self.measurements.push(Measurement { case: case.into(), engine: c.engine, threads: c.threads, particles, steps, seconds: Spread::of(&times) });
+        }
+        Ok(())
+    }
+
+    /// magdem alone on `threads` threads (the scaling study), `repeats` runs; returns the last.
+    fn magdem(&mut self, case: &str, scene: &Scene, threads: usize, work: Work) -> Result<MagdemRun, Error> {
+        let mut last = None;
+        let contender = Contender::magdem(scene, threads, work, &mut last);
+        self.compare(case, scene.initial.len(), scene.total_steps(), vec![contender])?;
+        Ok(last.expect("at least one repeat"))
+    }
+
+    /// The phase shares of one more single-thread run with the phase timers on.
+    fn profile(&mut self, case: &str, scene: &Scene, work: Work) -> Result<(), Error> {
+        let profiled = time_magdem(scene, 1, work, true)?;
+        let timers = profiled.simulation.timers();
+        let total: f64 = timers.phases().iter().map(|(_, d)| d.as_secs_f64()).sum();
+        let shares = timers.phases().iter().map(|(n, d)| (*n, d.as_secs_f64() / total)).collect();
+        self.profiles.push((case.into(), shares));
+        Ok(())
     }
 
     fn find(&self, case: &str, engine: &str, threads: usize) -> Option<&Measurement> {
@@ -122,14 +154,19 @@ impl Bench<'_> {
                 let steps = contact_steps(n);
                 let dir = self.options.work.join(format!("contact-{}-{n}", packing.name()));
                 let scene = scene_in(&dir, "scene", &contact_scene(packing, n, steps))?;
-                let one = self.magdem(&case, &scene, 1, Work::Steps, true)?;
-                let two = self.magdem(&case, &scene, 2, Work::Steps, false)?;
+                let (mut one, mut two) = (None, None);
+                let mut contenders = vec![Contender::magdem(&scene, 1, Work::Steps, &mut one), Contender::magdem(&scene, 2, Work::Steps, &mut two)];
+                for engine in [Engine::Liggghts, Engine::Lammps] {
+                    let (scene, engine_dir) = (&scene, dir.join(engine.name()));
+                    contenders.extend(Contender::engine(engine, move || time_engine_scene(engine, scene, &engine_dir)));
+                }
+                self.compare(&case, n, steps, contenders)?;
+                let (one, two) = (one.expect("one-thread runs"), two.expect("two-thread runs"));
                 self.bitwise.push((case.clone(), bitwise_equal(&one.simulation, &two.simulation)));
                 for engine in [Engine::Liggghts, Engine::Lammps] {
-                    let engine_dir = dir.join(engine.name());
-                    self.engine(&case, engine, n, steps, || time_engine_scene(engine, &scene, &engine_dir));
-                    self.record_version(&engine_dir);
+                    self.record_version(&dir.join(engine.name()));
                 }
+                self.profile(&case, &scene, Work::Steps)?;
                 progress.inc(1);
             }
         }
@@ -153,9 +190,12 @@ impl Bench<'_> {
             progress.set_message(case.clone());
             let dir = self.options.work.join(format!("dipole-{}", label.replace(' ', "-")));
             let scene = scene_in(&dir, "scene", &magnetic_scene(307, cutoff, steps))?;
-            self.magdem(&case, &scene, 1, Work::Forces, true)?;
+            let mut last = None;
             let lammps_dir = dir.join("lammps");
-            self.engine(&case, Engine::Lammps, scene.initial.len(), steps, || time_lammps_dipoles(&scene, &lammps_dir));
+            let mut contenders = vec![Contender::magdem(&scene, 1, Work::Forces, &mut last)];
+            contenders.extend(Contender::engine(Engine::Lammps, || time_lammps_dipoles(&scene, &lammps_dir)));
+            self.compare(&case, scene.initial.len(), steps, contenders)?;
+            self.profile(&case, &scene, Work::Forces)?;
             if Engine::Lammps.available() {
                 match dipole_check::check(&scene, &dir.join("force-check")) {
                     Ok(check) => agreement.push((case.clone(), check.max_relative_error)),
@@ -175,11 +215,11 @@ impl Bench<'_> {
                 let steps = (1e7 / n as f64).round().max(100.0) as u64;
                 let scene = scene_in(&dir, &format!("contact-{}", packing.name()), &contact_scene(packing, n, steps))?;
                 let case = format!("scaling contact {}", packing.name());
-                let run = self.magdem(&case, &scene, 1, Work::Steps, false)?;
+                let run = self.magdem(&case, &scene, 1, Work::Steps)?;
                 self.memory.push((case.clone(), n, run.memory as f64 / n as f64));
                 drop(run);
                 if packing == Packing::Dense {
-                    self.magdem(&case, &scene, 2, Work::Steps, false)?;
+                    self.magdem(&case, &scene, 2, Work::Steps)?;
                 }
             }
             let steps = (2e6 / n as f64).round().max(20.0) as u64;
@@ -190,7 +230,7 @@ impl Bench<'_> {
             crate::core::neighbours::CellList::default().pairs_within(&scene.initial.position, &scene.domain, Some(15.0 * largest_d), &mut pairs);
             self.dipole_pairs.push((n, pairs.len()));
             drop(pairs);
-            let run = self.magdem(&case, &scene, 1, Work::Forces, false)?;
+            let run = self.magdem(&case, &scene, 1, Work::Forces)?;
             self.memory.push((case, n, run.memory as f64 / n as f64));
             progress.inc(1);
         }
@@ -425,7 +465,7 @@ fn markdown(bench: &Bench, agreement: &[(String, f64)]) -> String {
     );
     let _ = writeln!(
         s,
-        "Times are loop times in seconds, min / median / max of {} runs: magdem around its step loop (no output), LIGGGHTS and LAMMPS as the `Loop time` of their logs, each engine a separate process running the deck `magdem deck` writes for the same scene (same particles, dt = 1e-8 s, same output interval). Ratios compare medians (particle-steps per second). The scenes, decks and logs are under `{}`; the numbers are in `performance.csv`.\n",
+        "Times are loop times in seconds, min / median / max of {} runs: magdem around its step loop (no output), LIGGGHTS and LAMMPS as the `Loop time` of their logs, each engine a separate process running the deck `magdem deck` writes for the same scene (same particles, dt = 1e-8 s, same output interval). The contenders of a case run in turns (one run of each, then the next round), so that a shared machine's changing load falls on all of them alike. Ratios compare medians (particle-steps per second). The scenes, decks and logs are under `{}`; the numbers are in `performance.csv`.\n",
         o.repeats,
         o.work.display()
     );
