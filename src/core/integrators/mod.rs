@@ -68,24 +68,44 @@ fn slow_kick(p: &mut Particles, h: f64) {
 }
 
 fn kick_by(velocity: &mut [Vec3], spin: &mut [Vec3], force: &[Vec3], torque: &[Vec3], inverse: &InverseMasses, h: f64) {
-    let kick = |((v, w), (f, t)): ((&mut Vec3, &mut Vec3), (&Vec3, &Vec3)), inv_m: f64, inv_i: f64| {
-        *v += f * (h * inv_m);
-        *w += t * (h * inv_i);
-    };
-    if parallel::worth_it(velocity.len()) {
-        let state = velocity.par_iter_mut().zip(spin).zip(force.par_iter().zip(torque));
-        match inverse {
-            InverseMasses::Uniform { mass, inertia } => state.with_min_len(parallel::CHUNK).for_each(|s| kick(s, *mass, *inertia)),
-            InverseMasses::PerParticle { mass, inertia } => {
+    match inverse {
+        InverseMasses::Uniform { mass, inertia } => {
+            add_scaled(components_mut(velocity), components(force), h * mass);
+            add_scaled(components_mut(spin), components(torque), h * inertia);
+        }
+        InverseMasses::PerParticle { mass, inertia } => {
+            let kick = |((v, w), (f, t)): ((&mut Vec3, &mut Vec3), (&Vec3, &Vec3)), inv_m: f64, inv_i: f64| {
+                *v += f * (h * inv_m);
+                *w += t * (h * inv_i);
+            };
+            let masses = mass.iter().zip(inertia);
+            if parallel::worth_it(velocity.len()) {
+                let state = velocity.par_iter_mut().zip(spin).zip(force.par_iter().zip(torque));
                 state.zip(mass.par_iter().zip(inertia)).with_min_len(parallel::CHUNK).for_each(|(s, (m, i))| kick(s, *m, *i))
+            } else {
+                velocity.iter_mut().zip(spin).zip(force.iter().zip(torque)).zip(masses).for_each(|(s, (m, i))| kick(s, *m, *i))
             }
         }
+    }
+}
+
+/// The components of vectors as one slice (x₀, y₀, z₀, x₁, …): a loop over it is SIMD across
+/// particles, where a loop over the vectors works on one particle's three components at a time.
+fn components(v: &[Vec3]) -> &[f64] {
+    bytemuck::cast_slice(v)
+}
+
+fn components_mut(v: &mut [Vec3]) -> &mut [f64] {
+    bytemuck::cast_slice_mut(v)
+}
+
+/// a += b c, componentwise (the same arithmetic as `a += b * c` on the vectors).
+fn add_scaled(a: &mut [f64], b: &[f64], c: f64) {
+    let add = |(a, b): (&mut f64, &f64)| *a += b * c;
+    if parallel::worth_it(a.len() / 3) {
+        a.par_iter_mut().zip(b).with_min_len(3 * parallel::CHUNK).for_each(add);
     } else {
-        let state = velocity.iter_mut().zip(spin).zip(force.iter().zip(torque));
-        match inverse {
-            InverseMasses::Uniform { mass, inertia } => state.for_each(|s| kick(s, *mass, *inertia)),
-            InverseMasses::PerParticle { mass, inertia } => state.zip(mass.iter().zip(inertia)).for_each(|(s, (m, i))| kick(s, *m, *i)),
-        }
+        a.iter_mut().zip(b).for_each(add);
     }
 }
 
@@ -97,27 +117,41 @@ fn drift(p: &mut Particles, h: f64) {
 /// A kick by `kick` then a drift by `drift` in one pass over the particles (the same arithmetic
 /// as [`kick`] followed by [`drift`]).
 fn kick_drift(p: &mut Particles, kick: f64, drift: f64) {
-    type Item<'a> = ((((&'a mut Vec3, &'a mut Vec3), &'a mut Vec3), &'a Vec3), &'a Vec3);
-    let step = |((((x, v), w), f), t): Item, inv_m: f64, inv_i: f64| {
-        if kick != 0.0 {
-            *v += f * (kick * inv_m);
-            *w += t * (kick * inv_i);
+    if let InverseMasses::Uniform { mass, inertia } = p.inverse_masses {
+        // v += F/m kick, x += v drift, component by component; ω += T/I kick.
+        let in_parallel = parallel::worth_it(p.len());
+        let (x, v, f) = (components_mut(&mut p.position), components_mut(&mut p.velocity), components(&p.force));
+        let c = kick * mass;
+        let kick_and_drift = |((x, v), f): ((&mut f64, &mut f64), &f64)| {
+            *v += f * c;
+            *x += *v * drift;
+        };
+        let only_drift = |(x, v): (&mut f64, &mut f64)| *x += *v * drift;
+        match (in_parallel, kick != 0.0) {
+            (true, true) => x.par_iter_mut().zip(v).zip(f).with_min_len(3 * parallel::CHUNK).for_each(kick_and_drift),
+            (true, false) => x.par_iter_mut().zip(v).with_min_len(3 * parallel::CHUNK).for_each(only_drift),
+            (false, true) => x.iter_mut().zip(v).zip(f).for_each(kick_and_drift),
+            (false, false) => x.iter_mut().zip(v).for_each(only_drift),
         }
-        *x += *v * drift;
-    };
-    if parallel::worth_it(p.len()) {
-        let arrays = p.position.par_iter_mut().zip(&mut p.velocity).zip(&mut p.angular_velocity).zip(&p.force).zip(&p.torque);
-        match &p.inverse_masses {
-            InverseMasses::Uniform { mass, inertia } => arrays.with_min_len(parallel::CHUNK).for_each(|a| step(a, *mass, *inertia)),
-            InverseMasses::PerParticle { mass, inertia } => {
-                arrays.zip(mass.par_iter().zip(inertia)).with_min_len(parallel::CHUNK).for_each(|(a, (m, i))| step(a, *m, *i))
-            }
+        if kick != 0.0 {
+            add_scaled(components_mut(&mut p.angular_velocity), components(&p.torque), kick * inertia);
         }
     } else {
-        let arrays = p.position.iter_mut().zip(&mut p.velocity).zip(&mut p.angular_velocity).zip(&p.force).zip(&p.torque);
-        match &p.inverse_masses {
-            InverseMasses::Uniform { mass, inertia } => arrays.for_each(|a| step(a, *mass, *inertia)),
-            InverseMasses::PerParticle { mass, inertia } => arrays.zip(mass.iter().zip(inertia)).for_each(|(a, (m, i))| step(a, *m, *i)),
+        type Item<'a> = ((((&'a mut Vec3, &'a mut Vec3), &'a mut Vec3), &'a Vec3), &'a Vec3);
+        let step = |((((x, v), w), f), t): Item, inv_m: f64, inv_i: f64| {
+            if kick != 0.0 {
+                *v += f * (kick * inv_m);
+                *w += t * (kick * inv_i);
+            }
+            *x += *v * drift;
+        };
+        let InverseMasses::PerParticle { mass, inertia } = &p.inverse_masses else { unreachable!() };
+        if parallel::worth_it(p.len()) {
+            let arrays = p.position.par_iter_mut().zip(&mut p.velocity).zip(&mut p.angular_velocity).zip(&p.force).zip(&p.torque);
+            arrays.zip(mass.par_iter().zip(inertia)).with_min_len(parallel::CHUNK).for_each(|(a, (m, i))| step(a, *m, *i))
+        } else {
+            let arrays = p.position.iter_mut().zip(&mut p.velocity).zip(&mut p.angular_velocity).zip(&p.force).zip(&p.torque);
+            arrays.zip(mass.iter().zip(inertia)).for_each(|(a, (m, i))| step(a, *m, *i))
         }
     }
     if p.has_permanent_moments {
@@ -134,4 +168,44 @@ fn kick_drift(p: &mut Particles, kick: f64, drift: f64) {
 fn tick(state: &mut State, dt: f64) {
     state.step += 1;
     state.time = state.step as f64 * dt;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Particles with pseudo-random state and one shared (or per-particle) 1/m and 1/I.
+    fn particles(n: usize, per_particle: bool) -> Particles {
+        let value = |k: usize| ((k as f64 * 0.618_033_988_75).fract() - 0.5) * 1e-3;
+        let vectors = |offset: usize| (0..n).map(|i| Vec3::from_fn(|c, _| value(3 * (i + offset * n) + c))).collect::<Vec<_>>();
+        let mut p = Particles::default();
+        (p.position, p.velocity, p.angular_velocity, p.force, p.torque) = (vectors(0), vectors(1), vectors(2), vectors(3), vectors(4));
+        let (inv_m, inv_i) = (3.7e11, 2.9e21);
+        p.inverse_masses = if per_particle {
+            InverseMasses::PerParticle { mass: vec![inv_m; n], inertia: vec![inv_i; n] }
+        } else {
+            InverseMasses::Uniform { mass: inv_m, inertia: inv_i }
+        };
+        p
+    }
+
+    /// The componentwise loops of shared inverse masses do the per-vector arithmetic of
+    /// per-particle ones: the same bits, below and above the parallel threshold.
+    #[test]
+    fn kicks_give_the_same_bits_for_shared_and_per_particle_inverse_masses() {
+        for n in [7, parallel::MIN_PARALLEL_LEN + 5] {
+            let (mut shared, mut own) = (particles(n, false), particles(n, true));
+            parallel::with_warm_pool(n, || {
+                for p in [&mut shared, &mut own] {
+                    kick_drift(p, 0.5e-8, 1e-8);
+                    kick(p, 0.5e-8);
+                    drift(p, 1e-8);
+                }
+            });
+            assert_eq!(shared.position, own.position, "n = {n}");
+            assert_eq!(shared.velocity, own.velocity, "n = {n}");
+            assert_eq!(shared.angular_velocity, own.angular_velocity, "n = {n}");
+            assert_ne!(shared.position, particles(n, false).position, "the particles moved");
+        }
+    }
 }
