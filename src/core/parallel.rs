@@ -11,6 +11,8 @@ pub const MIN_PARALLEL_LEN: usize = 4096;
 /// Chunk length for parallel loops: long enough that the hand-off stays small.
 pub const CHUNK: usize = 1024;
 
+use super::state::Vec3;
+
 thread_local! {
     /// Set on the thread running a step inside [`with_warm_pool`].
     static WARM: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
@@ -26,6 +28,12 @@ pub fn worth_it(len: usize) -> bool {
 /// Calls `f(k, out)` for k in 0..n, which may push items; the items end up in `out` in k order
 /// (in parallel chunks when worth it, the chunks' items then copied into place in parallel).
 pub fn collect_ordered<T: Copy + Default + Send + Sync>(n: usize, out: &mut Vec<T>, f: impl Fn(usize, &mut Vec<T>) + Sync) {
+    collect_ordered_ranges(n, out, |ks, out| ks.for_each(|k| f(k, out)))
+}
+
+/// [`collect_ordered`] with `f(ks, out)` called once per range of consecutive k (the chunks),
+/// for a caller whose loop over k should be its own.
+pub fn collect_ordered_ranges<T: Copy + Default + Send + Sync>(n: usize, out: &mut Vec<T>, f: impl Fn(std::ops::Range<usize>, &mut Vec<T>) + Sync) {
     if worth_it(n) {
         use rayon::prelude::*;
         let parts: Vec<Vec<T>> = (0..n.div_ceil(CHUNK))
@@ -33,7 +41,7 @@ pub fn collect_ordered<T: Copy + Default + Send + Sync>(n: usize, out: &mut Vec<
             .map(|c| {
                 let ks = c * CHUNK..n.min((c + 1) * CHUNK);
                 let mut part = Vec::with_capacity(ks.len());
-                ks.for_each(|k| f(k, &mut part));
+                f(ks, &mut part);
                 part
             })
             .collect();
@@ -50,7 +58,7 @@ pub fn collect_ordered<T: Copy + Default + Send + Sync>(n: usize, out: &mut Vec<
         slots.into_par_iter().zip(&parts).for_each(|(slot, part)| slot.copy_from_slice(part));
     } else {
         out.clear();
-        (0..n).for_each(|k| f(k, out));
+        f(0..n, out);
     }
 }
 
@@ -93,13 +101,20 @@ pub fn with_warm_pool<R: Send>(len: usize, f: impl FnOnce() -> R + Send) -> R {
     })
 }
 
-/// `out[i] = value` for every i (in parallel chunks when worth it).
-pub fn fill<T: Copy + Send + Sync>(out: &mut [T], value: T) {
+/// `out[i] = value` for every i (in parallel chunks when worth it), stored four vectors at a
+/// time (a 96-byte copy the compiler writes as wide stores; one vector at a time it is not).
+pub fn fill(out: &mut [Vec3], value: Vec3) {
+    let fill_chunk = |chunk: &mut [Vec3]| {
+        let four = [value; 4];
+        let mut quads = chunk.chunks_exact_mut(4);
+        quads.by_ref().for_each(|q| q.copy_from_slice(&four));
+        quads.into_remainder().fill(value);
+    };
     if worth_it(out.len()) {
         use rayon::prelude::*;
-        out.par_chunks_mut(CHUNK).for_each(|chunk| chunk.fill(value));
+        out.par_chunks_mut(CHUNK).for_each(fill_chunk);
     } else {
-        out.fill(value);
+        fill_chunk(out);
     }
 }
 
