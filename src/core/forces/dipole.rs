@@ -145,11 +145,11 @@ fn row_forces(c: &Columns, image: &Image, i: usize, partners: Partners, cutoff2:
 fn row_forces_in<const PERIODIC: bool>(c: &Columns, image: &Image, i: usize, partners: Partners, cutoff2: f64, out: &mut [Vec<f64>; 3]) {
     let (xi, mi) = ([c.x[0][i], c.x[1][i], c.x[2][i]], [c.m[0][i], c.m[1][i], c.m[2][i]]);
     let len = partners[0].len();
+    // Every entry is written below: resized, not cleared.
     for o in out.iter_mut() {
-        o.clear();
         o.resize(len, 0.0);
     }
-    let [ox, oy, oz] = out;
+    let [ox, oy, oz] = out.each_mut().map(|o| &mut o[..len]);
     let [xs, ys, zs, mxs, mys, mzs] = partners.map(|p| &p[..len]);
     for q in 0..len {
         let d = [xi[0] - xs[q], xi[1] - ys[q], xi[2] - zs[q]];
