@@ -312,12 +312,29 @@ fn machine() -> String {
     let memory_kb: f64 = meminfo.lines().find_map(|l| l.strip_prefix("MemTotal:")).and_then(|s| s.split_whitespace().next()?.parse().ok()).unwrap_or(0.0);
     let kernel = std::fs::read_to_string("/proc/sys/kernel/osrelease").unwrap_or_default();
     format!(
-        "{model} ({}), {} cores, {:.1} GiB memory, Linux {}",
+        "{model} ({}), {} cores, {}, {:.1} GiB memory, Linux {}",
         simd.join(", "),
         std::thread::available_parallelism().map_or(0, |n| n.get()),
+        caches(),
         memory_kb / 1024.0 / 1024.0,
         kernel.trim()
     )
+}
+
+/// The first core's data and unified caches, as Linux lists them ("L1d 32K, L2 512K, L3 32768K
+/// shared by 2 cores").
+fn caches() -> String {
+    let read = |index: usize, name: &str| std::fs::read_to_string(format!("/sys/devices/system/cpu/cpu0/cache/index{index}/{name}")).ok().map(|s| s.trim().to_string());
+    let levels: Vec<String> = (0..8)
+        .filter_map(|i| Some((read(i, "level")?, read(i, "type")?, read(i, "size")?, read(i, "shared_cpu_list").unwrap_or_default())))
+        .filter(|(_, kind, _, _)| kind != "Instruction")
+        .map(|(level, kind, size, shared)| {
+            let cores = shared.split(',').map(|r| r.split_once('-').map_or(1, |(a, b)| b.parse::<usize>().unwrap_or(0) + 1 - a.parse::<usize>().unwrap_or(0))).sum::<usize>();
+            let name = if kind == "Data" { format!("L{level}d") } else { format!("L{level}") };
+            if cores > 1 { format!("{name} {size} shared by {cores} cores") } else { format!("{name} {size}") }
+        })
+        .collect();
+    if levels.is_empty() { "caches unknown".into() } else { format!("caches {}", levels.join(", ")) }
 }
 
 fn seconds(s: &Spread) -> String {
@@ -510,7 +527,7 @@ fn markdown(bench: &Bench, agreement: &[(String, f64)]) -> String {
         let _ = writeln!(s, "| {case} | {} | {} | {} | {agree} |", cell(one), cell(lmp), ratio(one, lmp));
     }
 
-    s += "\n## Cost against N\n\n![scaling](performance-scaling.png)\n\nnanoseconds per particle-step (median), magdem; contact scenes at 1e7 particle-steps (at least 100 steps), the dipole scene (as above, box scaled at equal concentration) as force evaluations at 2e6 particle-evaluations (at least 20). Memory: heap bytes the simulation holds at the end of its run, per particle (state, contact history, neighbour and pair lists, buffers; counted by the binary's instrumented allocator).\n\nWhere the contact scenes' cost per particle rises with N, their particle arrays (memory rows below) have outgrown a core's 2 MB second-level cache. The dipole sum's cost per particle follows its partners within the cut-off: a 15-diameter sphere is cut by the walls of the small boxes, so partners per particle grow with the box until it is much larger than the cut-off; from 4 096 particles on, the sum also runs over full rows (each pair twice, for threads and thread-count-independent results). The cost per pair (pairs within the cut-off, each counted once) separates the sum's own cost from the neighbourhood's size.\n\n";
+    s += "\n## Cost against N\n\n![scaling](performance-scaling.png)\n\nnanoseconds per particle-step (median), magdem; contact scenes at 1e7 particle-steps (at least 100 steps), the dipole scene (as above, box scaled at equal concentration) as force evaluations at 2e6 particle-evaluations (at least 20). Memory: heap bytes the simulation holds at the end of its run, per particle (state, contact history, neighbour and pair lists, buffers; counted by the binary's instrumented allocator).\n\nWhere the contact scenes' cost per particle rises with N, their particle arrays (memory rows below) have outgrown a cache level (the machine line above gives the sizes). The dipole sum's cost per particle follows its partners within the cut-off: a 15-diameter sphere is cut by the walls of the small boxes, so partners per particle grow with the box until it is much larger than the cut-off; from 4 096 particles on, the sum also runs over full rows (each pair twice, for threads and thread-count-independent results). The cost per pair (pairs within the cut-off, each counted once) separates the sum's own cost from the neighbourhood's size.\n\n";
     s += "| case | threads |";
     let sizes: Vec<usize> = scaling_sizes(o.max_particles);
     for n in &sizes {
@@ -575,10 +592,13 @@ fn markdown(bench: &Bench, agreement: &[(String, f64)]) -> String {
                 r.max_difference.map_or("–".into(), |d| format!("{d:.1e}"))
             );
         }
-        s += "\nOne and two processes give the same trajectory: the decks move to an MPI cluster unchanged. What the files route costs is the exchange interval, not the process count: an exchange (a `shell` call of `magdem magnetic-forces` on the first process, the forces read back as atomfile variables) takes milliseconds, so exchanging every step is out of reach, and holding the magnetic force for 100 steps (1 µs, about twice the Hertz contact duration) pumps energy into the contacts of case 1: compare the fastest particle and the aggregates with the callback run. A cluster study by files needs an interval well below the contact duration, or its own gather of the positions into the callback.\n";
+        s += "\nOne and two processes give the same trajectory: the decks move to an MPI cluster unchanged. What the files route costs is the exchange interval, not the process count: an exchange (a `shell` call of `magdem magnetic-forces` on the first process, the forces read back as atomfile variables) takes milliseconds, so exchanging every step is out of reach, and holding the magnetic force for 100 steps (1 µs, about twice the Hertz contact duration) pumps energy into the contacts of case 1. A cluster study by files needs an interval well below the contact duration, or its own gather of the positions into the callback.\n";
+        if !bench.mpi.iter().any(|r| r.route == "callback every step") {
+            s += "\nThe callback rows (the same point with the forces every step, for comparison) come from the experiment's own runs, which are not in `runs/` here: `magdem experiment experiments/paper/reference.toml` (or `make reproduce`) adds them.\n";
+        }
     }
     if let Some(t) = reproduce_wall_time() {
-        let _ = writeln!(s, "\n## The default `make reproduce` ensemble\n\nThe committed paper report (`reports/paper/README.md`) was produced by a `make reproduce` whose runs took {t} s of wall time ({:.1} min) on this kind of machine; the time before this work is in the history.", t as f64 / 60.0);
+        let _ = writeln!(s, "\n## The default `make reproduce` ensemble\n\nThe committed paper report (`reports/paper/README.md`) was produced by a `make reproduce` whose runs took {t} s of wall time ({:.1} min) when it was generated (that report names its commit; this bench does not rerun the ensemble); the time before this work is in the history.", t as f64 / 60.0);
     }
     if !bench.notes.is_empty() {
         s += "\n## Notes\n\n";
