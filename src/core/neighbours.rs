@@ -189,11 +189,9 @@ impl VerletList {
         let rebuilt = self.update(positions, domain, range, skin);
         let range2 = range * range;
         let candidates = &self.candidates;
-        let walled = !domain.periodic.contains(&true);
         parallel::collect_ordered_ranges(candidates.len(), out, |ks, out| {
             for &(i, j) in &candidates[ks] {
-                let (a, b) = (&positions[i as usize], &positions[j as usize]);
-                let r = if walled { a - b } else { domain.displacement(a, b) };
+                let r = domain.displacement(&positions[i as usize], &positions[j as usize]);
                 let d2 = r.norm_squared();
                 if d2 < range2 {
                     out.push(Pair { i, j, r, dist: d2.sqrt() });

@@ -5,13 +5,13 @@
 //! results are gathered in pair order and summed serially, and reductions are exact (max, first
 //! match). A run's result therefore does not depend on the thread count.
 
+use super::state::Vec3;
+
 /// Shortest loop worth splitting across threads (about 20 µs of per-particle work).
 pub const MIN_PARALLEL_LEN: usize = 4096;
 
 /// Chunk length for parallel loops: long enough that the hand-off stays small.
 pub const CHUNK: usize = 1024;
-
-use super::state::Vec3;
 
 thread_local! {
     /// Set on the thread running a step inside [`with_warm_pool`].

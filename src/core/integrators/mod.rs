@@ -78,12 +78,12 @@ fn kick_by(velocity: &mut [Vec3], spin: &mut [Vec3], force: &[Vec3], torque: &[V
                 *v += f * (h * inv_m);
                 *w += t * (h * inv_i);
             };
-            let masses = mass.iter().zip(inertia);
             if parallel::worth_it(velocity.len()) {
                 let state = velocity.par_iter_mut().zip(spin).zip(force.par_iter().zip(torque));
                 state.zip(mass.par_iter().zip(inertia)).with_min_len(parallel::CHUNK).for_each(|(s, (m, i))| kick(s, *m, *i))
             } else {
-                velocity.iter_mut().zip(spin).zip(force.iter().zip(torque)).zip(masses).for_each(|(s, (m, i))| kick(s, *m, *i))
+                let state = velocity.iter_mut().zip(spin).zip(force.iter().zip(torque));
+                state.zip(mass.iter().zip(inertia)).for_each(|(s, (m, i))| kick(s, *m, *i))
             }
         }
     }
@@ -117,41 +117,43 @@ fn drift(p: &mut Particles, h: f64) {
 /// A kick by `kick` then a drift by `drift` in one pass over the particles (the same arithmetic
 /// as [`kick`] followed by [`drift`]).
 fn kick_drift(p: &mut Particles, kick: f64, drift: f64) {
-    if let InverseMasses::Uniform { mass, inertia } = p.inverse_masses {
-        // v += F/m kick, x += v drift, component by component; ω += T/I kick.
-        let in_parallel = parallel::worth_it(p.len());
-        let (x, v, f) = (components_mut(&mut p.position), components_mut(&mut p.velocity), components(&p.force));
-        let c = kick * mass;
-        let kick_and_drift = |((x, v), f): ((&mut f64, &mut f64), &f64)| {
-            *v += f * c;
-            *x += *v * drift;
-        };
-        let only_drift = |(x, v): (&mut f64, &mut f64)| *x += *v * drift;
-        match (in_parallel, kick != 0.0) {
-            (true, true) => x.par_iter_mut().zip(v).zip(f).with_min_len(3 * parallel::CHUNK).for_each(kick_and_drift),
-            (true, false) => x.par_iter_mut().zip(v).with_min_len(3 * parallel::CHUNK).for_each(only_drift),
-            (false, true) => x.iter_mut().zip(v).zip(f).for_each(kick_and_drift),
-            (false, false) => x.iter_mut().zip(v).for_each(only_drift),
-        }
-        if kick != 0.0 {
-            add_scaled(components_mut(&mut p.angular_velocity), components(&p.torque), kick * inertia);
-        }
-    } else {
-        type Item<'a> = ((((&'a mut Vec3, &'a mut Vec3), &'a mut Vec3), &'a Vec3), &'a Vec3);
-        let step = |((((x, v), w), f), t): Item, inv_m: f64, inv_i: f64| {
-            if kick != 0.0 {
-                *v += f * (kick * inv_m);
-                *w += t * (kick * inv_i);
+    match &p.inverse_masses {
+        InverseMasses::Uniform { mass, inertia } => {
+            // v += F/m kick, x += v drift, component by component; ω += T/I kick.
+            let in_parallel = parallel::worth_it(p.position.len());
+            let (x, v, f) = (components_mut(&mut p.position), components_mut(&mut p.velocity), components(&p.force));
+            let c = kick * mass;
+            let kick_and_drift = |((x, v), f): ((&mut f64, &mut f64), &f64)| {
+                *v += f * c;
+                *x += *v * drift;
+            };
+            let only_drift = |(x, v): (&mut f64, &mut f64)| *x += *v * drift;
+            match (in_parallel, kick != 0.0) {
+                (true, true) => x.par_iter_mut().zip(v).zip(f).with_min_len(3 * parallel::CHUNK).for_each(kick_and_drift),
+                (true, false) => x.par_iter_mut().zip(v).with_min_len(3 * parallel::CHUNK).for_each(only_drift),
+                (false, true) => x.iter_mut().zip(v).zip(f).for_each(kick_and_drift),
+                (false, false) => x.iter_mut().zip(v).for_each(only_drift),
             }
-            *x += *v * drift;
-        };
-        let InverseMasses::PerParticle { mass, inertia } = &p.inverse_masses else { unreachable!() };
-        if parallel::worth_it(p.len()) {
-            let arrays = p.position.par_iter_mut().zip(&mut p.velocity).zip(&mut p.angular_velocity).zip(&p.force).zip(&p.torque);
-            arrays.zip(mass.par_iter().zip(inertia)).with_min_len(parallel::CHUNK).for_each(|(a, (m, i))| step(a, *m, *i))
-        } else {
-            let arrays = p.position.iter_mut().zip(&mut p.velocity).zip(&mut p.angular_velocity).zip(&p.force).zip(&p.torque);
-            arrays.zip(mass.iter().zip(inertia)).for_each(|(a, (m, i))| step(a, *m, *i))
+            if kick != 0.0 {
+                add_scaled(components_mut(&mut p.angular_velocity), components(&p.torque), kick * inertia);
+            }
+        }
+        InverseMasses::PerParticle { mass, inertia } => {
+            type Item<'a> = ((((&'a mut Vec3, &'a mut Vec3), &'a mut Vec3), &'a Vec3), &'a Vec3);
+            let step = |((((x, v), w), f), t): Item, inv_m: f64, inv_i: f64| {
+                if kick != 0.0 {
+                    *v += f * (kick * inv_m);
+                    *w += t * (kick * inv_i);
+                }
+                *x += *v * drift;
+            };
+            if parallel::worth_it(p.position.len()) {
+                let arrays = p.position.par_iter_mut().zip(&mut p.velocity).zip(&mut p.angular_velocity).zip(&p.force).zip(&p.torque);
+                arrays.zip(mass.par_iter().zip(inertia)).with_min_len(parallel::CHUNK).for_each(|(a, (m, i))| step(a, *m, *i))
+            } else {
+                let arrays = p.position.iter_mut().zip(&mut p.velocity).zip(&mut p.angular_velocity).zip(&p.force).zip(&p.torque);
+                arrays.zip(mass.iter().zip(inertia)).for_each(|(a, (m, i))| step(a, *m, *i))
+            }
         }
     }
     if p.has_permanent_moments {
