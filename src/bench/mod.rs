@@ -224,10 +224,10 @@ pub fn time_engine(engine: Engine, dir: &Path, in_file: &str, procs: usize) -> R
     }
 }
 
-/// Writes the engine's deck of `scene` into `dir` and times it.
-pub fn time_engine_scene(engine: Engine, scene: &Scene, dir: &Path) -> Result<f64, Error> {
+/// Writes the engine's deck of `scene` into `dir` and times it on `procs` MPI processes.
+pub fn time_engine_scene(engine: Engine, scene: &Scene, dir: &Path, procs: usize) -> Result<f64, Error> {
     let written = deck::write(engine, scene, dir)?;
-    time_engine(engine, dir, &written.input.to_string_lossy(), 1)
+    time_engine(engine, dir, &written.input.to_string_lossy(), procs)
 }
 
 /// Writes the LAMMPS `lj/cut/dipole/cut` deck of a dipole-only `scene` (its initial moments)

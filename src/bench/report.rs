@@ -44,6 +44,8 @@ struct Bench<'a> {
     dipole_pairs: Vec<(usize, usize)>,
     engine_versions: Vec<String>,
     mpi: Vec<MpiRun>,
+    /// Streaming bandwidth (GB/s) on one core and on two.
+    stream: (f64, f64),
     notes: Vec<String>,
 }
 
@@ -83,9 +85,9 @@ impl<'a> Contender<'a> {
         Contender { engine: "magdem", threads, run: Box::new(run) }
     }
 
-    /// A reference engine (one process), if installed.
-    fn engine(engine: Engine, run: impl FnMut() -> Result<f64, Error> + 'a) -> Option<Self> {
-        engine.available().then(|| Contender { engine: engine.name(), threads: 1, run: Box::new(run) })
+    /// A reference engine on `procs` MPI processes (one: no `mpirun`), if installed.
+    fn engine(engine: Engine, procs: usize, run: impl FnMut() -> Result<f64, Error> + 'a) -> Option<Self> {
+        engine.available().then(|| Contender { engine: engine.name(), threads: procs, run: Box::new(run) })
     }
 }
 
@@ -156,9 +158,13 @@ impl Bench<'_> {
                 let scene = scene_in(&dir, "scene", &contact_scene(packing, n, steps))?;
                 let (mut one, mut two) = (None, None);
                 let mut contenders = vec![Contender::magdem(&scene, 1, Work::Steps, &mut one), Contender::magdem(&scene, 2, Work::Steps, &mut two)];
+                // At 30 000 the engines also run on both cores (mpirun -np 2), beside magdem's threads.
+                let procs = if n == 30000 && mpirun_available() { vec![1, 2] } else { vec![1] };
                 for engine in [Engine::Liggghts, Engine::Lammps] {
-                    let (scene, engine_dir) = (&scene, dir.join(engine.name()));
-                    contenders.extend(Contender::engine(engine, move || time_engine_scene(engine, scene, &engine_dir)));
+                    for &np in &procs {
+                        let (scene, engine_dir) = (&scene, dir.join(if np == 1 { engine.name().to_string() } else { format!("{}-np{np}", engine.name()) }));
+                        contenders.extend(Contender::engine(engine, np, move || time_engine_scene(engine, scene, &engine_dir, np)));
+                    }
                 }
                 self.compare(&case, n, steps, contenders)?;
                 let (one, two) = (one.expect("one-thread runs"), two.expect("two-thread runs"));
@@ -193,7 +199,7 @@ impl Bench<'_> {
             let mut last = None;
             let lammps_dir = dir.join("lammps");
             let mut contenders = vec![Contender::magdem(&scene, 1, Work::Forces, &mut last)];
-            contenders.extend(Contender::engine(Engine::Lammps, || time_lammps_dipoles(&scene, &lammps_dir)));
+            contenders.extend(Contender::engine(Engine::Lammps, 1, || time_lammps_dipoles(&scene, &lammps_dir)));
             self.compare(&case, scene.initial.len(), steps, contenders)?;
             self.profile(&case, &scene, Work::Forces)?;
             if Engine::Lammps.available() {
@@ -245,7 +251,7 @@ fn mpi_demo(bench: &mut Bench, progress: &indicatif::ProgressBar) -> Result<(), 
     let magdem = std::env::current_exe()?;
     for engine in [Engine::Liggghts, Engine::Lammps] {
         let Some(point) = experiment.points.iter().find(|p| p.engine == engine.name()) else { continue };
-        if !engine.available() || Command::new("mpirun").arg("--version").output().is_err() {
+        if !engine.available() || !mpirun_available() {
             bench.notes.push(format!("MPI demonstration: {} or mpirun is not installed", engine.name()));
             continue;
         }
@@ -298,6 +304,36 @@ fn last_frame(path: &Path, engine: &str, route: &'static str, procs: usize) -> R
     })
 }
 
+/// Bandwidth (GB/s) of `a += s·b` over two 2 MiB arrays (beyond a core's second-level cache,
+/// inside the third, as the particle arrays of the 30 000-particle scenes), each of `threads`
+/// threads updating its share 400 times; the best of ten tries. Every pass of a step over
+/// particle arrays of that size is bounded by it.
+fn stream_bandwidth(threads: usize) -> f64 {
+    const LEN: usize = 1 << 18;
+    const ROUNDS: usize = 400;
+    let (mut a, b) = (vec![1.0_f64; LEN], vec![1e-9_f64; LEN]);
+    let mut best = f64::INFINITY;
+    for _ in 0..10 {
+        let started = std::time::Instant::now();
+        std::thread::scope(|scope| {
+            for (a, b) in a.chunks_mut(LEN / threads).zip(b.chunks(LEN / threads)) {
+                scope.spawn(move || {
+                    for _ in 0..ROUNDS {
+                        a.iter_mut().zip(b).for_each(|(x, y)| *x += 0.5 * y);
+                        std::hint::black_box(&mut *a);
+                    }
+                });
+            }
+        });
+        best = best.min(started.elapsed().as_secs_f64());
+    }
+    (3 * 8 * LEN * ROUNDS) as f64 / best / 1e9
+}
+
+fn mpirun_available() -> bool {
+    Command::new("mpirun").arg("--version").output().is_ok()
+}
+
 fn scaling_sizes(max: usize) -> Vec<usize> {
     [1000, 3000, 10000, 30000, 100000].into_iter().filter(|&n| n <= max).collect()
 }
@@ -345,7 +381,7 @@ fn seconds(s: &Spread) -> String {
 /// `performance.csv` into `options.out`; returns the report's path.
 pub fn write(options: &Options) -> Result<PathBuf, Error> {
     std::fs::create_dir_all(&options.out)?;
-    let mut bench = Bench { options, measurements: vec![], profiles: vec![], bitwise: vec![], memory: vec![], dipole_pairs: vec![], engine_versions: vec![], mpi: vec![], notes: vec![] };
+    let mut bench = Bench { options, measurements: vec![], profiles: vec![], bitwise: vec![], memory: vec![], dipole_pairs: vec![], engine_versions: vec![], mpi: vec![], stream: (stream_bandwidth(1), stream_bandwidth(2)), notes: vec![] };
     let total = 6 + 2 + scaling_sizes(options.max_particles).len() as u64 + options.mpi as u64;
     let progress = indicatif::ProgressBar::new(total).with_style(indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} cases {elapsed} {msg}")?);
     bench.contact_cases(&progress)?;
@@ -439,7 +475,12 @@ fn targets(bench: &Bench) -> String {
     }
     for case in ["contact sparse 30000", "contact dense 30000"] {
         if let Some(x) = speedup(case, ("magdem", 2), ("magdem", 1)) {
-            lines.push(format!("{case}, two threads ÷ one ≥ 1.7×: {x:.2}× — {}", verdict(x, 1.7)));
+            let engines: Vec<String> = [("liggghts", "LIGGGHTS"), ("lammps", "LAMMPS")]
+                .iter()
+                .filter_map(|(engine, name)| Some(format!("{name} {:.2}×", speedup(case, (engine, 2), (engine, 1))?)))
+                .collect();
+            let context = if engines.is_empty() { String::new() } else { format!(" (two MPI processes ÷ one: {}; see “Both cores”)", engines.join(", ")) };
+            lines.push(format!("{case}, two threads ÷ one ≥ 1.7×: {x:.2}× — {}{context}", verdict(x, 1.7)));
         }
     }
     for case in ["scaling contact sparse", "scaling contact dense", "scaling dipole cut-off 15 d"] {
@@ -466,6 +507,27 @@ fn targets(bench: &Bench) -> String {
 {}
 
 ", lines.iter().map(|l| format!("- {l}")).collect::<Vec<_>>().join("\n"))
+}
+
+/// magdem's two threads against the engines' two MPI processes at 30 000 particles, and the
+/// machine's streaming bandwidth on one core and two.
+fn both_cores(bench: &Bench) -> String {
+    let (one, two) = bench.stream;
+    let mut s = format!(
+        "\n## Both cores\n\nStreaming `a += s·b` over two 2 MiB arrays (beyond a core's second-level cache, as the particle arrays at 30 000 particles), best of ten tries: one core {one:.1} GB/s, two cores {two:.1} GB/s ({:.2}×), the most a second core could add to the contact step's passes over its particle arrays (kicks and drift, force seed, displacement check, monitor). magdem's second thread falls short of it by the hand-off of each short parallel loop and the serial pieces between them ([performance-history.md](performance-history.md)). The reference engines on both cores (`mpirun -np 2`, the same decks; `performance.csv` lists them with 2 in its threads column), for comparison, medians:\n\n",
+        two / one
+    );
+    s += "| case | magdem 2 threads ÷ 1 | LIGGGHTS 2 processes ÷ 1 | LAMMPS 2 processes ÷ 1 | magdem 2 threads ÷ LIGGGHTS 2 processes speed | magdem 2 threads ÷ LAMMPS 2 processes speed |\n|---|---|---|---|---|---|\n";
+    for case in ["contact sparse 30000", "contact dense 30000"] {
+        let ratio = |fast: (&str, usize), slow: (&str, usize)| match (bench.find(case, slow.0, slow.1), bench.find(case, fast.0, fast.1)) {
+            (Some(a), Some(b)) => format!("{:.2}×", a.seconds.median / b.seconds.median),
+            _ => "–".into(),
+        };
+        let gain = |engine| ratio((engine, 2), (engine, 1));
+        let (against_liggghts, against_lammps) = (ratio(("magdem", 2), ("liggghts", 2)), ratio(("magdem", 2), ("lammps", 2)));
+        let _ = writeln!(s, "| {case} | {} | {} | {} | {against_liggghts} | {against_lammps} |", gain("magdem"), gain("liggghts"), gain("lammps"));
+    }
+    s
 }
 
 fn markdown(bench: &Bench, agreement: &[(String, f64)]) -> String {
@@ -519,6 +581,7 @@ fn markdown(bench: &Bench, agreement: &[(String, f64)]) -> String {
         );
     }
 
+    s += &both_cores(bench);
     s += "\n## Dipole forces at case-1 parameters\n\n307 particles in the paper's 4.5 mg/ml box (396 × 396 × 330 µm), moments induced by 0.4 T without mutual induction (fixed dipoles, as LAMMPS holds them), dipole force only, 2 000 force evaluations with the particles held still (without contact forces the nearest pairs would collide within microseconds). LAMMPS runs its own `lj/cut/dipole/cut` (ε = 0) on the same positions and moments (REFERENCE-CODES.md: p = m √(1e-7/k_e)) as a `run` without an integrating fix; the force agreement is the largest |F_LAMMPS − F_magdem| over particles relative to the largest force, at the initial configuration (`reference::dipole_check`).\n\n";
     s += "| case | magdem 1 thread (s) | LAMMPS (s) | magdem ÷ LAMMPS speed | force agreement |\n|---|---|---|---|---|\n";
     for case in ["dipole all pairs 307", "dipole cut-off 15 d 307"] {
