@@ -422,7 +422,7 @@ fn scaling_figure(path: &Path, rows: &[Measurement]) -> Result<(), Error> {
     };
     let points = |packing: &str, engine: &str| -> Vec<(f64, f64)> {
         rows.iter()
-            .filter(|m| m.case.starts_with(&format!("contact {packing}")) && m.engine == engine)
+            .filter(|m| m.case.starts_with(&format!("contact {packing}")) && m.engine == engine && m.threads == 1)
             .map(|m| ((m.particles as f64).log10(), m.ns_per_particle_step().log10()))
             .collect()
     };
