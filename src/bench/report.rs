@@ -141,6 +141,11 @@ impl Bench<'_> {
         self.measurements.iter().find(|m| m.case == case && m.engine == engine && m.threads == threads)
     }
 
+    /// How many times faster (medians) `fast` ran `case` than `slow`, each (engine, threads).
+    fn speedup(&self, case: &str, fast: (&str, usize), slow: (&str, usize)) -> Option<f64> {
+        Some(self.find(case, slow.0, slow.1)?.seconds.median / self.find(case, fast.0, fast.1)?.seconds.median)
+    }
+
     /// Nanoseconds per force evaluation and pair within the cut-off (each counted once) at the
     /// median, for a run of the dipole scaling scene whose pairs were counted.
     fn ns_per_pair(&self, m: &Measurement) -> Option<f64> {
@@ -454,30 +459,27 @@ fn reproduce_wall_time() -> Option<u64> {
 
 /// The targets against this run's medians: one line each, met or not.
 fn targets(bench: &Bench) -> String {
-    let speedup = |case: &str, fast: (&str, usize), slow: (&str, usize)| {
-        Some(bench.find(case, slow.0, slow.1)?.seconds.median / bench.find(case, fast.0, fast.1)?.seconds.median)
-    };
     let verdict = |x: f64, target: f64| if x >= target { "met" } else { "not met" };
     let mut lines = vec![];
     let contact: Vec<(String, f64)> = bench
         .measurements
         .iter()
         .filter(|m| m.case.starts_with("contact ") && m.engine == "magdem" && m.threads == 1)
-        .filter_map(|m| Some((m.case.clone(), speedup(&m.case, ("magdem", 1), ("liggghts", 1))?)))
+        .filter_map(|m| Some((m.case.clone(), bench.speedup(&m.case, ("magdem", 1), ("liggghts", 1))?)))
         .collect();
     if let Some((case, worst)) = contact.iter().min_by(|a, b| a.1.total_cmp(&b.1)) {
         lines.push(format!("contact only, one thread ÷ LIGGGHTS ≥ 2× in every case: smallest {worst:.2}× ({case}) — {}", verdict(*worst, 2.0)));
     }
     for case in ["dipole all pairs 307", "dipole cut-off 15 d 307"] {
-        if let Some(x) = speedup(case, ("magdem", 1), ("lammps", 1)) {
+        if let Some(x) = bench.speedup(case, ("magdem", 1), ("lammps", 1)) {
             lines.push(format!("{case}, one thread ÷ LAMMPS ≥ 5×: {x:.2}× — {}", verdict(x, 5.0)));
         }
     }
     for case in ["contact sparse 30000", "contact dense 30000"] {
-        if let Some(x) = speedup(case, ("magdem", 2), ("magdem", 1)) {
+        if let Some(x) = bench.speedup(case, ("magdem", 2), ("magdem", 1)) {
             let engines: Vec<String> = [("liggghts", "LIGGGHTS"), ("lammps", "LAMMPS")]
                 .iter()
-                .filter_map(|(engine, name)| Some(format!("{name} {:.2}×", speedup(case, (engine, 2), (engine, 1))?)))
+                .filter_map(|(engine, name)| Some(format!("{name} {:.2}×", bench.speedup(case, (engine, 2), (engine, 1))?)))
                 .collect();
             let context = if engines.is_empty() { String::new() } else { format!(" (two MPI processes ÷ one: {}; see “Both cores”)", engines.join(", ")) };
             lines.push(format!("{case}, two threads ÷ one ≥ 1.7×: {x:.2}× — {}{context}", verdict(x, 1.7)));
@@ -519,10 +521,7 @@ fn both_cores(bench: &Bench) -> String {
     );
     s += "| case | magdem 2 threads ÷ 1 | LIGGGHTS 2 processes ÷ 1 | LAMMPS 2 processes ÷ 1 | magdem 2 threads ÷ LIGGGHTS 2 processes speed | magdem 2 threads ÷ LAMMPS 2 processes speed |\n|---|---|---|---|---|---|\n";
     for case in ["contact sparse 30000", "contact dense 30000"] {
-        let ratio = |fast: (&str, usize), slow: (&str, usize)| match (bench.find(case, slow.0, slow.1), bench.find(case, fast.0, fast.1)) {
-            (Some(a), Some(b)) => format!("{:.2}×", a.seconds.median / b.seconds.median),
-            _ => "–".into(),
-        };
+        let ratio = |fast, slow| bench.speedup(case, fast, slow).map_or("–".into(), |x| format!("{x:.2}×"));
         let gain = |engine| ratio((engine, 2), (engine, 1));
         let (against_liggghts, against_lammps) = (ratio(("magdem", 2), ("liggghts", 2)), ratio(("magdem", 2), ("lammps", 2)));
         let _ = writeln!(s, "| {case} | {} | {} | {} | {against_liggghts} | {against_lammps} |", gain("magdem"), gain("liggghts"), gain("lammps"));
