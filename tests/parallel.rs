@@ -16,11 +16,16 @@ fn crowd(n: usize, dipole: &str, steps: u64) -> Scene {
 
 /// [`crowd`] with the particles numbered by `order` (`placement` or `spatial`).
 fn crowd_numbered(n: usize, dipole: &str, steps: u64, order: &str) -> Scene {
+    crowd_in(n, dipole, steps, order, "")
+}
+
+/// [`crowd_numbered`] with the domain's `boundary` line (empty: walls all round).
+fn crowd_in(n: usize, dipole: &str, steps: u64, order: &str, boundary: &str) -> Scene {
     let scale = (n as f64 / 307.0).cbrt();
     let (l, h) = (3.96e-4 * scale, 3.3e-4 * scale);
     let end = steps as f64 * 1e-8;
     let text = common::scene(
-        &format!("version = 1\nseed = 5\n[domain]\nlo = [0.0, 0.0, 0.0]\nhi = [{l:e}, {l:e}, {h:e}]\n"),
+        &format!("version = 1\nseed = 5\n[domain]\nlo = [0.0, 0.0, 0.0]\nhi = [{l:e}, {l:e}, {h:e}]\n{boundary}\n"),
         &format!(
             "[[particles]]\nspecies = \"p\"\ncount = {n}\norder = \"{order}\"\n[forces.contact]\nwalls = true\n[forces.dipole]\n{dipole}\n\
              [forces.drag]\nlaw = \"schiller-naumann\"\nshielding = \"paper\"\n[forces.gravity]\ng = [0.0, 0.0, -9.81]\n\
@@ -56,15 +61,18 @@ fn one_and_two_threads_give_identical_bits() {
 
 #[test]
 fn the_row_sums_equal_a_direct_pair_sum() {
-    // Full rows (parallel, above the threshold) and half rows (below) against a direct double
-    // loop over the pairs within the cut-off; agreement to rounding (1e-12 of the largest force).
-    for n in [600, MIN_PARALLEL_LEN + 200] {
+    // Full rows (parallel, above the threshold) and half rows (below), in a walled box and in one
+    // periodic sideways (minimum image), against a direct double loop over the pairs within the
+    // cut-off; agreement to rounding (1e-12 of the largest force).
+    let sideways = "boundary = { x = \"periodic\", y = \"periodic\", z = \"wall\" }";
+    for (n, boundary) in [(600, ""), (MIN_PARALLEL_LEN + 200, ""), (601, sideways), (MIN_PARALLEL_LEN + 201, sideways)] {
         for cutoff in [Some(10.0), None] {
             let dipole = match cutoff {
                 Some(c) => format!("induction = \"none\"\ncutoff_diameters = {c:?}"),
                 None => "induction = \"none\"".to_string(),
             };
-            let scene = crowd(n, &dipole, 1);
+            let scene = crowd_in(n, &dipole, 1, "placement", boundary);
+            let domain = scene.domain.clone();
             let mut field = scene.magnetic_force_field().unwrap();
             field.terms.retain(|t| t.name() == "dipole");
             let mut state = scene.initial_state();
@@ -74,7 +82,13 @@ fn the_row_sums_equal_a_direct_pair_sum() {
             let mut direct = vec![Vec3::zeros(); p.len()];
             for i in 0..p.len() {
                 for j in i + 1..p.len() {
-                    let r = p.position[i] - p.position[j];
+                    let mut r = p.position[i] - p.position[j];
+                    for k in 0..2 {
+                        if domain.periodic[k] {
+                            let l = domain.hi[k] - domain.lo[k];
+                            r[k] -= l * (r[k] / l).round();
+                        }
+                    }
                     if r.norm() < range {
                         let f = dipole_pair_force(&p.moment[i], &p.moment[j], &r, r.norm());
                         direct[i] += f;
@@ -84,7 +98,7 @@ fn the_row_sums_equal_a_direct_pair_sum() {
             }
             let largest = direct.iter().map(|f| f.norm()).fold(0.0, f64::max);
             let worst = direct.iter().zip(&p.force).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
-            assert!(worst < 1e-12 * largest, "n = {n}, cut-off {cutoff:?}: worst difference {worst:e} of {largest:e}");
+            assert!(worst < 1e-12 * largest, "n = {n} {boundary}, cut-off {cutoff:?}: worst difference {worst:e} of {largest:e}");
         }
     }
 }

@@ -9,10 +9,10 @@
 //! The sum runs over rows of partners (all other particles, or the Verlet candidates within the
 //! cut-off): below [`parallel::MIN_PARALLEL_LEN`] particles half rows with F_ji = −F_ij; above
 //! it full rows, each particle summing its own (twice the pair work, but rows run in parallel
-//! and in the same order for any thread count). The loop over a row works on coordinate arrays
-//! so that it compiles to SIMD; its sum runs in eight lanes by partner index, a fixed order.
-//! Walled boxes skip the minimum-image arithmetic. When the moments phase has already listed the pairs (the paper's
-//! induction), the term sums over that list instead.
+//! and in the same order for any thread count). A row visits its partners in blocks of four
+//! consecutive particles, one SIMD vector each, and sums in eight lanes by partner index, a
+//! fixed order. Walled boxes skip the minimum-image arithmetic. When the moments phase has
+//! already listed the pairs (the paper's induction), the term sums over that list instead.
 
 use super::{ForceContext, ForceTerm};
 use crate::core::magnetisation::{pair_dipole_fields, MU0};
@@ -22,6 +22,7 @@ use crate::core::parallel;
 use crate::core::state::{State, Vec3};
 use nalgebra::Matrix3;
 use std::f64::consts::PI;
+use wide::f64x4;
 
 /// 3μ0/(4π) (N·m⁴/(A·m²)²).
 const PREFACTOR: f64 = 3.0 * MU0 / (4.0 * PI);
@@ -36,22 +37,49 @@ pub fn dipole_pair_force(mi: &Vec3, mj: &Vec3, r: &Vec3, dist: f64) -> Vec3 {
     (PREFACTOR * inv2 * inv2) * (mir * mj + mjr * mi + (mi.dot(mj) - 5.0 * mir * mjr) * rhat)
 }
 
-/// Coordinates in separate arrays (structure of arrays), so that loops over j compile to SIMD.
-#[derive(Debug, Default, Clone)]
-struct Columns {
-    x: [Vec<f64>; 3],
-    m: [Vec<f64>; 3],
+/// Partners are taken in blocks of four consecutive particles 4b..4b+4, one SIMD vector of f64
+/// (`wide::f64x4`, AVX where the CPU has it): the loads are contiguous, and the particles of a
+/// block that are not partners of the row cost a masked lane instead of a gather.
+const BLOCK: usize = 4;
+
+/// The x, y and z components of a vector for the four particles of a block.
+type BlockVectors = [f64x4; 3];
+
+/// Positions and moments of four consecutive particles, by component. The last block is padded
+/// with NaN positions, which no distance test passes, and zero moments.
+#[derive(Debug, Clone, Copy)]
+struct ParticleBlock {
+    x: BlockVectors,
+    m: BlockVectors,
 }
 
-impl Columns {
-    fn fill(&mut self, position: &[Vec3], moment: &[Vec3]) {
-        for k in 0..3 {
-            self.x[k].clear();
-            self.x[k].extend(position.iter().map(|v| v[k]));
-            self.m[k].clear();
-            self.m[k].extend(moment.iter().map(|v| v[k]));
-        }
+fn fill_particle_blocks(blocks: &mut Vec<ParticleBlock>, position: &[Vec3], moment: &[Vec3]) {
+    let padding = ParticleBlock { x: [f64x4::splat(f64::NAN); 3], m: [f64x4::ZERO; 3] };
+    blocks.clear();
+    blocks.resize(position.len().div_ceil(BLOCK), padding);
+    for (q, (x, m)) in position.iter().zip(moment).enumerate() {
+        set_lane(&mut blocks[q / BLOCK].x, q % BLOCK, x);
+        set_lane(&mut blocks[q / BLOCK].m, q % BLOCK, m);
     }
+}
+
+/// `blocks` = `vectors` in blocks of four, the last one padded with zeros.
+fn fill_blocks(blocks: &mut Vec<BlockVectors>, vectors: &[Vec3]) {
+    blocks.clear();
+    blocks.resize(vectors.len().div_ceil(BLOCK), [f64x4::ZERO; 3]);
+    for (q, v) in vectors.iter().enumerate() {
+        set_lane(&mut blocks[q / BLOCK], q % BLOCK, v);
+    }
+}
+
+fn set_lane(block: &mut BlockVectors, lane: usize, v: &Vec3) {
+    for k in 0..3 {
+        block[k].as_mut_array()[lane] = v[k];
+    }
+}
+
+fn lane(block: &BlockVectors, lane: usize) -> Vec3 {
+    Vec3::new(block[0].as_array()[lane], block[1].as_array()[lane], block[2].as_array()[lane])
 }
 
 /// Minimum image on periodic axes: d − L round(d/L), with L = 0 on walled axes.
@@ -67,11 +95,14 @@ impl Image {
     }
 }
 
-/// Neighbour rows of the cut-off sum, from the Verlet candidates: row i lists its j in ascending
-/// order, only j > i (half rows, for F_ji = −F_ij) or every neighbour (full rows).
+/// Neighbour rows of the cut-off sum, from the Verlet candidates: row i lists, ascending, the
+/// blocks that hold its candidates j, only j > i (half rows, for F_ji = −F_ij) or every
+/// neighbour (full rows).
 #[derive(Debug, Default, Clone)]
 struct Rows {
     start: Vec<usize>,
+    blocks: Vec<u32>,
+    /// Scratch: the candidates' rows, before they are reduced to blocks.
     js: Vec<u32>,
 }
 
@@ -100,164 +131,155 @@ impl Rows {
                 fill[j as usize] += 1;
             }
         }
-    }
-
-    fn row(&self, i: usize) -> &[u32] {
-        &self.js[self.start[i]..self.start[i + 1]]
-    }
-}
-
-/// Partner coordinates and moments of one row, contiguous: x, y, z, mx, my, mz.
-type Partners<'a> = [&'a [f64]; 6];
-
-/// Gathers the columns of the particles `js` into `buffer` (one row's partners), in one pass.
-fn gather<'a>(c: &Columns, js: &[u32], buffer: &'a mut [Vec<f64>; 6]) -> Partners<'a> {
-    for b in buffer.iter_mut() {
-        b.resize(js.len(), 0.0);
-    }
-    let [x, y, z, mx, my, mz] = buffer;
-    let partners = x.iter_mut().zip(y.iter_mut()).zip(z.iter_mut()).zip(mx.iter_mut().zip(my.iter_mut()).zip(mz.iter_mut()));
-    for ((((x, y), z), ((mx, my), mz)), &j) in partners.zip(js) {
-        let j = j as usize;
-        (*x, *y, *z) = (c.x[0][j], c.x[1][j], c.x[2][j]);
-        (*mx, *my, *mz) = (c.m[0][j], c.m[1][j], c.m[2][j]);
-    }
-    [x, y, z, mx, my, mz]
-}
-
-/// The columns of particles `range` (contiguous already).
-fn slice(c: &Columns, range: std::ops::Range<usize>) -> Partners<'_> {
-    [&c.x[0][range.clone()], &c.x[1][range.clone()], &c.x[2][range.clone()], &c.m[0][range.clone()], &c.m[1][range.clone()], &c.m[2][range]]
-}
-
-/// Writes F_ij into `out[k][q]` (k = x, y, z) for each partner q of particle i, zero beyond
-/// the cut-off (squared distance `cutoff2`). The vectorisable part: contiguous arrays, no sums.
-fn row_forces(c: &Columns, image: &Image, i: usize, partners: Partners, cutoff2: f64, out: &mut [Vec<f64>; 3]) {
-    // Without periodic axes the image term is d − 0 = d: the same bits without its arithmetic.
-    if image.length == [0.0; 3] {
-        row_forces_in::<false>(c, image, i, partners, cutoff2, out)
-    } else {
-        row_forces_in::<true>(c, image, i, partners, cutoff2, out)
-    }
-}
-
-#[inline(always)]
-fn row_forces_in<const PERIODIC: bool>(c: &Columns, image: &Image, i: usize, partners: Partners, cutoff2: f64, out: &mut [Vec<f64>; 3]) {
-    let (xi, mi) = ([c.x[0][i], c.x[1][i], c.x[2][i]], [c.m[0][i], c.m[1][i], c.m[2][i]]);
-    let len = partners[0].len();
-    // Every entry is written below: resized, not cleared.
-    for o in out.iter_mut() {
-        o.resize(len, 0.0);
-    }
-    let [ox, oy, oz] = out.each_mut().map(|o| &mut o[..len]);
-    let [xs, ys, zs, mxs, mys, mzs] = partners.map(|p| &p[..len]);
-    for q in 0..len {
-        let d = [xi[0] - xs[q], xi[1] - ys[q], xi[2] - zs[q]];
-        let d = if PERIODIC { [0, 1, 2].map(|k| d[k] - image.length[k] * (d[k] * image.inverse[k]).round_ties_even()) } else { d };
-        let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-        let inv = 1.0 / r2.sqrt();
-        let rhat = [d[0] * inv, d[1] * inv, d[2] * inv];
-        let mj = [mxs[q], mys[q], mzs[q]];
-        let mir = mi[0] * rhat[0] + mi[1] * rhat[1] + mi[2] * rhat[2];
-        let mjr = mj[0] * rhat[0] + mj[1] * rhat[1] + mj[2] * rhat[2];
-        let mimj = mi[0] * mj[0] + mi[1] * mj[1] + mi[2] * mj[2];
-        let scale = if r2 < cutoff2 { PREFACTOR * (inv * inv) * (inv * inv) } else { 0.0 };
-        let radial = mimj - 5.0 * mir * mjr;
-        ox[q] = scale * (mir * mj[0] + mjr * mi[0] + radial * rhat[0]);
-        oy[q] = scale * (mir * mj[1] + mjr * mi[1] + radial * rhat[1]);
-        oz[q] = scale * (mir * mj[2] + mjr * mi[2] + radial * rhat[2]);
-    }
-}
-
-/// Σ of one row's forces in eight running sums, the term of partner j in sum j mod 8, then the
-/// eight in order: a fixed order for any thread count, in which the zero terms of candidates
-/// beyond the cut-off change nothing (so the sum does not depend on when the candidates were
-/// built, and a resumed run stays bitwise equal).
-fn row_sum(out: &[Vec<f64>; 3], js: &[u32]) -> Vec3 {
-    row_sum_and_scatter(out, js, |_, _| ())
-}
-
-/// [`row_sum`], calling `each(j, F_ij)` for every partner on the way (the half rows' reaction).
-#[inline(always)]
-fn row_sum_and_scatter(out: &[Vec<f64>; 3], js: &[u32], mut each: impl FnMut(usize, Vec3)) -> Vec3 {
-    let mut lanes = [[0.0; 3]; 8];
-    let terms = out[0].iter().zip(&out[1]).zip(&out[2]);
-    for (((&fx, &fy), &fz), &j) in terms.zip(js) {
-        let lane = &mut lanes[j as usize % 8];
-        lane[0] += fx;
-        lane[1] += fy;
-        lane[2] += fz;
-        each(j as usize, Vec3::new(fx, fy, fz));
-    }
-    Vec3::from_fn(|k, _| lanes.iter().fold(0.0, |a, lane| a + lane[k]))
-}
-
-/// [`row_sum`] for the contiguous partners `start..`: the same sums, vectorised (lane j mod 8 of
-/// partner q = j − start is lane q mod 8 turned by start).
-fn contiguous_row_sum(out: &[Vec<f64>; 3], start: usize) -> Vec3 {
-    let lanes_of = |v: &[f64]| {
-        let mut lanes = [0.0; 8];
-        let chunks = v.chunks_exact(8);
-        let rest = chunks.remainder();
-        for chunk in chunks {
-            for l in 0..8 {
-                lanes[l] += chunk[l];
+        // Each row's entries become the blocks that hold them.
+        self.blocks.clear();
+        for i in 0..n {
+            let row = self.start[i]..self.start[i + 1];
+            self.start[i] = self.blocks.len();
+            for &j in &self.js[row] {
+                let block = j / BLOCK as u32;
+                if self.blocks.len() == self.start[i] || self.blocks.last() != Some(&block) {
+                    self.blocks.push(block);
+                }
             }
         }
-        for (l, x) in rest.iter().enumerate() {
-            lanes[l] += x;
+        self.start[n] = self.blocks.len();
+    }
+
+    fn row(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
+        self.blocks[self.start[i]..self.start[i + 1]].iter().map(|&b| b as usize)
+    }
+}
+
+/// One row of the sum: particle i and the test of its partners j, closer than the cut-off
+/// (squared distance `cutoff2`) and, in i's own block, j > i (half rows) or j ≠ i (full rows).
+struct Row {
+    x: [f64x4; 3],
+    m: [f64x4; 3],
+    cutoff2: f64x4,
+    own_block: usize,
+    /// Lanes of the own block that are partners.
+    own_lanes: f64x4,
+}
+
+impl Row {
+    fn new(blocks: &[ParticleBlock], i: usize, half: bool, cutoff2: f64) -> Self {
+        let own = &blocks[i / BLOCK];
+        let (x, m) = (lane(&own.x, i % BLOCK), lane(&own.m, i % BLOCK));
+        let lanes = f64x4::new([0.0, 1.0, 2.0, 3.0]);
+        let own = f64x4::splat((i % BLOCK) as f64);
+        let own_lanes = if half { lanes.simd_gt(own) } else { lanes.simd_ne(own) };
+        let splat = |v: Vec3| [0, 1, 2].map(|k| f64x4::splat(v[k]));
+        Row { x: splat(x), m: splat(m), cutoff2: f64x4::splat(cutoff2), own_block: i / BLOCK, own_lanes }
+    }
+}
+
+/// F_ij of row i's particle on the particles j of block b, by component, zero for the j that are
+/// not its partners: the module's formula with d = x_i − x_j not normalised,
+///
+///   F_ij = 3μ0/(4π r⁵) [ (m_i·d) m_j + (m_j·d) m_i + (m_i·m_j − 5 (m_i·d)(m_j·d)/r²) d ],
+///
+/// and 1/r = √(r²)·(1/r²), whose square root and division run side by side rather than one
+/// after the other. It equals [`dipole_pair_force`] to rounding (tests/parallel.rs).
+#[inline(always)]
+fn block_forces<const PERIODIC: bool>(block: &ParticleBlock, image: &Image, row: &Row, b: usize) -> BlockVectors {
+    let (xi, mi, mj) = (&row.x, &row.m, &block.m);
+    let mut d = [xi[0] - block.x[0], xi[1] - block.x[1], xi[2] - block.x[2]];
+    if PERIODIC {
+        for k in 0..3 {
+            d[k] -= f64x4::splat(image.length[k]) * (d[k] * f64x4::splat(image.inverse[k])).round_ties_even();
         }
-        // Lane q mod 8 holds the partners j = start + q: in j order it is lane (l − start) mod 8.
-        (0..8).fold(0.0, |a, l| a + lanes[(l + 8 - start % 8) % 8])
-    };
-    Vec3::new(lanes_of(&out[0]), lanes_of(&out[1]), lanes_of(&out[2]))
+    }
+    let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    let inv2 = f64x4::ONE / r2;
+    let inv = r2.sqrt() * inv2;
+    let mid = mi[0] * d[0] + mi[1] * d[1] + mi[2] * d[2];
+    let mjd = mj[0] * d[0] + mj[1] * d[1] + mj[2] * d[2];
+    let mimj = mi[0] * mj[0] + mi[1] * mj[1] + mi[2] * mj[2];
+    let scale = f64x4::splat(PREFACTOR) * (inv2 * inv2) * inv;
+    let radial = mimj - f64x4::splat(5.0) * mid * mjd * inv2;
+    let mut partner = r2.simd_lt(row.cutoff2);
+    if b == row.own_block {
+        partner = partner & row.own_lanes;
+    }
+    // A selection, not a product: the lanes left out (i itself, padding) may hold NaN.
+    let component = |k: usize| partner.select(scale * (mid * mj[k] + mjd * mi[k] + radial * d[k]), f64x4::ZERO);
+    [component(0), component(1), component(2)]
+}
+
+/// Σ_j F_ij over the partners in `blocks` (ascending), subtracting each F_ij from
+/// `reaction[j]` on the way when `HALF` (F_ji = −F_ij). The sum runs in eight running sums, the
+/// term of partner j in sum j mod 8, then the eight in order: a fixed order for any thread count,
+/// in which the zero terms of the lanes left out change nothing (so the sum does not depend on
+/// which candidates the Verlet list holds, and a resumed run stays bitwise equal).
+#[inline(always)]
+fn row_sum<const PERIODIC: bool, const HALF: bool>(
+    particles: &[ParticleBlock],
+    image: &Image,
+    row: &Row,
+    blocks: impl Iterator<Item = usize>,
+    reaction: &mut [BlockVectors],
+) -> Vec3 {
+    let mut sums = [[f64x4::ZERO; 2]; 3];
+    for b in blocks {
+        let f = block_forces::<PERIODIC>(&particles[b], image, row, b);
+        for k in 0..3 {
+            sums[k][b % 2] += f[k];
+            if HALF {
+                reaction[b][k] -= f[k];
+            }
+        }
+    }
+    Vec3::from_fn(|k, _| sums[k].iter().flat_map(|s| s.to_array()).fold(0.0, |a, s| a + s))
 }
 
 /// Adds Σ_j F_ij to `force` with partners from `rows` (`None` = all other particles) within
 /// `cutoff2`: half rows with F_ji = −F_ij below [`parallel::MIN_PARALLEL_LEN`] particles, full
 /// rows summed per particle in parallel above (see the module note).
-fn add_row_sums(c: &Columns, image: &Image, rows: Option<&Rows>, cutoff2: f64, force: &mut [Vec3]) {
+fn add_row_sums(particles: &[ParticleBlock], image: &Image, rows: Option<&Rows>, cutoff2: f64, force: &mut [Vec3]) {
+    // Without periodic axes the image term is d − 0 = d: the same bits without its arithmetic.
+    if image.length == [0.0; 3] {
+        add_row_sums_in::<false>(particles, image, rows, cutoff2, force)
+    } else {
+        add_row_sums_in::<true>(particles, image, rows, cutoff2, force)
+    }
+}
+
+fn add_row_sums_in<const PERIODIC: bool>(particles: &[ParticleBlock], image: &Image, rows: Option<&Rows>, cutoff2: f64, force: &mut [Vec3]) {
     let n = force.len();
+    let all_blocks = |from: usize| from / BLOCK..n.div_ceil(BLOCK);
     if n < parallel::MIN_PARALLEL_LEN {
-        let (mut out, mut buffer): ([Vec<f64>; 3], [Vec<f64>; 6]) = Default::default();
+        // The forces in blocks, so that a block's reactions are one vector operation; each
+        // particle receives its reactions (rows i' < i, in order) before its own row's sum, as in
+        // a pair-by-pair loop.
+        let mut total = vec![];
+        fill_blocks(&mut total, force);
         for i in 0..n {
-            match rows {
-                Some(rows) => {
-                    let js = rows.row(i);
-                    row_forces(c, image, i, gather(c, js, &mut buffer), cutoff2, &mut out);
-                    let sum = row_sum_and_scatter(&out, js, |j, f| force[j] -= f);
-                    force[i] += sum;
-                }
-                None => {
-                    row_forces(c, image, i, slice(c, i + 1..n), cutoff2, &mut out);
-                    force[i] += contiguous_row_sum(&out, i + 1);
-                    for q in 0..n - i - 1 {
-                        force[i + 1 + q] -= Vec3::new(out[0][q], out[1][q], out[2][q]);
-                    }
-                }
+            let row = Row::new(particles, i, true, cutoff2);
+            let sum = match rows {
+                Some(rows) => row_sum::<PERIODIC, true>(particles, image, &row, rows.row(i), &mut total),
+                None => row_sum::<PERIODIC, true>(particles, image, &row, all_blocks(i + 1), &mut total),
+            };
+            for k in 0..3 {
+                total[i / BLOCK][k].as_mut_array()[i % BLOCK] += sum[k];
             }
+        }
+        for (i, f) in force.iter_mut().enumerate() {
+            *f = lane(&total[i / BLOCK], i % BLOCK);
         }
     } else {
         use rayon::prelude::*;
         let sums: Vec<Vec3> = (0..n)
             .into_par_iter()
             .with_min_len(64)
-            .map_init(
-                || <([Vec<f64>; 3], [Vec<f64>; 6])>::default(),
-                |(out, buffer), i| match rows {
-                    Some(rows) => {
-                        let js = rows.row(i);
-                        row_forces(c, image, i, gather(c, js, buffer), cutoff2, out);
-                        row_sum(out, js)
-                    }
-                    None => {
-                        row_forces(c, image, i, slice(c, 0..i), cutoff2, out);
-                        let before = contiguous_row_sum(out, 0);
-                        row_forces(c, image, i, slice(c, i + 1..n), cutoff2, out);
-                        before + contiguous_row_sum(out, i + 1)
-                    }
-                },
-            )
+            .map(|i| {
+                let row = Row::new(particles, i, false, cutoff2);
+                let no_reactions = &mut [];
+                match rows {
+                    Some(rows) => row_sum::<PERIODIC, false>(particles, image, &row, rows.row(i), no_reactions),
+                    None => row_sum::<PERIODIC, false>(particles, image, &row, all_blocks(0), no_reactions),
+                }
+            })
             .collect();
         force.iter_mut().zip(&sums).for_each(|(f, sum)| *f += sum);
     }
@@ -290,13 +312,13 @@ pub struct DipoleForce {
     verlet: VerletList,
     pairs: Vec<Pair>,
     buffer: Vec<Vec3>,
-    columns: Columns,
+    particle_blocks: Vec<ParticleBlock>,
     rows: Rows,
 }
 
 impl DipoleForce {
     pub fn new(cutoff: Option<f64>, b0: Vec3, gradient: Matrix3<f64>) -> Self {
-        Self { cutoff, b0, gradient, verlet: VerletList::default(), pairs: vec![], buffer: vec![], columns: Columns::default(), rows: Rows::default() }
+        Self { cutoff, b0, gradient, verlet: VerletList::default(), pairs: vec![], buffer: vec![], particle_blocks: vec![], rows: Rows::default() }
     }
 }
 
@@ -317,12 +339,12 @@ impl ForceTerm for DipoleForce {
                 if self.verlet.update(&p.position, ctx.domain, c, c / 15.0) {
                     self.rows.build(n, self.verlet.candidates(), n >= parallel::MIN_PARALLEL_LEN);
                 }
-                self.columns.fill(&p.position, &p.moment);
-                add_row_sums(&self.columns, &Image::of(ctx.domain), Some(&self.rows), c * c, &mut p.force);
+                fill_particle_blocks(&mut self.particle_blocks, &p.position, &p.moment);
+                add_row_sums(&self.particle_blocks, &Image::of(ctx.domain), Some(&self.rows), c * c, &mut p.force);
             }
             (_, None) => {
-                self.columns.fill(&p.position, &p.moment);
-                add_row_sums(&self.columns, &Image::of(ctx.domain), None, f64::INFINITY, &mut p.force);
+                fill_particle_blocks(&mut self.particle_blocks, &p.position, &p.moment);
+                add_row_sums(&self.particle_blocks, &Image::of(ctx.domain), None, f64::INFINITY, &mut p.force);
             }
         }
         if p.has_permanent_moments {
