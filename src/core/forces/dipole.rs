@@ -154,8 +154,9 @@ impl Rows {
 /// One row of the sum: particle i and the test of its partners j, closer than the cut-off
 /// (squared distance `cutoff2`) and, in i's own block, j > i (half rows) or j ≠ i (full rows).
 struct Row {
-    x: [f64x4; 3],
-    m: [f64x4; 3],
+    /// Particle i's position and moment in every lane.
+    x: BlockVectors,
+    m: BlockVectors,
     cutoff2: f64x4,
     own_block: usize,
     /// Lanes of the own block that are partners.
@@ -164,11 +165,10 @@ struct Row {
 
 impl Row {
     fn new(blocks: &[ParticleBlock], i: usize, half: bool, cutoff2: f64) -> Self {
-        let own = &blocks[i / BLOCK];
-        let (x, m) = (lane(&own.x, i % BLOCK), lane(&own.m, i % BLOCK));
-        let lanes = f64x4::new([0.0, 1.0, 2.0, 3.0]);
-        let own = f64x4::splat((i % BLOCK) as f64);
-        let own_lanes = if half { lanes.simd_gt(own) } else { lanes.simd_ne(own) };
+        let block = &blocks[i / BLOCK];
+        let (x, m) = (lane(&block.x, i % BLOCK), lane(&block.m, i % BLOCK));
+        let (lanes, own_lane) = (f64x4::new([0.0, 1.0, 2.0, 3.0]), f64x4::splat((i % BLOCK) as f64));
+        let own_lanes = if half { lanes.simd_gt(own_lane) } else { lanes.simd_ne(own_lane) };
         let splat = |v: Vec3| [0, 1, 2].map(|k| f64x4::splat(v[k]));
         Row { x: splat(x), m: splat(m), cutoff2: f64x4::splat(cutoff2), own_block: i / BLOCK, own_lanes }
     }
