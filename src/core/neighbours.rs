@@ -165,7 +165,8 @@ impl VerletList {
         let any_moved = |xs: &[Vec3], x0s: &[Vec3]| xs.iter().zip(x0s).fold(false, |any, pair| any | moved(pair));
         let moved_too_far = stale
             || if parallel::worth_it(positions.len()) {
-                let chunks = positions.par_chunks(parallel::CHUNK).zip(self.reference.par_chunks(parallel::CHUNK));
+                let share = parallel::share(positions.len());
+                let chunks = positions.par_chunks(share).zip(self.reference.par_chunks(share));
                 chunks.map(|(xs, x0s)| any_moved(xs, x0s)).reduce(|| false, |a, b| a | b)
             } else {
                 any_moved(positions, &self.reference)

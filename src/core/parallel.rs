@@ -10,8 +10,16 @@ use super::state::Vec3;
 /// Shortest loop worth splitting across threads (about 20 µs of per-particle work).
 pub const MIN_PARALLEL_LEN: usize = 4096;
 
-/// Chunk length for parallel loops: long enough that the hand-off stays small.
+/// Chunk length for parallel loops over pairs: long enough that the hand-off stays small.
 pub const CHUNK: usize = 1024;
+
+/// Piece length of a parallel loop over `len` per-particle items: one contiguous share per
+/// thread, split the same way in every loop of the step, so that each thread reads back from its
+/// own cache the particles it wrote in the loop before (with finer pieces rayon hands them out by
+/// timing, and half of them come from the other core).
+pub fn share(len: usize) -> usize {
+    len.div_ceil(rayon::current_num_threads()).max(CHUNK)
+}
 
 thread_local! {
     /// Set on the thread running a step inside [`with_warm_pool`].
@@ -112,7 +120,7 @@ pub fn fill(out: &mut [Vec3], value: Vec3) {
     };
     if worth_it(out.len()) {
         use rayon::prelude::*;
-        out.par_chunks_mut(CHUNK).for_each(fill_chunk);
+        out.par_chunks_mut(share(out.len())).for_each(fill_chunk);
     } else {
         fill_chunk(out);
     }
@@ -122,7 +130,8 @@ pub fn fill(out: &mut [Vec3], value: Vec3) {
 pub fn copy<T: Copy + Send + Sync>(from: &[T], out: &mut [T]) {
     if worth_it(out.len()) {
         use rayon::prelude::*;
-        out.par_chunks_mut(CHUNK).zip(from.par_chunks(CHUNK)).for_each(|(o, f)| o.copy_from_slice(f));
+        let share = share(out.len());
+        out.par_chunks_mut(share).zip(from.par_chunks(share)).for_each(|(o, f)| o.copy_from_slice(f));
     } else {
         out.copy_from_slice(from);
     }

@@ -206,7 +206,7 @@ impl Monitor {
         // Branch-free test of all particles first; the first failing one is looked for only then.
         let any = if super::parallel::worth_it(p.len()) {
             let particles = p.position.par_iter().zip(&p.velocity).zip(&p.radius);
-            particles.with_min_len(super::parallel::CHUNK).map(suspect).reduce(|| false, |a, b| a | b)
+            particles.with_min_len(super::parallel::share(p.len())).map(suspect).reduce(|| false, |a, b| a | b)
         } else {
             particles().fold(false, |out, item| out | suspect(item))
         };

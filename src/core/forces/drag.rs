@@ -130,7 +130,8 @@ impl ForceTerm for Drag {
             }
         };
         if parallel::worth_it(force.len()) {
-            force.par_iter_mut().zip(torque.par_iter_mut()).enumerate().with_min_len(parallel::CHUNK).for_each(drag);
+            let share = parallel::share(force.len());
+            force.par_iter_mut().zip(torque.par_iter_mut()).enumerate().with_min_len(share).for_each(drag);
         } else {
             force.iter_mut().zip(torque.iter_mut()).enumerate().for_each(drag);
         }

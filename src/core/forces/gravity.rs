@@ -50,7 +50,7 @@ impl ForceTerm for GravityBuoyancy {
         let p = &mut state.particles;
         let add = |(f, w): (&mut Vec3, &Vec3)| *f += w;
         if parallel::worth_it(p.len()) {
-            p.force.par_iter_mut().zip(&self.weights).with_min_len(parallel::CHUNK).for_each(add);
+            p.force.par_iter_mut().zip(&self.weights).with_min_len(parallel::share(self.weights.len())).for_each(add);
         } else {
             p.force.iter_mut().zip(&self.weights).for_each(add);
         }

@@ -80,7 +80,7 @@ fn kick_by(velocity: &mut [Vec3], spin: &mut [Vec3], force: &[Vec3], torque: &[V
             };
             if parallel::worth_it(velocity.len()) {
                 let state = velocity.par_iter_mut().zip(spin).zip(force.par_iter().zip(torque));
-                state.zip(mass.par_iter().zip(inertia)).with_min_len(parallel::CHUNK).for_each(|(s, (m, i))| kick(s, *m, *i))
+                state.zip(mass.par_iter().zip(inertia)).with_min_len(parallel::share(mass.len())).for_each(|(s, (m, i))| kick(s, *m, *i))
             } else {
                 let state = velocity.iter_mut().zip(spin).zip(force.iter().zip(torque));
                 state.zip(mass.iter().zip(inertia)).for_each(|(s, (m, i))| kick(s, *m, *i))
@@ -103,7 +103,7 @@ fn components_mut(v: &mut [Vec3]) -> &mut [f64] {
 fn add_scaled(a: &mut [f64], b: &[f64], c: f64) {
     let add = |(a, b): (&mut f64, &f64)| *a += b * c;
     if parallel::worth_it(a.len() / 3) {
-        a.par_iter_mut().zip(b).with_min_len(3 * parallel::CHUNK).for_each(add);
+        a.par_iter_mut().zip(b).with_min_len(parallel::share(b.len())).for_each(add);
     } else {
         a.iter_mut().zip(b).for_each(add);
     }
@@ -129,8 +129,8 @@ fn kick_drift(p: &mut Particles, kick: f64, drift: f64) {
             };
             let only_drift = |(x, v): (&mut f64, &mut f64)| *x += *v * drift;
             match (in_parallel, kick != 0.0) {
-                (true, true) => x.par_iter_mut().zip(v).zip(f).with_min_len(3 * parallel::CHUNK).for_each(kick_and_drift),
-                (true, false) => x.par_iter_mut().zip(v).with_min_len(3 * parallel::CHUNK).for_each(only_drift),
+                (true, true) => x.par_iter_mut().zip(v).zip(f).with_min_len(parallel::share(f.len())).for_each(kick_and_drift),
+                (true, false) => x.par_iter_mut().zip(v).with_min_len(parallel::share(f.len())).for_each(only_drift),
                 (false, true) => x.iter_mut().zip(v).zip(f).for_each(kick_and_drift),
                 (false, false) => x.iter_mut().zip(v).for_each(only_drift),
             }
@@ -149,7 +149,7 @@ fn kick_drift(p: &mut Particles, kick: f64, drift: f64) {
             };
             if parallel::worth_it(p.position.len()) {
                 let arrays = p.position.par_iter_mut().zip(&mut p.velocity).zip(&mut p.angular_velocity).zip(&p.force).zip(&p.torque);
-                arrays.zip(mass.par_iter().zip(inertia)).with_min_len(parallel::CHUNK).for_each(|(a, (m, i))| step(a, *m, *i))
+                arrays.zip(mass.par_iter().zip(inertia)).with_min_len(parallel::share(mass.len())).for_each(|(a, (m, i))| step(a, *m, *i))
             } else {
                 let arrays = p.position.iter_mut().zip(&mut p.velocity).zip(&mut p.angular_velocity).zip(&p.force).zip(&p.torque);
                 arrays.zip(mass.iter().zip(inertia)).for_each(|(a, (m, i))| step(a, *m, *i))
