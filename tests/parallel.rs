@@ -11,15 +11,11 @@ use magdem::scene::Scene;
 /// `n` particles at the case-1 concentration of 4.5 mg/ml (box scaled from the paper's 307),
 /// walls, contact, drag with shielding, gravity, and the dipole term with `dipole` settings.
 fn crowd(n: usize, dipole: &str, steps: u64) -> Scene {
-    crowd_numbered(n, dipole, steps, "placement")
+    crowd_in(n, dipole, steps, "placement", "")
 }
 
-/// [`crowd`] with the particles numbered by `order` (`placement` or `spatial`).
-fn crowd_numbered(n: usize, dipole: &str, steps: u64, order: &str) -> Scene {
-    crowd_in(n, dipole, steps, order, "")
-}
-
-/// [`crowd_numbered`] with the domain's `boundary` line (empty: walls all round).
+/// [`crowd`] with the particles numbered by `order` (`placement` or `spatial`) and the domain's
+/// `boundary` line (empty: walls all round).
 fn crowd_in(n: usize, dipole: &str, steps: u64, order: &str, boundary: &str) -> Scene {
     let scale = (n as f64 / 307.0).cbrt();
     let (l, h) = (3.96e-4 * scale, 3.3e-4 * scale);
@@ -72,7 +68,6 @@ fn the_row_sums_equal_a_direct_pair_sum() {
                 None => "induction = \"none\"".to_string(),
             };
             let scene = crowd_in(n, &dipole, 1, "placement", boundary);
-            let domain = scene.domain.clone();
             let mut field = scene.magnetic_force_field().unwrap();
             field.terms.retain(|t| t.name() == "dipole");
             let mut state = scene.initial_state();
@@ -82,13 +77,7 @@ fn the_row_sums_equal_a_direct_pair_sum() {
             let mut direct = vec![Vec3::zeros(); p.len()];
             for i in 0..p.len() {
                 for j in i + 1..p.len() {
-                    let mut r = p.position[i] - p.position[j];
-                    for k in 0..2 {
-                        if domain.periodic[k] {
-                            let l = domain.hi[k] - domain.lo[k];
-                            r[k] -= l * (r[k] / l).round();
-                        }
-                    }
+                    let r = scene.domain.displacement(&p.position[i], &p.position[j]);
                     if r.norm() < range {
                         let f = dipole_pair_force(&p.moment[i], &p.moment[j], &r, r.norm());
                         direct[i] += f;
@@ -109,7 +98,7 @@ fn numbering_particles_in_space_changes_only_the_numbering() {
     // initial position) follows the same path after 60 steps with contacts, drag and the paper's
     // induction, to rounding (the sums run in another order): within 1e-9 of a radius.
     let dipole = "induction = \"paper\"\ncutoff_diameters = 15.0";
-    let (placed, spatial) = (crowd_numbered(900, dipole, 60, "placement"), crowd_numbered(900, dipole, 60, "spatial"));
+    let (placed, spatial) = (crowd_in(900, dipole, 60, "placement", ""), crowd_in(900, dipole, 60, "spatial", ""));
     let (x0, y0) = (placed.initial_state().particles.position, spatial.initial_state().particles.position);
     let matching: Vec<usize> = y0.iter().map(|y| x0.iter().position(|x| x == y).expect("the same positions")).collect();
     assert!(matching.iter().enumerate().any(|(k, &i)| k != i), "the spatial numbering should differ");
