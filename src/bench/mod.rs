@@ -176,10 +176,11 @@ pub fn time_magdem(scene: &Scene, threads: usize, work: Work, timings: bool) -> 
     let result = pool.install(|| {
         let before = heap_bytes();
         let mut simulation = scene.simulation(None);
+        simulation.initialise()?;
         if timings {
+            // The loop's phases only (the initial evaluation builds the neighbour lists).
             simulation.field.timers = PhaseTimers::enabled();
         }
-        simulation.initialise()?;
         let start = Instant::now();
         match work {
             Work::Steps => {

@@ -44,8 +44,10 @@ struct Bench<'a> {
     dipole_pairs: Vec<(usize, usize)>,
     engine_versions: Vec<String>,
     mpi: Vec<MpiRun>,
-    /// Streaming bandwidth (GB/s) on one core and on two.
-    stream: (f64, f64),
+    /// Per case: seconds of a streaming try on one core and on two, run in turns with the case.
+    stream: Vec<(String, Spread, Spread)>,
+    /// Per case: each phase's median seconds per step on one thread and on two.
+    phases_on_both_cores: Vec<(String, Vec<PhaseOnBothCores>)>,
     notes: Vec<String>,
 }
 
@@ -66,6 +68,25 @@ struct MpiRun {
     max_difference: Option<f64>,
 }
 
+/// A phase's name and its median seconds per step on one thread and on two.
+type PhaseOnBothCores = (&'static str, f64, f64);
+
+/// What the runs of one magdem contender leave: the last run, and each timed run's seconds per
+/// step by phase.
+#[derive(Default)]
+struct MagdemRuns {
+    last: Option<MagdemRun>,
+    phases: Vec<Vec<(&'static str, f64)>>,
+}
+
+impl MagdemRuns {
+    /// Median seconds per step of phase `name` over the timed runs.
+    fn median(&self, name: &str) -> f64 {
+        let times: Vec<f64> = self.phases.iter().map(|run| run.iter().find(|(n, _)| *n == name).map_or(0.0, |(_, t)| *t)).collect();
+        Spread::of(&times).median
+    }
+}
+
 /// One contender of a case: who runs, on how many threads, and one timed run (seconds).
 struct Contender<'a> {
     engine: &'static str,
@@ -74,15 +95,27 @@ struct Contender<'a> {
 }
 
 impl<'a> Contender<'a> {
-    /// magdem on `threads` threads; each run's finished simulation goes to `last`.
-    fn magdem(scene: &'a Scene, threads: usize, work: Work, last: &'a mut Option<MagdemRun>) -> Self {
+    /// magdem on `threads` threads, with its phase timers on if `timed`; what the runs leave
+    /// goes to `runs`.
+    fn magdem(scene: &'a Scene, threads: usize, work: Work, timed: bool, runs: &'a mut MagdemRuns) -> Self {
+        let steps = scene.total_steps() as f64;
         let run = move || {
-            let run = time_magdem(scene, threads, work, false)?;
+            let run = time_magdem(scene, threads, work, timed)?;
+            if timed {
+                runs.phases.push(run.simulation.timers().phases().iter().map(|(name, d)| (*name, d.as_secs_f64() / steps)).collect());
+            }
             let seconds = run.seconds;
-            *last = Some(run);
+            runs.last = Some(run);
             Ok(seconds)
         };
         Contender { engine: "magdem", threads, run: Box::new(run) }
+    }
+
+    /// The streaming try of [`stream_seconds`] on `threads` cores, as a contender so that it
+    /// sees the machine in the same minutes as the case it runs with.
+    fn stream(threads: usize) -> Self {
+        let (mut a, b) = (vec![1.0_f64; STREAM_LEN], vec![1e-9_f64; STREAM_LEN]);
+        Contender { engine: "stream", threads, run: Box::new(move || Ok(stream_seconds(threads, &mut a, &b))) }
     }
 
     /// A reference engine on `procs` MPI processes (one: no `mpirun`), if installed.
@@ -121,10 +154,10 @@ impl Bench<'_> {
 
     /// magdem alone on `threads` threads (the scaling study), `repeats` runs; returns the last.
     fn magdem(&mut self, case: &str, scene: &Scene, threads: usize, work: Work) -> Result<MagdemRun, Error> {
-        let mut last = None;
-        let contender = Contender::magdem(scene, threads, work, &mut last);
+        let mut runs = MagdemRuns::default();
+        let contender = Contender::magdem(scene, threads, work, false, &mut runs);
         self.compare(case, scene.initial.len(), scene.total_steps(), vec![contender])?;
-        Ok(last.expect("at least one repeat"))
+        Ok(runs.last.expect("at least one repeat"))
     }
 
     /// The phase shares of one more single-thread run with the phase timers on.
@@ -161,8 +194,11 @@ impl Bench<'_> {
                 let steps = contact_steps(n);
                 let dir = self.options.work.join(format!("contact-{}-{n}", packing.name()));
                 let scene = scene_in(&dir, "scene", &contact_scene(packing, n, steps))?;
-                let (mut one, mut two) = (None, None);
-                let mut contenders = vec![Contender::magdem(&scene, 1, Work::Steps, &mut one), Contender::magdem(&scene, 2, Work::Steps, &mut two)];
+                // At 30 000 (where two threads have a target) magdem's runs time their phases: a
+                // clock read per phase, under a microsecond of a step of 100–400 µs.
+                let timed = n == 30000;
+                let (mut one, mut two) = (MagdemRuns::default(), MagdemRuns::default());
+                let mut contenders = vec![Contender::magdem(&scene, 1, Work::Steps, timed, &mut one), Contender::magdem(&scene, 2, Work::Steps, timed, &mut two)];
                 // At 30 000 the engines also run on both cores (mpirun -np 2), beside magdem's threads.
                 let procs = if n == 30000 && mpirun_available() { vec![1, 2] } else { vec![1] };
                 for engine in [Engine::Liggghts, Engine::Lammps] {
@@ -171,8 +207,19 @@ impl Bench<'_> {
                         contenders.extend(Contender::engine(engine, np, move || time_engine_scene(engine, scene, &engine_dir, np)));
                     }
                 }
+                if timed {
+                    contenders.extend([Contender::stream(1), Contender::stream(2)]);
+                }
                 self.compare(&case, n, steps, contenders)?;
-                let (one, two) = (one.expect("one-thread runs"), two.expect("two-thread runs"));
+                if timed {
+                    let (streams, others) = std::mem::take(&mut self.measurements).into_iter().partition(|m| m.engine == "stream");
+                    self.measurements = others;
+                    let on = |threads| streams.iter().find(|m: &&Measurement| m.threads == threads).map(|m| m.seconds);
+                    self.stream.extend(on(1).zip(on(2)).map(|(one, two)| (case.clone(), one, two)));
+                    let phases = one.phases[0].iter().map(|(name, _)| (*name, one.median(name), two.median(name))).collect();
+                    self.phases_on_both_cores.push((case.clone(), phases));
+                }
+                let (one, two) = (one.last.expect("one-thread runs"), two.last.expect("two-thread runs"));
                 self.bitwise.push((case.clone(), bitwise_equal(&one.simulation, &two.simulation)));
                 for engine in [Engine::Liggghts, Engine::Lammps] {
                     self.record_version(&dir.join(engine.name()));
@@ -201,9 +248,9 @@ impl Bench<'_> {
             progress.set_message(case.clone());
             let dir = self.options.work.join(format!("dipole-{}", label.replace(' ', "-")));
             let scene = scene_in(&dir, "scene", &magnetic_scene(307, cutoff, steps))?;
-            let mut last = None;
+            let mut runs = MagdemRuns::default();
             let lammps_dir = dir.join("lammps");
-            let mut contenders = vec![Contender::magdem(&scene, 1, Work::Forces, &mut last)];
+            let mut contenders = vec![Contender::magdem(&scene, 1, Work::Forces, false, &mut runs)];
             contenders.extend(Contender::engine(Engine::Lammps, 1, || time_lammps_dipoles(&scene, &lammps_dir)));
             self.compare(&case, scene.initial.len(), steps, contenders)?;
             self.profile(&case, &scene, Work::Forces)?;
@@ -309,30 +356,28 @@ fn last_frame(path: &Path, engine: &str, route: &'static str, procs: usize) -> R
     })
 }
 
-/// Bandwidth (GB/s) of `a += s·b` over two 2 MiB arrays (beyond a core's second-level cache,
-/// inside the third, as the particle arrays of the 30 000-particle scenes), each of `threads`
-/// threads updating its share 400 times; the best of ten tries. Every pass of a step over
-/// particle arrays of that size is bounded by it.
-fn stream_bandwidth(threads: usize) -> f64 {
-    const LEN: usize = 1 << 18;
-    const ROUNDS: usize = 400;
-    let (mut a, b) = (vec![1.0_f64; LEN], vec![1e-9_f64; LEN]);
-    let mut best = f64::INFINITY;
-    for _ in 0..10 {
-        let started = std::time::Instant::now();
-        std::thread::scope(|scope| {
-            for (a, b) in a.chunks_mut(LEN / threads).zip(b.chunks(LEN / threads)) {
-                scope.spawn(move || {
-                    for _ in 0..ROUNDS {
-                        a.iter_mut().zip(b).for_each(|(x, y)| *x += 0.5 * y);
-                        std::hint::black_box(&mut *a);
-                    }
-                });
-            }
-        });
-        best = best.min(started.elapsed().as_secs_f64());
-    }
-    (3 * 8 * LEN * ROUNDS) as f64 / best / 1e9
+/// Length of the streaming arrays: 2 MiB each, beyond a core's second-level cache and inside
+/// the third, as the particle arrays of the 30 000-particle scenes.
+const STREAM_LEN: usize = 1 << 18;
+const STREAM_ROUNDS: usize = 400;
+/// Bytes one streaming try moves, each read and each write counted once.
+const STREAM_BYTES: f64 = (3 * 8 * STREAM_LEN * STREAM_ROUNDS) as f64;
+
+/// Seconds of one streaming try: `a += s·b`, each of `threads` threads updating its share
+/// [`STREAM_ROUNDS`] times.
+fn stream_seconds(threads: usize, a: &mut [f64], b: &[f64]) -> f64 {
+    let started = std::time::Instant::now();
+    std::thread::scope(|scope| {
+        for (a, b) in a.chunks_mut(a.len() / threads).zip(b.chunks(b.len() / threads)) {
+            scope.spawn(move || {
+                for _ in 0..STREAM_ROUNDS {
+                    a.iter_mut().zip(b).for_each(|(x, y)| *x += 0.5 * y);
+                    std::hint::black_box(&mut *a);
+                }
+            });
+        }
+    });
+    started.elapsed().as_secs_f64()
 }
 
 fn mpirun_available() -> bool {
@@ -386,7 +431,7 @@ fn seconds(s: &Spread) -> String {
 /// `performance.csv` into `options.out`; returns the report's path.
 pub fn write(options: &Options) -> Result<PathBuf, Error> {
     std::fs::create_dir_all(&options.out)?;
-    let mut bench = Bench { options, measurements: vec![], profiles: vec![], bitwise: vec![], memory: vec![], dipole_pairs: vec![], engine_versions: vec![], mpi: vec![], stream: (stream_bandwidth(1), stream_bandwidth(2)), notes: vec![] };
+    let mut bench = Bench { options, measurements: vec![], profiles: vec![], bitwise: vec![], memory: vec![], dipole_pairs: vec![], engine_versions: vec![], mpi: vec![], stream: vec![], phases_on_both_cores: vec![], notes: vec![] };
     let total = 6 + 2 + scaling_sizes(options.max_particles).len() as u64 + options.mpi as u64;
     let progress = indicatif::ProgressBar::new(total).with_style(indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} cases {elapsed} {msg}")?);
     bench.contact_cases(&progress)?;
@@ -481,8 +526,10 @@ fn targets(bench: &Bench) -> String {
                 .iter()
                 .filter_map(|(engine, name)| Some(format!("{name} {:.2}×", bench.speedup(case, (engine, 2), (engine, 1))?)))
                 .collect();
-            let context = if engines.is_empty() { String::new() } else { format!(" (two MPI processes ÷ one: {}; see “Both cores”)", engines.join(", ")) };
-            lines.push(format!("{case}, two threads ÷ one ≥ 1.7×: {x:.2}× — {}{context}", verdict(x, 1.7)));
+            let stream = bench.stream.iter().find(|(c, _, _)| c == case).map(|(_, one, two)| format!("streaming two cores ÷ one in the same minutes: {:.2}×", one.median / two.median));
+            let context: Vec<String> = [(!engines.is_empty()).then(|| format!("two MPI processes ÷ one: {}", engines.join(", "))), stream].into_iter().flatten().collect();
+            let context = if context.is_empty() { String::new() } else { format!(" ({}; see “Both cores”)", context.join("; ")) };
+            lines.push(format!("{case}, two threads ÷ one ≥ 1.7×: {x:.3}× — {}{context}", verdict(x, 1.7)));
         }
     }
     for case in ["scaling contact sparse", "scaling contact dense", "scaling dipole cut-off 15 d"] {
@@ -511,23 +558,50 @@ fn targets(bench: &Bench) -> String {
 ", lines.iter().map(|l| format!("- {l}")).collect::<Vec<_>>().join("\n"))
 }
 
-/// magdem's two threads against the engines' two MPI processes at 30 000 particles, and the
-/// machine's streaming bandwidth on one core and two.
+/// magdem's two threads against the engines' two MPI processes at 30 000 particles, phase by
+/// phase, and the machine's streaming bandwidth on one core and two.
 fn both_cores(bench: &Bench) -> String {
-    let (one, two) = bench.stream;
-    let mut s = format!(
-        "\n## Both cores\n\nStreaming `a += s·b` over two 2 MiB arrays (beyond a core's second-level cache, as the particle arrays at 30 000 particles), best of ten tries: one core {one:.1} GB/s, two cores {two:.1} GB/s ({:.2}×), the most a second core could add to the contact step's passes over its particle arrays (kicks and drift, force seed, displacement check, monitor). magdem's step synchronises its two threads at every one of these short loops (10–50 µs each), so a core that is held up anywhere holds up the other; on a shared virtual machine what the second thread buys therefore varies from hour to hour ([performance-history.md](performance-history.md)). The reference engines on both cores (`mpirun -np 2`, the same decks; `performance.csv` lists them with 2 in its threads column), for comparison, medians:\n\n",
-        two / one
-    );
-    s += "| case | magdem 2 threads ÷ 1 | LIGGGHTS 2 processes ÷ 1 | LAMMPS 2 processes ÷ 1 | magdem 2 threads ÷ LIGGGHTS 2 processes speed | magdem 2 threads ÷ LAMMPS 2 processes speed |\n|---|---|---|---|---|---|\n";
+    let mut s = "\n## Both cores\n\nThe reference engines on both cores (`mpirun -np 2`, the same decks; `performance.csv` lists them with 2 in its threads column), for comparison, and the machine's memory: streaming `a += s·b` over two 2 MiB arrays (beyond a core's second-level cache, as the particle arrays at 30 000 particles) on one core and on two, run in turns with the case's contenders so that it sees the machine in the same minutes. Medians:\n\n".to_string();
+    s += "| case | magdem 2 threads ÷ 1 | LIGGGHTS 2 processes ÷ 1 | LAMMPS 2 processes ÷ 1 | magdem 2 threads ÷ LIGGGHTS 2 processes speed | magdem 2 threads ÷ LAMMPS 2 processes speed | streaming, one core (GB/s) | streaming, two cores (GB/s) | streaming two cores ÷ one |\n|---|---|---|---|---|---|---|---|---|\n";
     for case in ["contact sparse 30000", "contact dense 30000"] {
         let ratio = |fast, slow| bench.speedup(case, fast, slow).map_or("–".into(), |x| format!("{x:.2}×"));
         let gain = |engine| ratio((engine, 2), (engine, 1));
         let (against_liggghts, against_lammps) = (ratio(("magdem", 2), ("liggghts", 2)), ratio(("magdem", 2), ("lammps", 2)));
-        let _ = writeln!(s, "| {case} | {} | {} | {} | {against_liggghts} | {against_lammps} |", gain("magdem"), gain("liggghts"), gain("lammps"));
+        let stream = bench.stream.iter().find(|(c, _, _)| c == case);
+        let (one, two, gained) = stream.map_or(("–".into(), "–".into(), "–".into()), |(_, one, two)| {
+            let gbs = |t: &Spread| format!("{:.0} ({:.0}–{:.0})", STREAM_BYTES / t.median / 1e9, STREAM_BYTES / t.max / 1e9, STREAM_BYTES / t.min / 1e9);
+            (gbs(one), gbs(two), format!("{:.2}×", one.median / two.median))
+        });
+        let _ = writeln!(s, "| {case} | {} | {} | {} | {against_liggghts} | {against_lammps} | {one} | {two} | {gained} |", gain("magdem"), gain("liggghts"), gain("lammps"));
     }
+    if bench.phases_on_both_cores.is_empty() {
+        return s;
+    }
+    s += "\nPhase by phase, from the same runs (the solver's timers; medians per step):\n\n| case | phase | 1 thread (µs) | 2 threads (µs) | 2 threads ÷ 1 |\n|---|---|---|---|---|\n";
+    let mut integrate_bandwidth = vec![];
+    for (case, phases) in &bench.phases_on_both_cores {
+        for (name, t1, t2) in phases {
+            let _ = writeln!(s, "| {case} | {name} | {:.1} | {:.1} | {:.2}× |", t1 * 1e6, t2 * 1e6, t1 / t2);
+        }
+        let (t1, t2): (f64, f64) = phases.iter().fold((0.0, 0.0), |(a, b), (_, t1, t2)| (a + t1, b + t2));
+        let _ = writeln!(s, "| {case} | sum of the phases | {:.1} | {:.1} | {:.2}× |", t1 * 1e6, t2 * 1e6, t1 / t2);
+        let particles = bench.measurements.iter().find(|m| &m.case == case).map_or(0, |m| m.particles);
+        if let Some((_, t1, t2)) = phases.iter().find(|(name, _, _)| *name == "integrate") {
+            let bytes = INTEGRATE_PASSES as f64 * 24.0 * particles as f64;
+            integrate_bandwidth.push(format!("{case}: {:.1} MB per step, {:.1} GB/s on one thread and {:.1} GB/s on two", bytes / 1e6, bytes / t1 / 1e9, bytes / t2 / 1e9));
+        }
+    }
+    let _ = write!(
+        s,
+        "\nThe integrator's share is pure streaming: velocity Verlet with one mass for all particles makes {INTEGRATE_PASSES} passes over arrays of N three-vectors per step (half kick and drift: x, v, ω read and written, F and T read; closing half kick: v, ω read and written, F and T read), each read and each write counted once, as the stream counts its bytes: {}. Set against the streaming columns above, this says how much of what a second core adds the memory system lets through. The other phases pass over particle arrays of the same size (the neighbour filter also gathers the partners' positions), and the serial rest of the step comes on top: the wall contacts' scan of the particles near a wall (a list too short to split) and the hand-offs between the parallel loops (1–2 µs each). The history ([performance-history.md](performance-history.md)) has the measurements behind this.\n",
+        integrate_bandwidth.join("; ")
+    );
     s
 }
+
+/// Passes (reads and writes) over arrays of three-vectors the velocity-Verlet kicks and drift
+/// make per step (see [`both_cores`]).
+const INTEGRATE_PASSES: usize = 14;
 
 fn markdown(bench: &Bench, agreement: &[(String, f64)]) -> String {
     let o = bench.options;
