@@ -248,11 +248,11 @@ impl Contact {
             (x.x - lo.x < a) | (x.y - lo.y < a) | (x.z - lo.z < a) | (hi.x - x.x < a) | (hi.y - x.y < a) | (hi.z - x.z < a)
         };
         // After a rebuild of the near list no particle moves more than skin/2 before the next
-        // one: only particles within a radius plus the skin of a wall can touch it until then.
+        // one: only particles within a radius plus half the skin of a wall can touch it until then.
         if let Some(skin) = ctx.near_rebuilt {
             let mut candidates = self.wall_candidates.take().unwrap_or_default();
             parallel::collect_ordered(p.len(), &mut candidates, |i, out| {
-                if near(i, skin) {
+                if near(i, 0.5 * skin) {
                     out.push(i as u32);
                 }
             });
@@ -316,5 +316,70 @@ impl ForceTerm for Contact {
             self.apply_walls(ctx, state, &mut diag);
         }
         state.diagnostics = diag;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::core::domain::Domain;
+    use crate::core::neighbours::VerletList;
+
+    /// Particles drifting in a walled box, in and out of the walls' reach: the wall contacts
+    /// found among the candidates kept between rebuilds of the near list are, spring for spring,
+    /// those found by testing every particle.
+    #[test]
+    fn wall_candidates_miss_no_wall_contact() {
+        let a = 5e-6;
+        let species = Species {
+            name: "s".into(),
+            radius: a,
+            density: 1000.0,
+            youngs_modulus: 1e9,
+            poisson_ratio: 0.3,
+            friction: 0.5,
+            restitution: 0.5,
+            susceptibility: 0.0,
+            saturation_magnetisation: None,
+            permanent_moment: None,
+        };
+        let edge = 100e-6;
+        let domain = Domain { lo: Vec3::zeros(), hi: Vec3::repeat(edge), periodic: [false; 3] };
+        let value = |k: usize| (k as f64 * 0.618_033_988_75).fract();
+        let mut state = State::default();
+        // Each particle moves 0.02 a per step in its own direction, so the near list (skin 0.4 a,
+        // rebuilt when a particle has moved 0.2 a) is rebuilt about every ten steps.
+        for i in 0..300 {
+            let x = Vec3::from_fn(|c, _| 0.5 * a + (edge - a) * value(3 * i + c));
+            let v = Vec3::from_fn(|c, _| value(1000 + 3 * i + c) - 0.5).normalize() * 0.02 * a;
+            state.particles.push(0, &species, x, v);
+        }
+        let (range, skin, dt) = (2.0 * a, 0.4 * a, 1e-8);
+        let (mut near, mut pairs, mut contact) = (VerletList::default(), vec![], Contact::new(std::slice::from_ref(&species), true));
+        let (mut found, mut rebuilds) = (0, 0);
+        for step in 0..400 {
+            let p = &mut state.particles;
+            for (x, v) in p.position.iter_mut().zip(&mut p.velocity) {
+                *x += *v;
+                // Back into the box once a particle is half a radius into a wall.
+                for c in 0..3 {
+                    if (x[c] < 0.5 * a && v[c] < 0.0) || (x[c] > edge - 0.5 * a && v[c] > 0.0) {
+                        v[c] = -v[c];
+                    }
+                }
+            }
+            let rebuilt = near.pairs_within(&p.position, &domain, range, skin, &mut pairs);
+            rebuilds += rebuilt as usize;
+            let ctx = ForceContext { domain: &domain, near_pairs: &pairs, near_rebuilt: rebuilt.then_some(skin), dt, magnetic_pairs: None };
+            let mut every_particle = state.clone();
+            Contact::new(std::slice::from_ref(&species), true).apply(&ctx, &mut every_particle);
+            contact.apply(&ctx, &mut state);
+            let (kept, all) = (&state.contacts.walls, &every_particle.contacts.walls);
+            assert!(kept == all, "step {step}: {} wall contacts among the candidates, {} testing every particle", kept.len(), all.len());
+            assert!(state.particles.force == every_particle.particles.force, "step {step}: forces differ");
+            found += state.contacts.walls.len();
+        }
+        assert!(rebuilds > 20, "{rebuilds} rebuilds");
+        assert!(found > 1000, "{found} wall contacts over the run");
     }
 }
