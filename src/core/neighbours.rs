@@ -193,19 +193,28 @@ impl VerletList {
     /// Returns whether the candidates were rebuilt.
     pub fn pairs_within(&mut self, positions: &[Vec3], domain: &Domain, range: f64, skin: f64, out: &mut Vec<Pair>) -> bool {
         let rebuilt = self.update(positions, domain, range, skin);
-        let range2 = range * range;
-        let candidates = &self.candidates;
-        parallel::collect_ordered_ranges(candidates.len(), out, |ks, out| {
-            for &(i, j) in &candidates[ks] {
-                let r = domain.displacement(&positions[i as usize], &positions[j as usize]);
-                let d2 = r.norm_squared();
-                if d2 < range2 {
-                    out.push(Pair { i, j, r, dist: d2.sqrt() });
-                }
-            }
-        });
+        if domain.periodic == [false; 3] {
+            filter(&self.candidates, positions, range, out, |a, b| a - b);
+        } else {
+            filter(&self.candidates, positions, range, out, |a, b| domain.displacement(a, b));
+        }
         rebuilt
     }
+}
+
+/// The `candidates` closer than `range` into `out`, with their separation `displacement(x_i, x_j)`
+/// (generic, so that a box without periodic axes filters with a plain subtraction).
+fn filter(candidates: &[(u32, u32)], positions: &[Vec3], range: f64, out: &mut Vec<Pair>, displacement: impl Fn(&Vec3, &Vec3) -> Vec3 + Sync) {
+    let range2 = range * range;
+    parallel::collect_ordered_ranges(candidates.len(), out, |ks, out| {
+        for &(i, j) in &candidates[ks] {
+            let r = displacement(&positions[i as usize], &positions[j as usize]);
+            let d2 = r.norm_squared();
+            if d2 < range2 {
+                out.push(Pair { i, j, r, dist: d2.sqrt() });
+            }
+        }
+    });
 }
 
 #[cfg(test)]
@@ -227,24 +236,30 @@ mod tests {
 
     #[test]
     fn verlet_list_gives_the_same_pairs_in_ij_order_as_particles_move() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
-        let domain = Domain { lo: Vec3::zeros(), hi: Vec3::new(1.0, 0.8, 0.6), periodic: [true, false, true] };
-        let mut pos: Vec<Vec3> = (0..300)
-            .map(|_| Vec3::new(rng.random::<f64>(), 0.8 * rng.random::<f64>(), 0.6 * rng.random::<f64>()))
-            .collect();
-        let mut list = VerletList::default();
-        let mut out = vec![];
-        for _ in 0..40 {
-            list.pairs_within(&pos, &domain, 0.15, 0.03, &mut out);
-            let got: Vec<(u32, u32)> = out.iter().map(|p| (p.i, p.j)).collect();
-            assert_eq!(got, brute(&pos, &domain, 0.15));
-            for x in pos.iter_mut() {
-                *x += Vec3::new(rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5) * 0.004;
-                domain.wrap(x);
-                x.y = x.y.clamp(0.0, 0.8);
+        // Periodic on two axes, and walled on all three (filtered with a plain subtraction).
+        for periodic in [[true, false, true], [false; 3]] {
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+            let domain = Domain { lo: Vec3::zeros(), hi: Vec3::new(1.0, 0.8, 0.6), periodic };
+            let mut pos: Vec<Vec3> = (0..300)
+                .map(|_| Vec3::new(rng.random::<f64>(), 0.8 * rng.random::<f64>(), 0.6 * rng.random::<f64>()))
+                .collect();
+            let mut list = VerletList::default();
+            let mut out = vec![];
+            for _ in 0..40 {
+                list.pairs_within(&pos, &domain, 0.15, 0.03, &mut out);
+                let got: Vec<(u32, u32)> = out.iter().map(|p| (p.i, p.j)).collect();
+                assert_eq!(got, brute(&pos, &domain, 0.15), "periodic {periodic:?}");
+                for p in &out {
+                    assert_eq!(p.r, domain.displacement(&pos[p.i as usize], &pos[p.j as usize]), "periodic {periodic:?}");
+                }
+                for x in pos.iter_mut() {
+                    *x += Vec3::new(rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5) * 0.004;
+                    domain.wrap(x);
+                    *x = x.zip_map(&domain.hi, |c, hi| c.clamp(0.0, hi));
+                }
             }
+            assert!(list.rebuilds > 1 && list.rebuilds < 40, "{} rebuilds", list.rebuilds);
         }
-        assert!(list.rebuilds > 1 && list.rebuilds < 40, "{} rebuilds", list.rebuilds);
     }
 
     #[test]
