@@ -194,30 +194,32 @@ pub struct State {
     pub next_substep: Option<f64>,
 }
 
+/// A non-magnetic test sphere of `radius` (ρ = 5000 kg/m³, E = 1 GPa, ν = 0.3, μ = e = 0.5).
+#[cfg(test)]
+pub(crate) fn test_sphere(radius: f64) -> Species {
+    Species {
+        name: "s".into(),
+        radius,
+        density: 5000.0,
+        youngs_modulus: 1e9,
+        poisson_ratio: 0.3,
+        friction: 0.5,
+        restitution: 0.5,
+        susceptibility: 0.0,
+        saturation_magnetisation: None,
+        permanent_moment: None,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn sphere(radius: f64) -> Species {
-        Species {
-            name: "s".into(),
-            radius,
-            density: 5000.0,
-            youngs_modulus: 1e9,
-            poisson_ratio: 0.3,
-            friction: 0.5,
-            restitution: 0.5,
-            susceptibility: 0.0,
-            saturation_magnetisation: None,
-            permanent_moment: None,
-        }
-    }
 
     /// Alike particles share one 1/m, 1/I; the first unlike one spreads the shared pair over
     /// the particles before it; a checkpoint's masses rebuild the same inverses.
     #[test]
     fn inverse_masses_stay_shared_only_while_particles_are_alike() {
-        let (small, large) = (sphere(1e-6), sphere(2e-6));
+        let (small, large) = (test_sphere(1e-6), test_sphere(2e-6));
         let mut p = Particles::default();
         p.push(0, &small, Vec3::zeros(), Vec3::zeros());
         p.push(0, &small, Vec3::zeros(), Vec3::zeros());

@@ -331,18 +331,7 @@ mod tests {
     #[test]
     fn wall_candidates_miss_no_wall_contact() {
         let a = 5e-6;
-        let species = Species {
-            name: "s".into(),
-            radius: a,
-            density: 1000.0,
-            youngs_modulus: 1e9,
-            poisson_ratio: 0.3,
-            friction: 0.5,
-            restitution: 0.5,
-            susceptibility: 0.0,
-            saturation_magnetisation: None,
-            permanent_moment: None,
-        };
+        let species = crate::core::state::test_sphere(a);
         let edge = 100e-6;
         let domain = Domain { lo: Vec3::zeros(), hi: Vec3::repeat(edge), periodic: [false; 3] };
         let value = |k: usize| (k as f64 * 0.618_033_988_75).fract();
