@@ -2,7 +2,7 @@
 //! or all pairs when no cut-off is set. Periodic axes use the minimum image.
 
 use super::domain::Domain;
-use super::parallel;
+use super::parallel::{self, Pieces};
 use rayon::prelude::*;
 use super::state::Vec3;
 
@@ -21,6 +21,8 @@ pub struct CellList {
     cell_start: Vec<u32>,
     cell_particles: Vec<u32>,
     particle_cell: Vec<u32>,
+    /// Chunk buffers of the parallel pair collection (the Verlet filter's too).
+    pieces: Pieces<Pair>,
 }
 
 impl CellList {
@@ -85,15 +87,15 @@ impl CellList {
         // Row by row, each particle with its partners of higher index in the cells around it
         // (rows in parallel when worth it): the pairs come out in (i, j) order.
         let range2 = range * range;
-        let this = &*self;
-        parallel::collect_ordered(n, out, |i, out| {
+        let Self { cell_start, cell_particles, particle_cell, pieces } = self;
+        parallel::collect_ordered(n, out, pieces, |i, out| {
             let row = out.len();
-            let c = this.particle_cell[i] as usize;
+            let c = particle_cell[i] as usize;
             let idx = [c % dims[0], (c / dims[0]) % dims[1], c / (dims[0] * dims[1])];
             let (cells, count) = neighbour_cells(idx, dims, domain);
             for &c2 in &cells[..count] {
-                let members = this.cell_start[c2 as usize] as usize..this.cell_start[c2 as usize + 1] as usize;
-                for &j in &this.cell_particles[members] {
+                let members = cell_start[c2 as usize] as usize..cell_start[c2 as usize + 1] as usize;
+                for &j in &cell_particles[members] {
                     if (j as usize) > i {
                         let r = domain.displacement(&positions[i], &positions[j as usize]);
                         let d2 = r.norm_squared();
@@ -193,10 +195,12 @@ impl VerletList {
     /// Returns whether the candidates were rebuilt.
     pub fn pairs_within(&mut self, positions: &[Vec3], domain: &Domain, range: f64, skin: f64, out: &mut Vec<Pair>) -> bool {
         let rebuilt = self.update(positions, domain, range, skin);
+        // The filter gathers in the cell list's buffers (used only when it rebuilds).
+        let (candidates, pieces) = (&self.candidates, &mut self.cells.pieces);
         if domain.periodic == [false; 3] {
-            filter(&self.candidates, positions, range, out, |a, b| a - b);
+            filter(candidates, positions, range, out, pieces, |a, b| a - b);
         } else {
-            filter(&self.candidates, positions, range, out, |a, b| domain.displacement(a, b));
+            filter(candidates, positions, range, out, pieces, |a, b| domain.displacement(a, b));
         }
         rebuilt
     }
@@ -204,9 +208,9 @@ impl VerletList {
 
 /// The `candidates` closer than `range` into `out`, with their separation `displacement(x_i, x_j)`
 /// (generic, so that a box without periodic axes filters with a plain subtraction).
-fn filter(candidates: &[(u32, u32)], positions: &[Vec3], range: f64, out: &mut Vec<Pair>, displacement: impl Fn(&Vec3, &Vec3) -> Vec3 + Sync) {
+fn filter(candidates: &[(u32, u32)], positions: &[Vec3], range: f64, out: &mut Vec<Pair>, pieces: &mut Pieces<Pair>, displacement: impl Fn(&Vec3, &Vec3) -> Vec3 + Sync) {
     let range2 = range * range;
-    parallel::collect_ordered_ranges(candidates.len(), out, |ks, out| {
+    parallel::collect_ordered_ranges(candidates.len(), out, pieces, |ks, out| {
         for &(i, j) in &candidates[ks] {
             let r = displacement(&positions[i as usize], &positions[j as usize]);
             let d2 = r.norm_squared();

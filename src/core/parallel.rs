@@ -33,41 +33,60 @@ pub fn worth_it(len: usize) -> bool {
     len >= MIN_PARALLEL_LEN && WARM.with(|w| w.get())
 }
 
+/// The buffers of an ordered parallel collection ([`collect_ordered`]), one per chunk, kept from
+/// call to call: a collection run every step then allocates nothing once warm (allocating them
+/// afresh, 1 024 items each, and handing out the copy in parallel cost 8 µs of a 50 µs neighbour
+/// filter on two threads, dense 30 000 particles).
+#[derive(Debug, Clone)]
+pub struct Pieces<T>(Vec<Vec<T>>);
+
+impl<T> Default for Pieces<T> {
+    fn default() -> Self {
+        Self(Vec::new())
+    }
+}
+
 /// Calls `f(k, out)` for k in 0..n, which may push items; the items end up in `out` in k order
-/// (in parallel chunks when worth it, the chunks' items then copied into place in parallel).
-pub fn collect_ordered<T: Copy + Default + Send + Sync>(n: usize, out: &mut Vec<T>, f: impl Fn(usize, &mut Vec<T>) + Sync) {
-    collect_ordered_ranges(n, out, |ks, out| ks.for_each(|k| f(k, out)))
+/// (in parallel chunks when worth it, gathered in `pieces` and then copied into place).
+pub fn collect_ordered<T: Copy + Default + Send + Sync>(n: usize, out: &mut Vec<T>, pieces: &mut Pieces<T>, f: impl Fn(usize, &mut Vec<T>) + Sync) {
+    collect_ordered_ranges(n, out, pieces, |ks, out| ks.for_each(|k| f(k, out)))
 }
 
 /// [`collect_ordered`] with `f(ks, out)` called once per range of consecutive k (the chunks),
 /// for a caller whose loop over k should be its own.
-pub fn collect_ordered_ranges<T: Copy + Default + Send + Sync>(n: usize, out: &mut Vec<T>, f: impl Fn(std::ops::Range<usize>, &mut Vec<T>) + Sync) {
-    if worth_it(n) {
-        use rayon::prelude::*;
-        let parts: Vec<Vec<T>> = (0..n.div_ceil(CHUNK))
-            .into_par_iter()
-            .map(|c| {
-                let ks = c * CHUNK..n.min((c + 1) * CHUNK);
-                let mut part = Vec::with_capacity(ks.len());
-                f(ks, &mut part);
-                part
-            })
-            .collect();
-        // Resized from its last length (a buffer reused step after step hardly changes length),
-        // so that only the difference is written serially before the parallel copy.
-        out.resize(parts.iter().map(Vec::len).sum(), T::default());
-        let mut slots = Vec::with_capacity(parts.len());
-        let mut rest = out.as_mut_slice();
-        for part in &parts {
-            let (slot, tail) = rest.split_at_mut(part.len());
-            slots.push(slot);
-            rest = tail;
-        }
-        slots.into_par_iter().zip(&parts).for_each(|(slot, part)| slot.copy_from_slice(part));
-    } else {
+pub fn collect_ordered_ranges<T: Copy + Default + Send + Sync>(n: usize, out: &mut Vec<T>, pieces: &mut Pieces<T>, f: impl Fn(std::ops::Range<usize>, &mut Vec<T>) + Sync) {
+    if !worth_it(n) {
         out.clear();
         f(0..n, out);
+        return;
     }
+    use rayon::prelude::*;
+    let chunks = n.div_ceil(CHUNK);
+    if pieces.0.len() < chunks {
+        pieces.0.resize_with(chunks, Vec::new);
+    }
+    let parts = &mut pieces.0[..chunks];
+    parts.par_iter_mut().enumerate().for_each(|(c, part)| {
+        part.clear();
+        f(c * CHUNK..n.min((c + 1) * CHUNK), part);
+    });
+    let total = parts.iter().map(Vec::len).sum();
+    if !worth_it(total) {
+        out.clear();
+        parts.iter().for_each(|part| out.extend_from_slice(part));
+        return;
+    }
+    // Resized from its last length (a buffer reused step after step hardly changes length), so
+    // that only the difference is written serially before the parallel copy.
+    out.resize(total, T::default());
+    let mut slots = Vec::with_capacity(chunks);
+    let mut rest = out.as_mut_slice();
+    for part in parts.iter() {
+        let (slot, tail) = rest.split_at_mut(part.len());
+        slots.push(slot);
+        rest = tail;
+    }
+    slots.into_par_iter().zip(&*parts).for_each(|(slot, part)| slot.copy_from_slice(part));
 }
 
 /// `f(k)` for k in 0..n into `out`, in k order (in parallel chunks when worth it).
@@ -134,5 +153,37 @@ pub fn copy<T: Copy + Send + Sync>(from: &[T], out: &mut [T]) {
         out.par_chunks_mut(share).zip(from.par_chunks(share)).for_each(|(o, f)| o.copy_from_slice(f));
     } else {
         out.copy_from_slice(from);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Reused buffers give the serial loop's items in order, whether the calls grow or shrink,
+    /// and whether the items are many (parallel copy) or few (serial copy).
+    #[test]
+    fn ordered_collection_with_reused_pieces_equals_the_serial_loop() {
+        let items = |k: usize, out: &mut Vec<u64>| {
+            for copy in 0..k % 3 {
+                out.push((k * 3 + copy) as u64);
+            }
+        };
+        let rare = |k: usize, out: &mut Vec<u64>| {
+            if k % 1000 == 7 {
+                out.push(k as u64);
+            }
+        };
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        let (mut out, mut pieces) = (vec![], Pieces::default());
+        for n in [5000, 20_000, 4100, 9000, 4096] {
+            for f in [&items as &(dyn Fn(usize, &mut Vec<u64>) + Sync), &rare] {
+                let mut serial = vec![];
+                (0..n).for_each(|k| f(k, &mut serial));
+                pool.install(|| with_warm_pool(n, || collect_ordered(n, &mut out, &mut pieces, f)));
+                assert_eq!(out, serial, "n = {n}");
+            }
+        }
+        assert!(pieces.0.len() >= 20, "the buffers of the longest call are kept");
     }
 }

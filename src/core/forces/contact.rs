@@ -14,7 +14,7 @@
 
 use super::{ForceContext, ForceTerm};
 use crate::core::neighbours::Pair;
-use crate::core::parallel;
+use crate::core::parallel::{self, Pieces};
 use crate::core::state::{ContactDiagnostics, Particles, Species, State, Vec3, WallFace};
 
 /// Pair constants of the contact law for two species (the wall takes the particle's own species).
@@ -120,6 +120,9 @@ pub struct Contact {
     /// yet, test every particle).
     wall_candidates: Option<Vec<u32>>,
     wall_found: Vec<WallTouch>,
+    /// Buffers of the parallel wall scans.
+    wall_candidate_pieces: Pieces<u32>,
+    wall_found_pieces: Pieces<WallTouch>,
     wall_touching: Vec<(WallTouch, Vec3)>,
     outcomes: Vec<ContactOutcome>,
     spare_pairs: Vec<((u32, u32), Vec3)>,
@@ -148,6 +151,8 @@ impl Contact {
             touching: vec![],
             wall_candidates: None,
             wall_found: vec![],
+            wall_candidate_pieces: Pieces::default(),
+            wall_found_pieces: Pieces::default(),
             wall_touching: vec![],
             outcomes: vec![],
             spare_pairs: vec![],
@@ -251,7 +256,7 @@ impl Contact {
         // one: only particles within a radius plus half the skin of a wall can touch it until then.
         if let Some(skin) = ctx.near_rebuilt {
             let mut candidates = self.wall_candidates.take().unwrap_or_default();
-            parallel::collect_ordered(p.len(), &mut candidates, |i, out| {
+            parallel::collect_ordered(p.len(), &mut candidates, &mut self.wall_candidate_pieces, |i, out| {
                 if near(i, 0.5 * skin) {
                     out.push(i as u32);
                 }
@@ -275,8 +280,8 @@ impl Contact {
             }
         };
         match &self.wall_candidates {
-            Some(candidates) => parallel::collect_ordered(candidates.len(), &mut found, |k, out| touches(candidates[k] as usize, out)),
-            None => parallel::collect_ordered(p.len(), &mut found, touches),
+            Some(candidates) => parallel::collect_ordered(candidates.len(), &mut found, &mut self.wall_found_pieces, |k, out| touches(candidates[k] as usize, out)),
+            None => parallel::collect_ordered(p.len(), &mut found, &mut self.wall_found_pieces, touches),
         }
         let mut cursor = 0;
         self.wall_touching.clear();
