@@ -44,8 +44,8 @@ struct Bench<'a> {
     dipole_pairs: Vec<(usize, usize)>,
     engine_versions: Vec<String>,
     mpi: Vec<MpiRun>,
-    /// Per case: seconds of a streaming try on one core and on two, run in turns with the case.
-    stream: Vec<(String, Spread, Spread)>,
+    /// Per case: the machine's own two-core gains, run in turns with the case.
+    ceilings: Vec<(String, Ceilings)>,
     /// Per case: each phase's median seconds per step on one thread and on two.
     phases_on_both_cores: Vec<(String, Vec<PhaseOnBothCores>)>,
     notes: Vec<String>,
@@ -66,6 +66,13 @@ struct MpiRun {
     largest: usize,
     /// Largest position difference to the 1-process run of the same engine (m).
     max_difference: Option<f64>,
+}
+
+/// What the machine itself gains from a second core, measured in the same minutes as a case:
+/// seconds on one core and on two of arithmetic alone and of the case's integrator alone.
+struct Ceilings {
+    arithmetic: (Spread, Spread),
+    integrator: (Spread, Spread),
 }
 
 /// A phase's name and its median seconds per step on one thread and on two.
@@ -111,11 +118,31 @@ impl<'a> Contender<'a> {
         Contender { engine: "magdem", threads, run: Box::new(run) }
     }
 
-    /// The streaming try of [`stream_seconds`] on `threads` cores, as a contender so that it
-    /// sees the machine in the same minutes as the case it runs with.
-    fn stream(threads: usize) -> Self {
-        let (mut a, b) = (vec![1.0_f64; STREAM_LEN], vec![1e-9_f64; STREAM_LEN]);
-        Contender { engine: "stream", threads, run: Box::new(move || Ok(stream_seconds(threads, &mut a, &b))) }
+    /// The arithmetic try of [`arithmetic_seconds`] on `threads` cores, as a contender so that
+    /// it sees the machine in the same minutes as the case it runs with.
+    fn arithmetic(threads: usize) -> Self {
+        Contender { engine: ARITHMETIC, threads, run: Box::new(move || Ok(arithmetic_seconds(threads))) }
+    }
+
+    /// The scene's integrator alone on `threads` threads: [`INTEGRATOR_STEPS`] steps of its kicks
+    /// and drift with the forces held (no force evaluation), the step's streaming without the
+    /// rest of the step. Same contender protocol as [`Contender::arithmetic`].
+    fn integrator_alone(scene: &Scene, threads: usize) -> Result<Self, Error> {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
+        let mut simulation = pool.install(|| scene.simulation(None));
+        simulation.initialise()?;
+        let (dt, n) = (scene.dt(), scene.initial.len());
+        let run = move || {
+            let Simulation { state, integrator, .. } = &mut simulation;
+            let started = Instant::now();
+            pool.install(|| {
+                for _ in 0..INTEGRATOR_STEPS {
+                    crate::core::parallel::with_warm_pool(n, || integrator.step(state, dt, &mut |_, _, _| {}));
+                }
+            });
+            Ok(started.elapsed().as_secs_f64())
+        };
+        Ok(Contender { engine: INTEGRATOR_ALONE, threads, run: Box::new(run) })
     }
 
     /// A reference engine on `procs` MPI processes (one: no `mpirun`), if installed.
@@ -208,14 +235,16 @@ impl Bench<'_> {
                     }
                 }
                 if timed {
-                    contenders.extend([Contender::stream(1), Contender::stream(2)]);
+                    contenders.extend([Contender::arithmetic(1), Contender::arithmetic(2)]);
+                    contenders.extend([Contender::integrator_alone(&scene, 1)?, Contender::integrator_alone(&scene, 2)?]);
                 }
                 self.compare(&case, n, steps, contenders)?;
                 if timed {
-                    let (streams, others) = std::mem::take(&mut self.measurements).into_iter().partition(|m| m.engine == "stream");
+                    let (machine, others): (Vec<_>, _) = std::mem::take(&mut self.measurements).into_iter().partition(|m| [ARITHMETIC, INTEGRATOR_ALONE].contains(&m.engine));
                     self.measurements = others;
-                    let on = |threads| streams.iter().find(|m: &&Measurement| m.threads == threads).map(|m| m.seconds);
-                    self.stream.extend(on(1).zip(on(2)).map(|(one, two)| (case.clone(), one, two)));
+                    let on = |engine, threads| machine.iter().find(|m| m.engine == engine && m.threads == threads).map_or(Spread::of(&[f64::NAN]), |m| m.seconds);
+                    let both = |engine| (on(engine, 1), on(engine, 2));
+                    self.ceilings.push((case.clone(), Ceilings { arithmetic: both(ARITHMETIC), integrator: both(INTEGRATOR_ALONE) }));
                     let phases = one.phases[0].iter().map(|(name, _)| (*name, one.median(name), two.median(name))).collect();
                     self.phases_on_both_cores.push((case.clone(), phases));
                 }
@@ -356,24 +385,30 @@ fn last_frame(path: &Path, engine: &str, route: &'static str, procs: usize) -> R
     })
 }
 
-/// Length of the streaming arrays: 2 MiB each, beyond a core's second-level cache and inside
-/// the third, as the particle arrays of the 30 000-particle scenes.
-const STREAM_LEN: usize = 1 << 18;
-const STREAM_ROUNDS: usize = 400;
-/// Bytes one streaming try moves, each read and each write counted once.
-const STREAM_BYTES: f64 = (3 * 8 * STREAM_LEN * STREAM_ROUNDS) as f64;
+/// Contender names of the machine's own gains (kept out of the measurements table).
+const ARITHMETIC: &str = "arithmetic";
+const INTEGRATOR_ALONE: &str = "integrator alone";
 
-/// Seconds of one streaming try: `a += s·b`, each of `threads` threads updating its share
-/// [`STREAM_ROUNDS`] times.
-fn stream_seconds(threads: usize, a: &mut [f64], b: &[f64]) -> f64 {
-    let started = std::time::Instant::now();
+/// Steps of an integrator-alone try (about a tenth of a second at 30 000 particles).
+const INTEGRATOR_STEPS: usize = 1000;
+
+/// Multiply-add rounds of an arithmetic try, over 32 independent lanes (8 AVX2 registers: two
+/// fused multiply-adds per cycle keep a Zen 3 or Skylake core's floating-point pipes full).
+const ARITHMETIC_ROUNDS: usize = 40_000_000;
+
+/// Seconds of one arithmetic try: [`ARITHMETIC_ROUNDS`] rounds of `a = a·m + c` on 32 lanes held
+/// in registers, shared out among `threads` threads; no memory traffic, so it measures whether
+/// the cores deliver their arithmetic (a shared machine's other tenants can take part of it).
+fn arithmetic_seconds(threads: usize) -> f64 {
+    let started = Instant::now();
     std::thread::scope(|scope| {
-        for (a, b) in a.chunks_mut(a.len() / threads).zip(b.chunks(b.len() / threads)) {
+        for t in 0..threads {
             scope.spawn(move || {
-                for _ in 0..STREAM_ROUNDS {
-                    a.iter_mut().zip(b).for_each(|(x, y)| *x += 0.5 * y);
-                    std::hint::black_box(&mut *a);
+                let mut lanes: [f64; 32] = std::array::from_fn(|k| (k + t) as f64);
+                for _ in 0..ARITHMETIC_ROUNDS / threads {
+                    lanes.iter_mut().for_each(|a| *a = a.mul_add(0.999_999, 1e-7));
                 }
+                std::hint::black_box(lanes);
             });
         }
     });
@@ -423,6 +458,11 @@ fn caches() -> String {
     if levels.is_empty() { "caches unknown".into() } else { format!("caches {}", levels.join(", ")) }
 }
 
+/// How many times faster two cores ran than one (medians).
+fn gain((one, two): &(Spread, Spread)) -> f64 {
+    one.median / two.median
+}
+
 fn seconds(s: &Spread) -> String {
     format!("{:.3} / {:.3} / {:.3}", s.min, s.median, s.max)
 }
@@ -431,7 +471,7 @@ fn seconds(s: &Spread) -> String {
 /// `performance.csv` into `options.out`; returns the report's path.
 pub fn write(options: &Options) -> Result<PathBuf, Error> {
     std::fs::create_dir_all(&options.out)?;
-    let mut bench = Bench { options, measurements: vec![], profiles: vec![], bitwise: vec![], memory: vec![], dipole_pairs: vec![], engine_versions: vec![], mpi: vec![], stream: vec![], phases_on_both_cores: vec![], notes: vec![] };
+    let mut bench = Bench { options, measurements: vec![], profiles: vec![], bitwise: vec![], memory: vec![], dipole_pairs: vec![], engine_versions: vec![], mpi: vec![], ceilings: vec![], phases_on_both_cores: vec![], notes: vec![] };
     let total = 6 + 2 + scaling_sizes(options.max_particles).len() as u64 + options.mpi as u64;
     let progress = indicatif::ProgressBar::new(total).with_style(indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} cases {elapsed} {msg}")?);
     bench.contact_cases(&progress)?;
@@ -526,8 +566,10 @@ fn targets(bench: &Bench) -> String {
                 .iter()
                 .filter_map(|(engine, name)| Some(format!("{name} {:.2}×", bench.speedup(case, (engine, 2), (engine, 1))?)))
                 .collect();
-            let stream = bench.stream.iter().find(|(c, _, _)| c == case).map(|(_, one, two)| format!("streaming two cores ÷ one in the same minutes: {:.2}×", one.median / two.median));
-            let context: Vec<String> = [(!engines.is_empty()).then(|| format!("two MPI processes ÷ one: {}", engines.join(", "))), stream].into_iter().flatten().collect();
+            let machine = bench.ceilings.iter().find(|(c, _)| c == case).map(|(_, g)| {
+                format!("in the same minutes the machine's own two-core gains: arithmetic {:.2}×, the integrator alone {:.2}×", gain(&g.arithmetic), gain(&g.integrator))
+            });
+            let context: Vec<String> = [(!engines.is_empty()).then(|| format!("two MPI processes ÷ one: {}", engines.join(", "))), machine].into_iter().flatten().collect();
             let context = if context.is_empty() { String::new() } else { format!(" ({}; see “Both cores”)", context.join("; ")) };
             lines.push(format!("{case}, two threads ÷ one ≥ 1.7×: {x:.3}× — {}{context}", verdict(x, 1.7)));
         }
@@ -559,20 +601,22 @@ fn targets(bench: &Bench) -> String {
 }
 
 /// magdem's two threads against the engines' two MPI processes at 30 000 particles, phase by
-/// phase, and the machine's streaming bandwidth on one core and two.
+/// phase, and what the machine itself gains from a second core in the same minutes.
 fn both_cores(bench: &Bench) -> String {
-    let mut s = "\n## Both cores\n\nThe reference engines on both cores (`mpirun -np 2`, the same decks; `performance.csv` lists them with 2 in its threads column), for comparison, and the machine's memory: streaming `a += s·b` over two 2 MiB arrays (beyond a core's second-level cache, as the particle arrays at 30 000 particles) on one core and on two, run in turns with the case's contenders so that it sees the machine in the same minutes. Medians:\n\n".to_string();
-    s += "| case | magdem 2 threads ÷ 1 | LIGGGHTS 2 processes ÷ 1 | LAMMPS 2 processes ÷ 1 | magdem 2 threads ÷ LIGGGHTS 2 processes speed | magdem 2 threads ÷ LAMMPS 2 processes speed | streaming, one core (GB/s) | streaming, two cores (GB/s) | streaming two cores ÷ one |\n|---|---|---|---|---|---|---|---|---|\n";
+    let mut s = "\n## Both cores\n\nThe reference engines on both cores (`mpirun -np 2`, the same decks; `performance.csv` lists them with 2 in its threads column), and what the machine itself gains from a second core, measured in turns with the case's contenders so that it sees the machine in the same minutes: *arithmetic*, fused multiply-adds on 32 lanes held in registers (no memory traffic: whether the two cores deliver two cores' arithmetic, which a shared machine's other tenants can take part of), and *the integrator alone*, magdem's velocity-Verlet kicks and drift on the case's particles with the forces held (the step's own streaming over its particle arrays, without the rest of the step). Medians:\n\n".to_string();
+    s += "| case | magdem 2 threads ÷ 1 | LIGGGHTS 2 processes ÷ 1 | LAMMPS 2 processes ÷ 1 | magdem 2 threads ÷ LIGGGHTS 2 processes speed | magdem 2 threads ÷ LAMMPS 2 processes speed | arithmetic, 2 cores ÷ 1 | integrator alone, 1 thread (GB/s) | integrator alone, 2 threads (GB/s) | integrator alone, 2 threads ÷ 1 |\n|---|---|---|---|---|---|---|---|---|---|\n";
     for case in ["contact sparse 30000", "contact dense 30000"] {
         let ratio = |fast, slow| bench.speedup(case, fast, slow).map_or("–".into(), |x| format!("{x:.2}×"));
-        let gain = |engine| ratio((engine, 2), (engine, 1));
+        let gained = |engine| ratio((engine, 2), (engine, 1));
         let (against_liggghts, against_lammps) = (ratio(("magdem", 2), ("liggghts", 2)), ratio(("magdem", 2), ("lammps", 2)));
-        let stream = bench.stream.iter().find(|(c, _, _)| c == case);
-        let (one, two, gained) = stream.map_or(("–".into(), "–".into(), "–".into()), |(_, one, two)| {
-            let gbs = |t: &Spread| format!("{:.0} ({:.0}–{:.0})", STREAM_BYTES / t.median / 1e9, STREAM_BYTES / t.max / 1e9, STREAM_BYTES / t.min / 1e9);
-            (gbs(one), gbs(two), format!("{:.2}×", one.median / two.median))
+        let particles = bench.measurements.iter().find(|m| m.case == case).map_or(0, |m| m.particles);
+        let bytes = INTEGRATE_PASSES as f64 * 24.0 * particles as f64 * INTEGRATOR_STEPS as f64;
+        let machine = bench.ceilings.iter().find(|(c, _)| c == case).map(|(_, g)| {
+            let gbs = |t: &Spread| format!("{:.0} ({:.0}–{:.0})", bytes / t.median / 1e9, bytes / t.max / 1e9, bytes / t.min / 1e9);
+            [format!("{:.2}×", gain(&g.arithmetic)), gbs(&g.integrator.0), gbs(&g.integrator.1), format!("{:.2}×", gain(&g.integrator))]
         });
-        let _ = writeln!(s, "| {case} | {} | {} | {} | {against_liggghts} | {against_lammps} | {one} | {two} | {gained} |", gain("magdem"), gain("liggghts"), gain("lammps"));
+        let machine = machine.unwrap_or_else(|| std::array::from_fn(|_| "–".to_string())).join(" | ");
+        let _ = writeln!(s, "| {case} | {} | {} | {} | {against_liggghts} | {against_lammps} | {machine} |", gained("magdem"), gained("liggghts"), gained("lammps"));
     }
     if bench.phases_on_both_cores.is_empty() {
         return s;
@@ -593,7 +637,7 @@ fn both_cores(bench: &Bench) -> String {
     }
     let _ = write!(
         s,
-        "\nThe integrator's share is pure streaming: velocity Verlet with one mass for all particles makes {INTEGRATE_PASSES} passes over arrays of N three-vectors per step (half kick and drift: x, v, ω read and written, F and T read; closing half kick: v, ω read and written, F and T read), each read and each write counted once, as the stream counts its bytes: {}. Set against the streaming columns above, this says how much of what a second core adds the memory system lets through. The other phases pass over particle arrays of the same size (the neighbour filter also gathers the partners' positions), and the serial rest of the step comes on top: the wall contacts' scan of the particles near a wall (a list too short to split) and the hand-offs between the parallel loops (1–2 µs each). The history ([performance-history.md](performance-history.md)) has the measurements behind this.\n",
+        "\nThe integrator's share is pure streaming: velocity Verlet with one mass for all particles makes {INTEGRATE_PASSES} passes over arrays of N three-vectors per step (half kick and drift: x, v, ω read and written, F and T read; closing half kick: v, ω read and written, F and T read), each read and each write counted once: {}. The integrator alone (table above) runs the same passes back to back: what it gains from a second thread is what the memory system let through for this pattern in those minutes, to set against the integrate phase's gain here. The other phases pass over particle arrays of the same size (the neighbour filter also gathers the partners' positions), and the serial rest of the step comes on top: the wall contacts' scan of the particles near a wall (a list too short to split) and the hand-offs between the parallel loops. The history ([performance-history.md](performance-history.md)) has the measurements behind this.\n",
         integrate_bandwidth.join("; ")
     );
     s
