@@ -609,8 +609,7 @@ fn both_cores(bench: &Bench) -> String {
         let ratio = |fast, slow| bench.speedup(case, fast, slow).map_or("–".into(), |x| format!("{x:.2}×"));
         let gained = |engine| ratio((engine, 2), (engine, 1));
         let (against_liggghts, against_lammps) = (ratio(("magdem", 2), ("liggghts", 2)), ratio(("magdem", 2), ("lammps", 2)));
-        let particles = bench.measurements.iter().find(|m| m.case == case).map_or(0, |m| m.particles);
-        let bytes = INTEGRATE_PASSES as f64 * 24.0 * particles as f64 * INTEGRATOR_STEPS as f64;
+        let bytes = integrate_bytes_per_step(bench, case) * INTEGRATOR_STEPS as f64;
         let machine = bench.ceilings.iter().find(|(c, _)| c == case).map(|(_, g)| {
             let gbs = |t: &Spread| format!("{:.0} ({:.0}–{:.0})", bytes / t.median / 1e9, bytes / t.max / 1e9, bytes / t.min / 1e9);
             [format!("{:.2}×", gain(&g.arithmetic)), gbs(&g.integrator.0), gbs(&g.integrator.1), format!("{:.2}×", gain(&g.integrator))]
@@ -629,9 +628,8 @@ fn both_cores(bench: &Bench) -> String {
         }
         let (t1, t2): (f64, f64) = phases.iter().fold((0.0, 0.0), |(a, b), (_, t1, t2)| (a + t1, b + t2));
         let _ = writeln!(s, "| {case} | sum of the phases | {:.1} | {:.1} | {:.2}× |", t1 * 1e6, t2 * 1e6, t1 / t2);
-        let particles = bench.measurements.iter().find(|m| &m.case == case).map_or(0, |m| m.particles);
         if let Some((_, t1, t2)) = phases.iter().find(|(name, _, _)| *name == "integrate") {
-            let bytes = INTEGRATE_PASSES as f64 * 24.0 * particles as f64;
+            let bytes = integrate_bytes_per_step(bench, case);
             integrate_bandwidth.push(format!("{case}: {:.1} MB per step, {:.1} GB/s on one thread and {:.1} GB/s on two", bytes / 1e6, bytes / t1 / 1e9, bytes / t2 / 1e9));
         }
     }
@@ -646,6 +644,12 @@ fn both_cores(bench: &Bench) -> String {
 /// Passes (reads and writes) over arrays of three-vectors the velocity-Verlet kicks and drift
 /// make per step (see [`both_cores`]).
 const INTEGRATE_PASSES: usize = 14;
+
+/// Bytes the velocity-Verlet kicks and drift move per step in `case` (24 per three-vector pass).
+fn integrate_bytes_per_step(bench: &Bench, case: &str) -> f64 {
+    let particles = bench.measurements.iter().find(|m| m.case == case).map_or(0, |m| m.particles);
+    INTEGRATE_PASSES as f64 * 24.0 * particles as f64
+}
 
 fn markdown(bench: &Bench, agreement: &[(String, f64)]) -> String {
     let o = bench.options;
