@@ -16,6 +16,7 @@ use stats_alloc::INSTRUMENTED_SYSTEM;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Barrier;
 use std::process::Command;
 use std::time::Instant;
 
@@ -170,9 +171,25 @@ pub enum Work {
 /// number of steps; `timings` switches on the phase timers (for a profile; they cost a few per
 /// cent, so timed runs leave them off).
 pub fn time_magdem(scene: &Scene, threads: usize, work: Work, timings: bool) -> Result<MagdemRun, Error> {
+    time_magdem_from(scene, threads, work, timings, Start::Alone)
+}
+
+/// How a timed magdem run starts its clock.
+#[derive(Clone, Copy)]
+pub enum Start<'a> {
+    /// As soon as it is set up; its allocations are counted (its memory is measured on one
+    /// thread: counting on two would time the counters' contention).
+    Alone,
+    /// When every run sharing the barrier is set up, so that their loops run at the same time;
+    /// nothing is counted (the counters are shared by all threads).
+    Together(&'a Barrier),
+}
+
+/// [`time_magdem`] with the clock started as `start` says.
+pub fn time_magdem_from(scene: &Scene, threads: usize, work: Work, timings: bool, start: Start) -> Result<MagdemRun, Error> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-    // Memory is measured on one thread (counting on two would time the counters' contention).
-    count_allocations(threads == 1);
+    let alone = matches!(start, Start::Alone);
+    count_allocations(alone && threads == 1);
     let result = pool.install(|| {
         let before = heap_bytes();
         let mut simulation = scene.simulation(None);
@@ -180,6 +197,9 @@ pub fn time_magdem(scene: &Scene, threads: usize, work: Work, timings: bool) -> 
         if timings {
             // The loop's phases only (the initial evaluation builds the neighbour lists).
             simulation.field.timers = PhaseTimers::enabled();
+        }
+        if let Start::Together(barrier) = start {
+            barrier.wait();
         }
         let start = Instant::now();
         match work {
@@ -198,7 +218,9 @@ pub fn time_magdem(scene: &Scene, threads: usize, work: Work, timings: bool) -> 
         let memory = heap_bytes().saturating_sub(before);
         Ok(MagdemRun { seconds, simulation, memory })
     });
-    count_allocations(false);
+    if alone {
+        count_allocations(false);
+    }
     result
 }
 

@@ -69,10 +69,19 @@ struct MpiRun {
 }
 
 /// What the machine itself gains from a second core, measured in the same minutes as a case:
-/// seconds on one core and on two of arithmetic alone and of the case's integrator alone.
+/// seconds of arithmetic alone on one core and on two, and the loop seconds of two one-thread
+/// runs of the case at once (the slower of the pair).
 struct Ceilings {
     arithmetic: (Spread, Spread),
-    integrator: (Spread, Spread),
+    two_runs: Spread,
+}
+
+impl Ceilings {
+    /// How many times the throughput of one one-thread run two such runs at once give, given
+    /// one run's time alone.
+    fn two_runs_gain(&self, one_run: &Spread) -> f64 {
+        2.0 * one_run.median / self.two_runs.median
+    }
 }
 
 /// A phase's name and its median seconds per step on one thread and on two.
@@ -124,25 +133,22 @@ impl<'a> Contender<'a> {
         Contender { engine: ARITHMETIC, threads, run: Box::new(move || Ok(arithmetic_seconds(threads))) }
     }
 
-    /// The scene's integrator alone on `threads` threads: [`INTEGRATOR_STEPS`] steps of its kicks
-    /// and drift with the forces held (no force evaluation), the step's streaming without the
-    /// rest of the step. Same contender protocol as [`Contender::arithmetic`].
-    fn integrator_alone(scene: &Scene, threads: usize) -> Result<Self, Error> {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-        let mut simulation = pool.install(|| scene.simulation(None));
-        simulation.initialise()?;
-        let (dt, n) = (scene.dt(), scene.initial.len());
+    /// Two one-thread magdem runs of `scene` at once, their loops started together: the slower
+    /// loop's seconds. Two independent runs share nothing but the machine (no hand-off, no join,
+    /// no data), so what they gain over one run is the most the case's own work can gain from a
+    /// second core in those minutes, and what an ensemble of runs gains from it.
+    fn two_runs_at_once(scene: &'a Scene, work: Work) -> Self {
         let run = move || {
-            let Simulation { state, integrator, .. } = &mut simulation;
-            let started = Instant::now();
-            pool.install(|| {
-                for _ in 0..INTEGRATOR_STEPS {
-                    crate::core::parallel::with_warm_pool(n, || integrator.step(state, dt, &mut |_, _, _| {}));
-                }
+            let barrier = Barrier::new(2);
+            let runs = std::thread::scope(|scope| {
+                // Both runs are the same scene: if one fails before the barrier, so does the other.
+                let both = [(); 2].map(|_| scope.spawn(|| time_magdem_from(scene, 1, work, false, Start::Together(&barrier))));
+                both.map(|run| run.join().expect("a timed run does not panic"))
             });
-            Ok(started.elapsed().as_secs_f64())
+            let [a, b] = runs;
+            Ok(a?.seconds.max(b?.seconds))
         };
-        Ok(Contender { engine: INTEGRATOR_ALONE, threads, run: Box::new(run) })
+        Contender { engine: TWO_RUNS, threads: 2, run: Box::new(run) }
     }
 
     /// A reference engine on `procs` MPI processes (one: no `mpirun`), if installed.
@@ -206,6 +212,14 @@ impl Bench<'_> {
         Some(self.find(case, slow.0, slow.1)?.seconds.median / self.find(case, fast.0, fast.1)?.seconds.median)
     }
 
+    /// The machine's own two-core gains measured with `case`: arithmetic, and two one-thread
+    /// runs at once (throughput over one magdem run alone).
+    fn two_core_gains(&self, case: &str) -> Option<(f64, f64)> {
+        let (_, ceilings) = self.ceilings.iter().find(|(c, _)| c == case)?;
+        let one_run = self.find(case, "magdem", 1)?;
+        Some((gain(&ceilings.arithmetic), ceilings.two_runs_gain(&one_run.seconds)))
+    }
+
     /// Nanoseconds per force evaluation and pair within the cut-off (each counted once) at the
     /// median, for a run of the dipole scaling scene whose pairs were counted.
     fn ns_per_pair(&self, m: &Measurement) -> Option<f64> {
@@ -236,15 +250,15 @@ impl Bench<'_> {
                 }
                 if timed {
                     contenders.extend([Contender::arithmetic(1), Contender::arithmetic(2)]);
-                    contenders.extend([Contender::integrator_alone(&scene, 1)?, Contender::integrator_alone(&scene, 2)?]);
+                    contenders.push(Contender::two_runs_at_once(&scene, Work::Steps));
                 }
                 self.compare(&case, n, steps, contenders)?;
                 if timed {
-                    let (machine, others): (Vec<_>, _) = std::mem::take(&mut self.measurements).into_iter().partition(|m| [ARITHMETIC, INTEGRATOR_ALONE].contains(&m.engine));
+                    let (machine, others): (Vec<_>, _) = std::mem::take(&mut self.measurements).into_iter().partition(|m| [ARITHMETIC, TWO_RUNS].contains(&m.engine));
                     self.measurements = others;
                     let on = |engine, threads| machine.iter().find(|m| m.engine == engine && m.threads == threads).map_or(Spread::of(&[f64::NAN]), |m| m.seconds);
                     let both = |engine| (on(engine, 1), on(engine, 2));
-                    self.ceilings.push((case.clone(), Ceilings { arithmetic: both(ARITHMETIC), integrator: both(INTEGRATOR_ALONE) }));
+                    self.ceilings.push((case.clone(), Ceilings { arithmetic: both(ARITHMETIC), two_runs: on(TWO_RUNS, 2) }));
                     let phases = one.phases[0].iter().map(|(name, _)| (*name, one.median(name), two.median(name))).collect();
                     self.phases_on_both_cores.push((case.clone(), phases));
                 }
@@ -387,10 +401,7 @@ fn last_frame(path: &Path, engine: &str, route: &'static str, procs: usize) -> R
 
 /// Contender names of the machine's own gains (kept out of the measurements table).
 const ARITHMETIC: &str = "arithmetic";
-const INTEGRATOR_ALONE: &str = "integrator alone";
-
-/// Steps of an integrator-alone try (about a tenth of a second at 30 000 particles).
-const INTEGRATOR_STEPS: usize = 1000;
+const TWO_RUNS: &str = "two runs at once";
 
 /// Multiply-add rounds of an arithmetic try, over 32 independent lanes (8 AVX2 registers: two
 /// fused multiply-adds per cycle keep a Zen 3 or Skylake core's floating-point pipes full).
@@ -566,8 +577,8 @@ fn targets(bench: &Bench) -> String {
                 .iter()
                 .filter_map(|(engine, name)| Some(format!("{name} {:.2}×", bench.speedup(case, (engine, 2), (engine, 1))?)))
                 .collect();
-            let machine = bench.ceilings.iter().find(|(c, _)| c == case).map(|(_, g)| {
-                format!("in the same minutes the machine's own two-core gains: arithmetic {:.2}×, the integrator alone {:.2}×", gain(&g.arithmetic), gain(&g.integrator))
+            let machine = bench.two_core_gains(case).map(|(arithmetic, two_runs)| {
+                format!("in the same minutes: arithmetic on two cores {arithmetic:.2}× one, two one-thread runs at once {two_runs:.2}× the throughput of one")
             });
             let context: Vec<String> = [(!engines.is_empty()).then(|| format!("two MPI processes ÷ one: {}", engines.join(", "))), machine].into_iter().flatten().collect();
             let context = if context.is_empty() { String::new() } else { format!(" ({}; see “Both cores”)", context.join("; ")) };
@@ -603,16 +614,16 @@ fn targets(bench: &Bench) -> String {
 /// magdem's two threads against the engines' two MPI processes at 30 000 particles, phase by
 /// phase, and what the machine itself gains from a second core in the same minutes.
 fn both_cores(bench: &Bench) -> String {
-    let mut s = "\n## Both cores\n\nThe reference engines on both cores (`mpirun -np 2`, the same decks; `performance.csv` lists them with 2 in its threads column), and what the machine itself gains from a second core, measured in turns with the case's contenders so that it sees the machine in the same minutes: *arithmetic*, fused multiply-adds on 32 lanes held in registers (no memory traffic: whether the two cores deliver two cores' arithmetic, which a shared machine's other tenants can take part of), and *the integrator alone*, magdem's velocity-Verlet kicks and drift on the case's particles with the forces held (the step's own streaming over its particle arrays, without the rest of the step). Medians:\n\n".to_string();
-    s += "| case | magdem 2 threads ÷ 1 | LIGGGHTS 2 processes ÷ 1 | LAMMPS 2 processes ÷ 1 | magdem 2 threads ÷ LIGGGHTS 2 processes speed | magdem 2 threads ÷ LAMMPS 2 processes speed | arithmetic, 2 cores ÷ 1 | integrator alone, 1 thread (GB/s) | integrator alone, 2 threads (GB/s) | integrator alone, 2 threads ÷ 1 |\n|---|---|---|---|---|---|---|---|---|---|\n";
+    let mut s = "\n## Both cores\n\nThe reference engines on both cores (`mpirun -np 2`, the same decks; `performance.csv` lists them with 2 in its threads column), and what the machine itself gains from a second core, measured in turns with the case's contenders so that it sees the machine in the same minutes: *arithmetic*, fused multiply-adds on 32 lanes held in registers (no memory traffic: whether the two cores deliver two cores' arithmetic, which a shared machine's other tenants can take part of), and *two runs at once*, two independent one-thread magdem runs of the case side by side, their loops started together (the throughput of the pair, timed by the slower, over that of one run alone). The two runs share nothing but the machine: no hand-off, no join, no data. What they gain is the most the case's own work, with its own memory traffic, can gain from a second core in those minutes, and it is what an ensemble of runs (seeds, time steps, concentrations) gains by running two at a time. The last column sets magdem's two threads against it. Medians:\n\n".to_string();
+    s += "| case | magdem 2 threads ÷ 1 | LIGGGHTS 2 processes ÷ 1 | LAMMPS 2 processes ÷ 1 | magdem 2 threads ÷ LIGGGHTS 2 processes speed | magdem 2 threads ÷ LAMMPS 2 processes speed | arithmetic, 2 cores ÷ 1 | two runs at once, throughput ÷ one run | magdem's 2-thread gain ÷ two runs' gain |\n|---|---|---|---|---|---|---|---|---|\n";
     for case in ["contact sparse 30000", "contact dense 30000"] {
         let ratio = |fast, slow| bench.speedup(case, fast, slow).map_or("–".into(), |x| format!("{x:.2}×"));
         let gained = |engine| ratio((engine, 2), (engine, 1));
         let (against_liggghts, against_lammps) = (ratio(("magdem", 2), ("liggghts", 2)), ratio(("magdem", 2), ("lammps", 2)));
-        let bytes = integrate_bytes_per_step(bench, case) * INTEGRATOR_STEPS as f64;
-        let machine = bench.ceilings.iter().find(|(c, _)| c == case).map(|(_, g)| {
-            let gbs = |t: &Spread| format!("{:.0} ({:.0}–{:.0})", bytes / t.median / 1e9, bytes / t.max / 1e9, bytes / t.min / 1e9);
-            [format!("{:.2}×", gain(&g.arithmetic)), gbs(&g.integrator.0), gbs(&g.integrator.1), format!("{:.2}×", gain(&g.integrator))]
+        let magdem_gain = bench.speedup(case, ("magdem", 2), ("magdem", 1));
+        let machine = bench.two_core_gains(case).map(|(arithmetic, two_runs)| {
+            let efficiency = magdem_gain.map_or("–".into(), |g| format!("{:.2}", g / two_runs));
+            [format!("{arithmetic:.2}×"), format!("{two_runs:.2}×"), efficiency]
         });
         let machine = machine.unwrap_or_else(|| std::array::from_fn(|_| "–".to_string())).join(" | ");
         let _ = writeln!(s, "| {case} | {} | {} | {} | {against_liggghts} | {against_lammps} | {machine} |", gained("magdem"), gained("liggghts"), gained("lammps"));
@@ -635,7 +646,7 @@ fn both_cores(bench: &Bench) -> String {
     }
     let _ = write!(
         s,
-        "\nThe integrator's share is pure streaming: velocity Verlet with one mass for all particles makes {INTEGRATE_PASSES} passes over arrays of N three-vectors per step (half kick and drift: x, v, ω read and written, F and T read; closing half kick: v, ω read and written, F and T read), each read and each write counted once: {}. The integrator alone (table above) runs the same passes back to back: what it gains from a second thread is what the memory system let through for this pattern in those minutes, to set against the integrate phase's gain here. The other phases pass over particle arrays of the same size (the neighbour filter also gathers the partners' positions), and the serial rest of the step comes on top: the wall contacts' scan of the particles near a wall (a list too short to split) and the hand-offs between the parallel loops. The history ([performance-history.md](performance-history.md)) has the measurements behind this.\n",
+        "\nThe integrator's share is pure streaming: velocity Verlet with one mass for all particles makes {INTEGRATE_PASSES} passes over arrays of N three-vectors per step (half kick and drift: x, v, ω read and written, F and T read; closing half kick: v, ω read and written, F and T read), each read and each write counted once: {}. The other phases pass over particle arrays of the same size (the neighbour filter also gathers the partners' positions), and the serial rest of the step comes on top: the wall contacts' scan of the particles near a wall (a list too short to split) and the hand-offs between the parallel loops. The history ([performance-history.md](performance-history.md)) has the measurements behind this.\n",
         integrate_bandwidth.join("; ")
     );
     s
