@@ -118,7 +118,7 @@ fn timings_do_not_change_the_trajectory() {
             (words[0].to_string(), words[3].trim_end_matches('%').parse().unwrap())
         })
         .collect();
-    for phase in ["neighbours", "moments", "contact", "dipole", "drag", "gravity", "integrate", "monitor"] {
+    for phase in ["neighbours", "seed", "moments", "contact", "dipole", "drag", "integrate", "monitor"] {
         assert!(shares.iter().any(|(name, _)| name == phase), "no {phase} in {stdout}");
     }
     let total: f64 = shares.iter().map(|s| s.1).sum();

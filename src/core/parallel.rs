@@ -5,8 +5,6 @@
 //! results are gathered in pair order and summed serially, and reductions are exact (max, first
 //! match). A run's result therefore does not depend on the thread count.
 
-use super::state::Vec3;
-
 /// Shortest loop worth splitting across threads (about 20 µs of per-particle work).
 pub const MIN_PARALLEL_LEN: usize = 4096;
 
@@ -126,34 +124,6 @@ pub fn with_warm_pool<R: Send>(len: usize, f: impl FnOnce() -> R + Send) -> R {
         done.store(true, Ordering::Release);
         result
     })
-}
-
-/// `out[i] = value` for every i (in parallel chunks when worth it), stored four vectors at a
-/// time (a 96-byte copy the compiler writes as wide stores; one vector at a time it is not).
-pub fn fill(out: &mut [Vec3], value: Vec3) {
-    let fill_chunk = |chunk: &mut [Vec3]| {
-        let four = [value; 4];
-        let mut quads = chunk.chunks_exact_mut(4);
-        quads.by_ref().for_each(|q| q.copy_from_slice(&four));
-        quads.into_remainder().fill(value);
-    };
-    if worth_it(out.len()) {
-        use rayon::prelude::*;
-        out.par_chunks_mut(share(out.len())).for_each(fill_chunk);
-    } else {
-        fill_chunk(out);
-    }
-}
-
-/// `out.copy_from_slice(from)` (in parallel chunks when worth it).
-pub fn copy<T: Copy + Send + Sync>(from: &[T], out: &mut [T]) {
-    if worth_it(out.len()) {
-        use rayon::prelude::*;
-        let share = share(out.len());
-        out.par_chunks_mut(share).zip(from.par_chunks(share)).for_each(|(o, f)| o.copy_from_slice(f));
-    } else {
-        out.copy_from_slice(from);
-    }
 }
 
 #[cfg(test)]

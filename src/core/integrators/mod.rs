@@ -59,33 +59,98 @@ pub fn by_name(name: &str, slow_every: u64, tolerance: f64) -> Option<Box<dyn In
 
 /// v += F/m h, ω += T/I h.
 fn kick(p: &mut Particles, h: f64) {
-    kick_by(&mut p.velocity, &mut p.angular_velocity, &p.force, &p.torque, &p.inverse_masses, h);
+    kick_drift_by(p, Forces::Fast, h, 0.0);
 }
 
 /// v += F_slow/m h, ω += T_slow/I h.
 fn slow_kick(p: &mut Particles, h: f64) {
-    kick_by(&mut p.velocity, &mut p.angular_velocity, &p.slow_force, &p.slow_torque, &p.inverse_masses, h);
+    kick_drift_by(p, Forces::Slow, h, 0.0);
 }
 
-fn kick_by(velocity: &mut [Vec3], spin: &mut [Vec3], force: &[Vec3], torque: &[Vec3], inverse: &InverseMasses, h: f64) {
-    match inverse {
+/// x += v h, and permanent moments turn with the particle by ω h (Rodrigues rotation).
+fn drift(p: &mut Particles, h: f64) {
+    kick_drift(p, 0.0, h);
+}
+
+/// A kick by `kick` then a drift by `drift` in one pass over the particles (the same arithmetic
+/// as [`kick`] followed by [`drift`]).
+fn kick_drift(p: &mut Particles, kick: f64, drift: f64) {
+    kick_drift_by(p, Forces::Fast, kick, drift);
+}
+
+/// Which force arrays a kick applies.
+#[derive(Clone, Copy)]
+enum Forces {
+    /// `force`/`torque`.
+    Fast,
+    /// `slow_force`/`slow_torque`.
+    Slow,
+}
+
+/// v += F/m kick and ω += T/I kick, then x += v drift (a zero kick or drift is skipped): one
+/// parallel loop in which each thread takes its share of the particles through all of it (a
+/// parallel loop per array would hand out and join once per array).
+fn kick_drift_by(p: &mut Particles, forces: Forces, kick: f64, drift: f64) {
+    let (force, torque) = match forces {
+        Forces::Fast => (&p.force, &p.torque),
+        Forces::Slow => (&p.slow_force, &p.slow_torque),
+    };
+    let (x, v, w) = (&mut p.position, &mut p.velocity, &mut p.angular_velocity);
+    let (in_parallel, share) = (parallel::worth_it(x.len()), parallel::share(x.len()));
+    match &p.inverse_masses {
         InverseMasses::Uniform { mass, inertia } => {
-            add_scaled(components_mut(velocity), components(force), h * mass);
-            add_scaled(components_mut(spin), components(torque), h * inertia);
-        }
-        InverseMasses::PerParticle { mass, inertia } => {
-            let kick = |((v, w), (f, t)): ((&mut Vec3, &mut Vec3), (&Vec3, &Vec3)), inv_m: f64, inv_i: f64| {
-                *v += f * (h * inv_m);
-                *w += t * (h * inv_i);
+            let (c, ci) = (kick * mass, kick * inertia);
+            // Component by component (SIMD across particles).
+            let advance = |x: &mut [Vec3], v: &mut [Vec3], w: &mut [Vec3], f: &[Vec3], t: &[Vec3]| {
+                let (x, v, w, f, t) = (components_mut(x), components_mut(v), components_mut(w), components(f), components(t));
+                match (kick != 0.0, drift != 0.0) {
+                    (true, true) => x.iter_mut().zip(v).zip(f).for_each(|((x, v), f)| {
+                        *v += f * c;
+                        *x += *v * drift;
+                    }),
+                    (true, false) => v.iter_mut().zip(f).for_each(|(v, f)| *v += f * c),
+                    (false, true) => x.iter_mut().zip(v).for_each(|(x, v)| *x += *v * drift),
+                    (false, false) => {}
+                }
+                if kick != 0.0 {
+                    w.iter_mut().zip(t).for_each(|(w, t)| *w += t * ci);
+                }
             };
-            if parallel::worth_it(velocity.len()) {
-                let state = velocity.par_iter_mut().zip(spin).zip(force.par_iter().zip(torque));
-                state.zip(mass.par_iter().zip(inertia)).with_min_len(parallel::share(mass.len())).for_each(|(s, (m, i))| kick(s, *m, *i))
+            if in_parallel {
+                let shares = x.par_chunks_mut(share).zip(v.par_chunks_mut(share)).zip(w.par_chunks_mut(share));
+                shares.zip(force.par_chunks(share).zip(torque.par_chunks(share))).for_each(|(((x, v), w), (f, t))| advance(x, v, w, f, t));
             } else {
-                let state = velocity.iter_mut().zip(spin).zip(force.iter().zip(torque));
-                state.zip(mass.iter().zip(inertia)).for_each(|(s, (m, i))| kick(s, *m, *i))
+                advance(x, v, w, force, torque);
             }
         }
+        InverseMasses::PerParticle { mass, inertia } => {
+            let advance = |x: &mut [Vec3], v: &mut [Vec3], w: &mut [Vec3], f: &[Vec3], t: &[Vec3], m: &[f64], i: &[f64]| {
+                for ((((x, v), w), (f, t)), (m, i)) in x.iter_mut().zip(v).zip(w).zip(f.iter().zip(t)).zip(m.iter().zip(i)) {
+                    if kick != 0.0 {
+                        *v += f * (kick * m);
+                        *w += t * (kick * i);
+                    }
+                    if drift != 0.0 {
+                        *x += *v * drift;
+                    }
+                }
+            };
+            if in_parallel {
+                let shares = x.par_chunks_mut(share).zip(v.par_chunks_mut(share)).zip(w.par_chunks_mut(share));
+                let inputs = force.par_chunks(share).zip(torque.par_chunks(share)).zip(mass.par_chunks(share).zip(inertia.par_chunks(share)));
+                shares.zip(inputs).for_each(|(((x, v), w), ((f, t), (m, i)))| advance(x, v, w, f, t, m, i));
+            } else {
+                advance(x, v, w, force, torque, mass, inertia);
+            }
+        }
+    }
+    if p.has_permanent_moments && drift != 0.0 {
+        let turn = |(m, w): (&mut Vec3, &Vec3)| {
+            if *m != Vec3::zeros() {
+                *m = nalgebra::Rotation3::new(w * drift) * *m;
+            }
+        };
+        p.permanent_moment.iter_mut().zip(&p.angular_velocity).for_each(turn);
     }
 }
 
@@ -97,73 +162,6 @@ fn components(v: &[Vec3]) -> &[f64] {
 
 fn components_mut(v: &mut [Vec3]) -> &mut [f64] {
     bytemuck::cast_slice_mut(v)
-}
-
-/// a += b c, componentwise (the same arithmetic as `a += b * c` on the vectors).
-fn add_scaled(a: &mut [f64], b: &[f64], c: f64) {
-    let add = |(a, b): (&mut f64, &f64)| *a += b * c;
-    if parallel::worth_it(a.len() / 3) {
-        a.par_iter_mut().zip(b).with_min_len(parallel::share(b.len())).for_each(add);
-    } else {
-        a.iter_mut().zip(b).for_each(add);
-    }
-}
-
-/// x += v h, and permanent moments turn with the particle by ω h (Rodrigues rotation).
-fn drift(p: &mut Particles, h: f64) {
-    kick_drift(p, 0.0, h);
-}
-
-/// A kick by `kick` then a drift by `drift` in one pass over the particles (the same arithmetic
-/// as [`kick`] followed by [`drift`]).
-fn kick_drift(p: &mut Particles, kick: f64, drift: f64) {
-    match &p.inverse_masses {
-        InverseMasses::Uniform { mass, inertia } => {
-            // v += F/m kick, x += v drift, component by component; ω += T/I kick.
-            let in_parallel = parallel::worth_it(p.position.len());
-            let (x, v, f) = (components_mut(&mut p.position), components_mut(&mut p.velocity), components(&p.force));
-            let c = kick * mass;
-            let kick_and_drift = |((x, v), f): ((&mut f64, &mut f64), &f64)| {
-                *v += f * c;
-                *x += *v * drift;
-            };
-            let only_drift = |(x, v): (&mut f64, &mut f64)| *x += *v * drift;
-            match (in_parallel, kick != 0.0) {
-                (true, true) => x.par_iter_mut().zip(v).zip(f).with_min_len(parallel::share(f.len())).for_each(kick_and_drift),
-                (true, false) => x.par_iter_mut().zip(v).with_min_len(parallel::share(f.len())).for_each(only_drift),
-                (false, true) => x.iter_mut().zip(v).zip(f).for_each(kick_and_drift),
-                (false, false) => x.iter_mut().zip(v).for_each(only_drift),
-            }
-            if kick != 0.0 {
-                add_scaled(components_mut(&mut p.angular_velocity), components(&p.torque), kick * inertia);
-            }
-        }
-        InverseMasses::PerParticle { mass, inertia } => {
-            type Item<'a> = ((((&'a mut Vec3, &'a mut Vec3), &'a mut Vec3), &'a Vec3), &'a Vec3);
-            let step = |((((x, v), w), f), t): Item, inv_m: f64, inv_i: f64| {
-                if kick != 0.0 {
-                    *v += f * (kick * inv_m);
-                    *w += t * (kick * inv_i);
-                }
-                *x += *v * drift;
-            };
-            if parallel::worth_it(p.position.len()) {
-                let arrays = p.position.par_iter_mut().zip(&mut p.velocity).zip(&mut p.angular_velocity).zip(&p.force).zip(&p.torque);
-                arrays.zip(mass.par_iter().zip(inertia)).with_min_len(parallel::share(mass.len())).for_each(|(a, (m, i))| step(a, *m, *i))
-            } else {
-                let arrays = p.position.iter_mut().zip(&mut p.velocity).zip(&mut p.angular_velocity).zip(&p.force).zip(&p.torque);
-                arrays.zip(mass.iter().zip(inertia)).for_each(|(a, (m, i))| step(a, *m, *i))
-            }
-        }
-    }
-    if p.has_permanent_moments {
-        let turn = |(m, w): (&mut Vec3, &Vec3)| {
-            if *m != Vec3::zeros() {
-                *m = nalgebra::Rotation3::new(w * drift) * *m;
-            }
-        };
-        p.permanent_moment.iter_mut().zip(&p.angular_velocity).for_each(turn);
-    }
 }
 
 /// Advances the clock after a completed step.
