@@ -188,8 +188,7 @@ pub enum Start<'a> {
 /// [`time_magdem`] with the clock started as `start` says.
 pub fn time_magdem_from(scene: &Scene, threads: usize, work: Work, timings: bool, start: Start) -> Result<MagdemRun, Error> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-    let alone = matches!(start, Start::Alone);
-    count_allocations(alone && threads == 1);
+    count_allocations(matches!(start, Start::Alone) && threads == 1);
     let result = pool.install(|| {
         let before = heap_bytes();
         let mut simulation = scene.simulation(None);
@@ -218,9 +217,7 @@ pub fn time_magdem_from(scene: &Scene, threads: usize, work: Work, timings: bool
         let memory = heap_bytes().saturating_sub(before);
         Ok(MagdemRun { seconds, simulation, memory })
     });
-    if alone {
-        count_allocations(false);
-    }
+    count_allocations(false);
     result
 }
 
