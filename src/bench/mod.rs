@@ -8,6 +8,7 @@
 
 pub mod report;
 
+use crate::core::parallel;
 use crate::core::simulation::Simulation;
 use crate::core::timers::PhaseTimers;
 use crate::reference::{deck, dipole_check, Engine};
@@ -208,8 +209,10 @@ pub fn time_magdem_from(scene: &Scene, threads: usize, work: Work, timings: bool
                 }
             }
             Work::Forces => {
+                // Each evaluation as a step runs it, in a warm pool.
+                let (field, state) = (&mut simulation.field, &mut simulation.state);
                 for _ in 0..scene.total_steps() {
-                    simulation.field.evaluate(&mut simulation.state, scene.dt());
+                    parallel::with_warm_pool(state.particles.len(), || field.evaluate(state, scene.dt()));
                 }
             }
         }

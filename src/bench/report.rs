@@ -332,7 +332,9 @@ impl Bench<'_> {
             self.dipole_pairs.push((n, pairs.len()));
             drop(pairs);
             let run = self.magdem(&case, &scene, 1, Work::Forces)?;
-            self.memory.push((case, n, run.memory as f64 / n as f64));
+            self.memory.push((case.clone(), n, run.memory as f64 / n as f64));
+            drop(run);
+            self.magdem(&case, &scene, 2, Work::Forces)?;
             progress.inc(1);
         }
         Ok(())
@@ -532,6 +534,7 @@ fn scaling_figure(path: &Path, rows: &[Measurement]) -> Result<(), Error> {
         Series::line("magdem contact dense, 1 thread", line("scaling contact dense", "magdem", 1), palette(1)),
         Series::line("magdem contact dense, 2 threads", line("scaling contact dense", "magdem", 2), palette(5)),
         Series::line("magdem dipoles, 15 d cut-off, 1 thread", line("scaling dipole cut-off 15 d", "magdem", 1), palette(4)),
+        Series::line("magdem dipoles, 15 d cut-off, 2 threads", line("scaling dipole cut-off 15 d", "magdem", 2), palette(7)),
     ];
     for (k, (engine, packing)) in [("liggghts", "sparse"), ("liggghts", "dense"), ("lammps", "sparse"), ("lammps", "dense")].into_iter().enumerate() {
         let colour = if engine == "liggghts" { RGBColor(30, 150, 60) } else { RGBColor(230, 140, 0) };
@@ -722,7 +725,7 @@ fn markdown(bench: &Bench, agreement: &[(String, f64)]) -> String {
         let _ = writeln!(s, "| {case} | {} | {} | {} | {agree} |", cell(one), cell(lmp), ratio(one, lmp));
     }
 
-    s += "\n## Cost against N\n\n![scaling](performance-scaling.png)\n\nnanoseconds per particle-step (median), magdem; contact scenes at 1e7 particle-steps (at least 100 steps), the dipole scene (as above, box scaled at equal concentration) as force evaluations at 2e6 particle-evaluations (at least 20). Memory: heap bytes the simulation holds at the end of its run, per particle (state, contact history, neighbour and pair lists, buffers; counted by the binary's instrumented allocator).\n\nWhere the contact scenes' cost per particle rises with N, their particle arrays (memory rows below) have outgrown a cache level (the machine line above gives the sizes). The dipole sum's cost per particle follows its partners within the cut-off: a 15-diameter sphere is cut by the walls of the small boxes, so partners per particle grow with the box until it is much larger than the cut-off; from 4 096 particles on, the sum also runs over full rows (each pair twice, for threads and thread-count-independent results). The cost per pair (pairs within the cut-off, each counted once) separates the sum's own cost from the neighbourhood's size.\n\n";
+    s += "\n## Cost against N\n\n![scaling](performance-scaling.png)\n\nnanoseconds per particle-step (median), magdem; contact scenes at 1e7 particle-steps (at least 100 steps), the dipole scene (as above, box scaled at equal concentration) as force evaluations at 2e6 particle-evaluations (at least 20). Memory: heap bytes the simulation holds at the end of its run, per particle (state, contact history, neighbour and pair lists, buffers; counted by the binary's instrumented allocator).\n\nWhere the contact scenes' cost per particle rises with N, their particle arrays (memory rows below) have outgrown a cache level (the machine line above gives the sizes). The dipole sum's cost per particle follows its partners within the cut-off: a 15-diameter sphere is cut by the walls of the small boxes, so partners per particle grow with the box until it is much larger than the cut-off; from 4 096 particles on, the sum runs in 16 bands of rows, each with its own buffer for the reactions, the buffers then added in band order (the bands share the threads, and the order is the same on any thread count). The cost per pair (pairs within the cut-off, each counted once) separates the sum's own cost from the neighbourhood's size.\n\n";
     s += "| case | threads |";
     let sizes: Vec<usize> = scaling_sizes(o.max_particles);
     for n in &sizes {
@@ -731,7 +734,7 @@ fn markdown(bench: &Bench, agreement: &[(String, f64)]) -> String {
     s += "\n|---|---|";
     s += &"---|".repeat(sizes.len());
     s += "\n";
-    for (case, threads) in [("scaling contact sparse", 1), ("scaling contact dense", 1), ("scaling contact dense", 2), ("scaling dipole cut-off 15 d", 1)] {
+    for (case, threads) in [("scaling contact sparse", 1), ("scaling contact dense", 1), ("scaling contact dense", 2), ("scaling dipole cut-off 15 d", 1), ("scaling dipole cut-off 15 d", 2)] {
         let _ = write!(s, "| {} | {threads} |", case.trim_start_matches("scaling "));
         for n in &sizes {
             let m = bench.measurements.iter().find(|m| m.case == case && m.threads == threads && m.particles == *n);
@@ -747,7 +750,7 @@ fn markdown(bench: &Bench, agreement: &[(String, f64)]) -> String {
     s += "\n";
     let _ = write!(s, "| dipole cut-off 15 d: ns per pair | 1 |");
     for n in &sizes {
-        let m = bench.measurements.iter().find(|m| m.case == "scaling dipole cut-off 15 d" && m.particles == *n);
+        let m = bench.measurements.iter().find(|m| m.case == "scaling dipole cut-off 15 d" && m.threads == 1 && m.particles == *n);
         let _ = write!(s, " {} |", m.and_then(|m| bench.ns_per_pair(m)).map_or("–".into(), |ns| format!("{ns:.1} ns")));
     }
     s += "\n";

@@ -6,10 +6,10 @@
 //! T_i = m_perm,i × B_loc,i acts only on permanent moments: an induced moment of a linear sphere is
 //! parallel to its local field.
 //!
-//! The sum runs over rows of partners (all other particles, or the Verlet candidates within the
-//! cut-off): below [`parallel::MIN_PARALLEL_LEN`] particles half rows with F_ji = −F_ij; above
-//! it full rows, each particle summing its own (twice the pair work, but rows run in parallel
-//! and in the same order for any thread count). A row visits its partners in blocks of four
+//! The sum runs over half rows of partners (the particles above, or the Verlet candidates above
+//! within the cut-off) with F_ji = −F_ij; above [`parallel::MIN_PARALLEL_LEN`] particles the
+//! rows are split into bands summed apart (in parallel) and then added in band order, the same
+//! order for any thread count (see [`BANDS`]). A row visits its partners in blocks of four
 //! consecutive particles, one SIMD vector each, and sums in eight lanes by partner index, a
 //! fixed order. Walled boxes skip the minimum-image arithmetic. When the moments phase has
 //! already listed the pairs (the paper's induction), the term sums over that list instead.
@@ -55,11 +55,20 @@ struct ParticleBlock {
 
 fn fill_particle_blocks(blocks: &mut Vec<ParticleBlock>, position: &[Vec3], moment: &[Vec3]) {
     let padding = ParticleBlock { x: [f64x4::splat(f64::NAN); 3], m: [f64x4::ZERO; 3] };
-    blocks.clear();
-    blocks.resize(position.len().div_ceil(BLOCK), padding);
-    for (q, (x, m)) in position.iter().zip(moment).enumerate() {
-        set_lane(&mut blocks[q / BLOCK].x, q % BLOCK, x);
-        set_lane(&mut blocks[q / BLOCK].m, q % BLOCK, m);
+    let n = position.len();
+    blocks.resize(n.div_ceil(BLOCK), padding);
+    let fill = |(q, block): (usize, &mut ParticleBlock)| {
+        *block = padding;
+        for (lane, i) in (q * BLOCK..n.min((q + 1) * BLOCK)).enumerate() {
+            set_lane(&mut block.x, lane, &position[i]);
+            set_lane(&mut block.m, lane, &moment[i]);
+        }
+    };
+    if parallel::worth_it(n) {
+        use rayon::prelude::*;
+        blocks.par_iter_mut().with_min_len(parallel::CHUNK).enumerate().for_each(fill);
+    } else {
+        blocks.iter_mut().enumerate().for_each(fill);
     }
 }
 
@@ -96,54 +105,29 @@ impl Image {
 }
 
 /// Neighbour rows of the cut-off sum, from the Verlet candidates: row i lists, ascending, the
-/// blocks that hold its candidates j, only j > i (half rows, for F_ji = −F_ij) or every
-/// neighbour (full rows).
+/// blocks that hold its candidates j > i (half rows, for F_ji = −F_ij).
 #[derive(Debug, Default, Clone)]
 struct Rows {
     start: Vec<usize>,
     blocks: Vec<u32>,
-    /// Scratch: the candidates' rows, before they are reduced to blocks.
-    js: Vec<u32>,
 }
 
 impl Rows {
-    fn build(&mut self, n: usize, candidates: &[(u32, u32)], full: bool) {
+    fn build(&mut self, n: usize, candidates: &[(u32, u32)]) {
         self.start.clear();
-        self.start.resize(n + 1, 0);
-        for &(i, j) in candidates {
-            self.start[i as usize + 1] += 1;
-            if full {
-                self.start[j as usize + 1] += 1;
-            }
-        }
-        for i in 0..n {
-            self.start[i + 1] += self.start[i];
-        }
-        let mut fill = self.start.clone();
-        self.js.clear();
-        self.js.resize(self.start[n], 0);
-        // Candidates are sorted by (i, j): each row receives its entries in ascending order.
-        for &(i, j) in candidates {
-            self.js[fill[i as usize]] = j;
-            fill[i as usize] += 1;
-            if full {
-                self.js[fill[j as usize]] = i;
-                fill[j as usize] += 1;
-            }
-        }
-        // Each row's entries become the blocks that hold them.
         self.blocks.clear();
+        // Candidates are sorted by (i, j): each row's candidates come together, in ascending order.
+        let mut candidates = candidates.iter().peekable();
         for i in 0..n {
-            let row = self.start[i]..self.start[i + 1];
-            self.start[i] = self.blocks.len();
-            for &j in &self.js[row] {
+            self.start.push(self.blocks.len());
+            while let Some((_, j)) = candidates.next_if(|(owner, _)| *owner as usize == i) {
                 let block = j / BLOCK as u32;
                 if self.blocks.len() == self.start[i] || self.blocks.last() != Some(&block) {
                     self.blocks.push(block);
                 }
             }
         }
-        self.start[n] = self.blocks.len();
+        self.start.push(self.blocks.len());
     }
 
     fn row(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
@@ -152,7 +136,7 @@ impl Rows {
 }
 
 /// One row of the sum: particle i and the test of its partners j, closer than the cut-off
-/// (squared distance `cutoff2`) and, in i's own block, j > i (half rows) or j ≠ i (full rows).
+/// (squared distance `cutoff2`) and, in i's own block, j > i.
 struct Row {
     /// Particle i's position and moment in every lane.
     x: BlockVectors,
@@ -164,11 +148,11 @@ struct Row {
 }
 
 impl Row {
-    fn new(blocks: &[ParticleBlock], i: usize, half: bool, cutoff2: f64) -> Self {
+    fn new(blocks: &[ParticleBlock], i: usize, cutoff2: f64) -> Self {
         let block = &blocks[i / BLOCK];
         let (x, m) = (lane(&block.x, i % BLOCK), lane(&block.m, i % BLOCK));
         let (lanes, own_lane) = (f64x4::new([0.0, 1.0, 2.0, 3.0]), f64x4::splat((i % BLOCK) as f64));
-        let own_lanes = if half { lanes.simd_gt(own_lane) } else { lanes.simd_ne(own_lane) };
+        let own_lanes = lanes.simd_gt(own_lane);
         let splat = |v: Vec3| [0, 1, 2].map(|k| f64x4::splat(v[k]));
         Row { x: splat(x), m: splat(m), cutoff2: f64x4::splat(cutoff2), own_block: i / BLOCK, own_lanes }
     }
@@ -207,81 +191,122 @@ fn block_forces<const PERIODIC: bool>(block: &ParticleBlock, image: &Image, row:
     [component(0), component(1), component(2)]
 }
 
-/// Σ_j F_ij over the partners in `blocks` (ascending), subtracting each F_ij from
-/// `reaction[j]` on the way when `HALF` (F_ji = −F_ij). The sum runs in eight running sums, the
-/// term of partner j in sum j mod 8, then the eight in order: a fixed order for any thread count,
-/// in which the zero terms of the lanes left out change nothing (so the sum does not depend on
+/// Σ_j F_ij over the partners in `blocks` (ascending), subtracting each F_ij from the reaction
+/// of j's block b, `reaction[b − first_block]`, on the way (F_ji = −F_ij). The sum runs in eight
+/// running sums, the term of partner j in sum j mod 8, then the eight in order: a fixed order, in
+/// which the zero terms of the lanes left out change nothing (so the sum does not depend on
 /// which candidates the Verlet list holds, and a resumed run stays bitwise equal).
 #[inline(always)]
-fn row_sum<const PERIODIC: bool, const HALF: bool>(
+fn row_sum<const PERIODIC: bool>(
     particles: &[ParticleBlock],
     image: &Image,
     row: &Row,
     blocks: impl Iterator<Item = usize>,
     reaction: &mut [BlockVectors],
+    first_block: usize,
 ) -> Vec3 {
     let mut sums = [[f64x4::ZERO; 2]; 3];
     for b in blocks {
         let f = block_forces::<PERIODIC>(&particles[b], image, row, b);
         for k in 0..3 {
             sums[k][b % 2] += f[k];
-            if HALF {
-                reaction[b][k] -= f[k];
-            }
+            reaction[b - first_block][k] -= f[k];
         }
     }
     Vec3::from_fn(|k, _| sums[k].iter().flat_map(|s| s.to_array()).fold(0.0, |a, s| a + s))
 }
 
+/// Rows of the sum in bands of consecutive rows, each summing half rows into its own buffer; the
+/// buffers are then added in band order. The bands are fixed by the rows alone (one below
+/// [`parallel::MIN_PARALLEL_LEN`] particles, [`BANDS`] above), never by the thread count, so the
+/// sum's order, and its bits, are the same on any number of threads.
+const BANDS: usize = 16;
+
+/// One band: rows `rows`, and the forces they give to blocks `first_block..` (their own row
+/// sums and their reactions, which go only to higher particles).
+#[derive(Debug, Default, Clone)]
+struct Band {
+    rows: std::ops::Range<usize>,
+    first_block: usize,
+    forces: Vec<BlockVectors>,
+}
+
 /// Adds Σ_j F_ij to `force` with partners from `rows` (`None` = all other particles) within
-/// `cutoff2`: half rows with F_ji = −F_ij below [`parallel::MIN_PARALLEL_LEN`] particles, full
-/// rows summed per particle in parallel above (see the module note).
-fn add_row_sums(particles: &[ParticleBlock], image: &Image, rows: Option<&Rows>, cutoff2: f64, force: &mut [Vec3]) {
+/// `cutoff2`, by half rows with F_ji = −F_ij in `bands` (see [`BANDS`]).
+fn add_row_sums(particles: &[ParticleBlock], image: &Image, rows: Option<&Rows>, cutoff2: f64, force: &mut [Vec3], bands: &mut Vec<Band>) {
     // Without periodic axes the image term is d − 0 = d: the same bits without its arithmetic.
     if image.length == [0.0; 3] {
-        add_row_sums_in::<false>(particles, image, rows, cutoff2, force)
+        add_row_sums_in::<false>(particles, image, rows, cutoff2, force, bands)
     } else {
-        add_row_sums_in::<true>(particles, image, rows, cutoff2, force)
+        add_row_sums_in::<true>(particles, image, rows, cutoff2, force, bands)
     }
 }
 
-fn add_row_sums_in<const PERIODIC: bool>(particles: &[ParticleBlock], image: &Image, rows: Option<&Rows>, cutoff2: f64, force: &mut [Vec3]) {
+fn add_row_sums_in<const PERIODIC: bool>(particles: &[ParticleBlock], image: &Image, rows: Option<&Rows>, cutoff2: f64, force: &mut [Vec3], bands: &mut Vec<Band>) {
+    use rayon::prelude::*;
     let n = force.len();
-    let all_blocks = |from: usize| from / BLOCK..n.div_ceil(BLOCK);
-    if n < parallel::MIN_PARALLEL_LEN {
-        // The forces in blocks, so that a block's reactions are one vector operation; each
-        // particle receives its reactions (rows i' < i, in order) before its own row's sum, as in
-        // a pair-by-pair loop.
-        let mut total = vec![];
-        fill_blocks(&mut total, force);
-        for i in 0..n {
-            let row = Row::new(particles, i, true, cutoff2);
+    let blocks = n.div_ceil(BLOCK);
+    let count = if n < parallel::MIN_PARALLEL_LEN { 1 } else { BANDS };
+    // Bands of about equal work, counted in partner blocks.
+    let work = |i: usize| rows.map_or(blocks - i / BLOCK, |rows| rows.start[i + 1] - rows.start[i]);
+    let total: usize = (0..n).map(work).sum();
+    bands.resize_with(count, Band::default);
+    let (mut i, mut done) = (0, 0);
+    for (b, band) in bands.iter_mut().enumerate() {
+        let start = i;
+        while i < n && (b + 1 == count || done < total * (b + 1) / count) {
+            done += work(i);
+            i += 1;
+        }
+        band.rows = start..i;
+    }
+    // Each band's buffer starts from zero, the first from the forces so far; each particle
+    // receives its reactions (rows i' < i, in order) before its own row's sum, as in a
+    // pair-by-pair loop.
+    let sum_band = |(b, band): (usize, &mut Band)| {
+        band.first_block = if b == 0 { 0 } else { band.rows.start / BLOCK };
+        if b == 0 {
+            fill_blocks(&mut band.forces, force);
+        } else {
+            band.forces.clear();
+            band.forces.resize(blocks - band.first_block, [f64x4::ZERO; 3]);
+        }
+        let reactions = &mut band.forces;
+        for i in band.rows.clone() {
+            let row = Row::new(particles, i, cutoff2);
             let sum = match rows {
-                Some(rows) => row_sum::<PERIODIC, true>(particles, image, &row, rows.row(i), &mut total),
-                None => row_sum::<PERIODIC, true>(particles, image, &row, all_blocks(i + 1), &mut total),
+                Some(rows) => row_sum::<PERIODIC>(particles, image, &row, rows.row(i), reactions, band.first_block),
+                None => row_sum::<PERIODIC>(particles, image, &row, (i + 1) / BLOCK..blocks, reactions, band.first_block),
             };
             for k in 0..3 {
-                total[i / BLOCK][k].as_mut_array()[i % BLOCK] += sum[k];
+                reactions[i / BLOCK - band.first_block][k].as_mut_array()[i % BLOCK] += sum[k];
             }
         }
-        for (i, f) in force.iter_mut().enumerate() {
-            *f = lane(&total[i / BLOCK], i % BLOCK);
-        }
+    };
+    if parallel::worth_it(n) {
+        bands.par_iter_mut().enumerate().for_each(sum_band);
     } else {
-        use rayon::prelude::*;
-        let sums: Vec<Vec3> = (0..n)
-            .into_par_iter()
-            .with_min_len(64)
-            .map(|i| {
-                let row = Row::new(particles, i, false, cutoff2);
-                let no_reactions = &mut [];
-                match rows {
-                    Some(rows) => row_sum::<PERIODIC, false>(particles, image, &row, rows.row(i), no_reactions),
-                    None => row_sum::<PERIODIC, false>(particles, image, &row, all_blocks(0), no_reactions),
-                }
-            })
-            .collect();
-        force.iter_mut().zip(&sums).for_each(|(f, sum)| *f += sum);
+        bands.iter_mut().enumerate().for_each(sum_band);
+    }
+    let (first, others) = bands.split_first_mut().expect("at least one band");
+    // Block by block, the other bands' forces in band order.
+    let add_others = |q0: usize, out: &mut [BlockVectors]| {
+        for band in others.iter() {
+            let skip = band.first_block.saturating_sub(q0);
+            let theirs = band.forces.iter().skip((q0 + skip).saturating_sub(band.first_block));
+            for (sum, forces) in out.iter_mut().skip(skip).zip(theirs) {
+                (0..3).for_each(|k| sum[k] += forces[k]);
+            }
+        }
+    };
+    if parallel::worth_it(n) {
+        let share = parallel::share(blocks);
+        first.forces.par_chunks_mut(share).enumerate().for_each(|(c, out)| add_others(c * share, out));
+    } else {
+        add_others(0, &mut first.forces);
+    }
+    for (i, f) in force.iter_mut().enumerate() {
+        *f = lane(&first.forces[i / BLOCK], i % BLOCK);
     }
 }
 
@@ -314,11 +339,12 @@ pub struct DipoleForce {
     buffer: Vec<Vec3>,
     particle_blocks: Vec<ParticleBlock>,
     rows: Rows,
+    bands: Vec<Band>,
 }
 
 impl DipoleForce {
     pub fn new(cutoff: Option<f64>, b0: Vec3, gradient: Matrix3<f64>) -> Self {
-        Self { cutoff, b0, gradient, verlet: VerletList::default(), pairs: vec![], buffer: vec![], particle_blocks: vec![], rows: Rows::default() }
+        Self { cutoff, b0, gradient, verlet: VerletList::default(), pairs: vec![], buffer: vec![], particle_blocks: vec![], rows: Rows::default(), bands: vec![] }
     }
 }
 
@@ -337,14 +363,14 @@ impl ForceTerm for DipoleForce {
             (Some((range, pairs)), _) if range == self.cutoff => add_listed_pairs(pairs, &p.moment, &mut p.force, &mut self.buffer),
             (_, Some(c)) => {
                 if self.verlet.update(&p.position, ctx.domain, c, c / 15.0) {
-                    self.rows.build(n, self.verlet.candidates(), n >= parallel::MIN_PARALLEL_LEN);
+                    self.rows.build(n, self.verlet.candidates());
                 }
                 fill_particle_blocks(&mut self.particle_blocks, &p.position, &p.moment);
-                add_row_sums(&self.particle_blocks, &Image::of(ctx.domain), Some(&self.rows), c * c, &mut p.force);
+                add_row_sums(&self.particle_blocks, &Image::of(ctx.domain), Some(&self.rows), c * c, &mut p.force, &mut self.bands);
             }
             (_, None) => {
                 fill_particle_blocks(&mut self.particle_blocks, &p.position, &p.moment);
-                add_row_sums(&self.particle_blocks, &Image::of(ctx.domain), None, f64::INFINITY, &mut p.force);
+                add_row_sums(&self.particle_blocks, &Image::of(ctx.domain), None, f64::INFINITY, &mut p.force, &mut self.bands);
             }
         }
         if p.has_permanent_moments {
