@@ -57,7 +57,7 @@ fn one_and_two_threads_give_identical_bits() {
 
 #[test]
 fn the_row_sums_equal_a_direct_pair_sum() {
-    // Full rows (parallel, above the threshold) and half rows (below), in a walled box and in one
+    // Half rows in 16 bands (above the threshold) and in one (below), in a walled box and in one
     // periodic sideways (minimum image), against a direct double loop over the pairs within the
     // cut-off; agreement to rounding (1e-12 of the largest force).
     let sideways = "boundary = { x = \"periodic\", y = \"periodic\", z = \"wall\" }";
@@ -90,6 +90,34 @@ fn the_row_sums_equal_a_direct_pair_sum() {
             assert!(worst < 1e-12 * largest, "n = {n} {boundary}, cut-off {cutoff:?}: worst difference {worst:e} of {largest:e}");
         }
     }
+}
+
+#[test]
+fn the_dipole_sum_does_not_depend_on_when_the_verlet_list_was_built() {
+    // Above the threshold (16 bands), the same state evaluated by a fresh force field and by one
+    // whose Verlet list was built at other positions (each particle 0.2 d away, less than half
+    // the skin of d/1.5 at a 10 d cut-off, so the list is kept and holds other candidates): the
+    // same bits, as a resumed run needs.
+    let scene = crowd(MIN_PARALLEL_LEN + 300, "induction = \"none\"\ncutoff_diameters = 10.0", 1);
+    let field = || {
+        let mut field = scene.magnetic_force_field().unwrap();
+        field.terms.retain(|t| t.name() == "dipole");
+        field
+    };
+    let (mut fresh, mut aged) = (field(), field());
+    let state = scene.initial_state();
+    let mut elsewhere = state.clone();
+    for (k, x) in elsewhere.particles.position.iter_mut().enumerate() {
+        let angle = k as f64 * 2.399_963;
+        *x += Vec3::new(angle.cos(), angle.sin(), 0.0) * 0.2 * 11.0e-6;
+    }
+    aged.evaluate(&mut elsewhere, scene.dt());
+    let (mut a, mut b) = (state.clone(), state);
+    aged.evaluate(&mut a, scene.dt());
+    fresh.evaluate(&mut b, scene.dt());
+    let bits = |s: &magdem::core::state::State| s.particles.force.iter().flat_map(|f| f.iter().map(|c| c.to_bits()).collect::<Vec<_>>()).collect::<Vec<_>>();
+    assert!(a.particles.force.iter().any(|f| f.norm() > 0.0), "the test should exercise the dipole sum");
+    assert_eq!(bits(&a), bits(&b), "forces differ with the Verlet list's history");
 }
 
 #[test]

@@ -7,7 +7,7 @@
 //! parallel to its local field.
 //!
 //! The sum runs over half rows of partners (the particles above, or the Verlet candidates above
-//! within the cut-off) with F_ji = −F_ij; above [`parallel::MIN_PARALLEL_LEN`] particles the
+//! within the cut-off) with F_ji = −F_ij; from [`parallel::MIN_PARALLEL_LEN`] particles on the
 //! rows are split into bands summed apart (in parallel) and then added in band order, the same
 //! order for any thread count (see [`BANDS`]). A row visits its partners in blocks of four
 //! consecutive particles, one SIMD vector each, and sums in eight lanes by partner index, a
@@ -128,6 +128,7 @@ impl Rows {
             }
         }
         self.start.push(self.blocks.len());
+        debug_assert!(candidates.next().is_none(), "candidates sorted by (i, j), i < n");
     }
 
     fn row(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
@@ -217,9 +218,10 @@ fn row_sum<const PERIODIC: bool>(
 }
 
 /// Rows of the sum in bands of consecutive rows, each summing half rows into its own buffer; the
-/// buffers are then added in band order. The bands are fixed by the rows alone (one below
-/// [`parallel::MIN_PARALLEL_LEN`] particles, [`BANDS`] above), never by the thread count, so the
-/// sum's order, and its bits, are the same on any number of threads.
+/// buffers are then added in band order. The bands are fixed by the particle count alone (one
+/// below [`parallel::MIN_PARALLEL_LEN`] particles, [`BANDS`] from there on), never by the thread
+/// count or the Verlet list, so the sum's order, and its bits, are the same on any number of
+/// threads and after any rebuild history.
 const BANDS: usize = 16;
 
 /// One band: rows `rows`, and the forces they give to blocks `first_block..` (their own row
@@ -247,8 +249,10 @@ fn add_row_sums_in<const PERIODIC: bool>(particles: &[ParticleBlock], image: &Im
     let n = force.len();
     let blocks = n.div_ceil(BLOCK);
     let count = if n < parallel::MIN_PARALLEL_LEN { 1 } else { BANDS };
-    // Bands of about equal work, counted in partner blocks.
-    let work = |i: usize| rows.map_or(blocks - i / BLOCK, |rows| rows.start[i + 1] - rows.start[i]);
+    // Bands of about equal work, fixed by n alone: equal numbers of rows with a cut-off, and over
+    // all pairs, rows weighted by their partner blocks. (A split by the Verlet candidates would
+    // move with the list's rebuilds, and a resumed run would no longer be bitwise equal.)
+    let work = |i: usize| if rows.is_some() { 1 } else { blocks - i / BLOCK };
     let total: usize = (0..n).map(work).sum();
     bands.resize_with(count, Band::default);
     let (mut i, mut done) = (0, 0);
@@ -260,9 +264,9 @@ fn add_row_sums_in<const PERIODIC: bool>(particles: &[ParticleBlock], image: &Im
         }
         band.rows = start..i;
     }
-    // Each band's buffer starts from zero, the first from the forces so far; each particle
-    // receives its reactions (rows i' < i, in order) before its own row's sum, as in a
-    // pair-by-pair loop.
+    // Each band's buffer starts from zero, the first from the forces so far. Within a band, each
+    // particle receives the reactions of the band's rows i' < i, in order, before its own row's
+    // sum, as in a pair-by-pair loop; those of the other bands are added after, in band order.
     let sum_band = |(b, band): (usize, &mut Band)| {
         band.first_block = if b == 0 { 0 } else { band.rows.start / BLOCK };
         if b == 0 {
