@@ -117,7 +117,7 @@ fn the_dipole_sum_does_not_depend_on_when_the_verlet_list_was_built() {
     let (mut a, mut b) = (state.clone(), state);
     aged.evaluate(&mut a, scene.dt());
     fresh.evaluate(&mut b, scene.dt());
-    let bits = |s: &magdem::core::state::State| s.particles.force.iter().flat_map(|f| f.iter().map(|c| c.to_bits()).collect::<Vec<_>>()).collect::<Vec<_>>();
+    let bits = |s: &magdem::core::state::State| s.particles.force.iter().flat_map(|f| f.iter().map(|c| c.to_bits())).collect::<Vec<_>>();
     assert!(a.particles.force.iter().any(|f| f.norm() > 0.0), "the test should exercise the dipole sum");
     assert_eq!(bits(&a), bits(&b), "forces differ with the Verlet list's history");
 }

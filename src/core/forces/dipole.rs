@@ -263,12 +263,12 @@ fn add_row_sums_in<const PERIODIC: bool>(particles: &[ParticleBlock], image: &Im
             i += 1;
         }
         band.rows = start..i;
+        band.first_block = if b == 0 { 0 } else { start / BLOCK };
     }
     // Each band's buffer starts from zero, the first from the forces so far. Within a band, each
     // particle receives the reactions of the band's rows i' < i, in order, before its own row's
     // sum, as in a pair-by-pair loop; those of the other bands are added after, in band order.
     let sum_band = |(b, band): (usize, &mut Band)| {
-        band.first_block = if b == 0 { 0 } else { band.rows.start / BLOCK };
         if b == 0 {
             fill_blocks(&mut band.forces, force);
         } else {
@@ -287,7 +287,8 @@ fn add_row_sums_in<const PERIODIC: bool>(particles: &[ParticleBlock], image: &Im
             }
         }
     };
-    if parallel::worth_it(n) {
+    let in_parallel = parallel::worth_it(n);
+    if in_parallel {
         bands.par_iter_mut().enumerate().for_each(sum_band);
     } else {
         bands.iter_mut().enumerate().for_each(sum_band);
@@ -303,7 +304,7 @@ fn add_row_sums_in<const PERIODIC: bool>(particles: &[ParticleBlock], image: &Im
             }
         }
     };
-    if parallel::worth_it(n) {
+    if in_parallel {
         let share = parallel::share(blocks);
         first.forces.par_chunks_mut(share).enumerate().for_each(|(c, out)| add_others(c * share, out));
     } else {
