@@ -87,7 +87,8 @@ fn run_point(point: &Point, file: &Path, options: &ExperimentOptions) -> Outcome
         }
     }
     let result = match point.engine.as_str() {
-        "magdem" => match run(&point.scene, file, &RunOptions { resume, ..Default::default() }) {
+        // The runner has decided above which existing files it may replace.
+        "magdem" => match run(&point.scene, file, &RunOptions { resume, overwrite: !resume, ..Default::default() }) {
             Err(RunFailure::Unstable(e)) => return Outcome::Unstable(e.to_string().replace('\n', " ")),
             other => other.map(|_| ()).map_err(|e| match e {
                 RunFailure::Interrupted { .. } => None,
@@ -125,7 +126,10 @@ pub fn run_experiments(experiments: &[Experiment], options: &ExperimentOptions) 
         queue.extend((0..experiment.points.len()).map(|p| (e, p)));
     }
     queue.sort_by(|a, b| cost(&experiments[b.0].points[b.1]).total_cmp(&cost(&experiments[a.0].points[a.1])));
-    let bar = if options.progress { ProgressBar::new(queue.len() as u64) } else { ProgressBar::hidden() };
+    // On a terminal a progress bar; otherwise (a log file, CI) one line per finished run.
+    let terminal = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let bar = if options.progress && terminal { ProgressBar::new(queue.len() as u64) } else { ProgressBar::hidden() };
+    let finished = AtomicUsize::new(0);
     bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} runs | {elapsed} | ETA {eta} | {msg}")?);
     let next = AtomicUsize::new(0);
     let done: Mutex<Vec<Vec<Option<PointResult>>>> = Mutex::new(experiments.iter().map(|e| e.points.iter().map(|_| None).collect()).collect());
@@ -146,7 +150,12 @@ pub fn run_experiments(experiments: &[Experiment], options: &ExperimentOptions) 
                     let outcome = run_point(point, &file, options);
                     bar.inc(1);
                     bar.set_message(format!("{}: {}", point.id, outcome.label()));
-                    let result = PointResult { id: point.id.clone(), file, outcome, wall_time: start.elapsed().as_secs_f64() };
+                    let wall_time = start.elapsed().as_secs_f64();
+                    let count = finished.fetch_add(1, Ordering::Relaxed) + 1;
+                    if options.progress && !terminal {
+                        println!("{}: {} ({wall_time:.0} s; {} of {} runs left)", point.id, outcome.label(), queue.len() - count, queue.len());
+                    }
+                    let result = PointResult { id: point.id.clone(), file, outcome, wall_time };
                     done.lock().expect("no worker panicked")[e][p] = Some(result);
                 }
                 });

@@ -112,6 +112,9 @@ enum Command {
         /// Continue an interrupted run from the output file's checkpoint.
         #[arg(long)]
         resume: bool,
+        /// Replace an existing output file (without it an existing file is refused).
+        #[arg(long, conflicts_with = "resume")]
+        overwrite: bool,
         /// Print wall time per step phase at the end.
         #[arg(long)]
         timings: bool,
@@ -274,7 +277,7 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Command::Run { scene, output, engine, exchange_every, mpi, resume, timings, quiet, abort_after_frame } => {
+        Command::Run { scene, output, engine, exchange_every, mpi, resume, overwrite, timings, quiet, abort_after_frame } => {
             let scene = match load(&scene) {
                 Ok(s) => s,
                 Err(code) => return code,
@@ -322,7 +325,7 @@ fn main() -> ExitCode {
                 }
             }
             let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed));
-            let options = RunOptions { resume, progress: !quiet, timings, abort_after_frame };
+            let options = RunOptions { resume, overwrite, progress: !quiet, timings, abort_after_frame };
             match run(&scene, &output, &options) {
                 Ok(summary) => {
                     if summary.already_complete {
@@ -353,6 +356,7 @@ fn main() -> ExitCode {
                         RunFailure::Interrupted { .. } => ExitCode::from(130),
                         RunFailure::Unstable(_) => ExitCode::from(3),
                         RunFailure::Trajectory(_) => ExitCode::from(1),
+                        RunFailure::Refused(_) => ExitCode::from(2),
                     }
                 }
             }
@@ -520,20 +524,26 @@ fn report_written<E: std::fmt::Display>(result: Result<PathBuf, E>) -> ExitCode 
 }
 
 fn analyse(path: &Path, frame: isize, gap: f64, csv: bool, header: bool) -> Result<(), Box<dyn std::error::Error>> {
-    use magdem::analysis::{stats::summary, trajectory::FrameReader};
+    use magdem::analysis::{aggregates::finite_lengths, stats::summary, trajectory::FrameReader};
     let t = Trajectory::open(path)?;
     let reader = FrameReader::new(&t)?;
     let (time, aggs) = reader.aggregates(frame, gap)?;
-    let lengths: Vec<f64> = aggs.iter().map(|a| a.length * 1e6).collect();
+    let lengths: Vec<f64> = finite_lengths(&aggs).iter().map(|l| l * 1e6).collect();
     let s = summary(&lengths);
+    let box_extent = reader.box_extent();
+    let capped = aggs.iter().filter(|a| a.box_limited(box_extent)).count();
+    let percolating = aggs.iter().filter(|a| a.percolating).count();
     if csv {
         let sizes = summary(&aggs.iter().map(|a| a.size() as f64).collect::<Vec<_>>());
         let vx = summary(&aggs.iter().map(|a| a.com_velocity.x * 1e6).collect::<Vec<_>>());
         if header {
-            println!("file,time_s,aggregates,particles,mean_length_um,pop_std_length_um,sample_std_length_um,mean_size,pop_std_size,mean_vx_um_s,pop_std_vx_um_s");
+            println!(
+                "file,time_s,aggregates,particles,mean_length_um,pop_std_length_um,sample_std_length_um,mean_size,pop_std_size,\
+                 mean_vx_um_s,pop_std_vx_um_s,box_limited_fraction,percolating"
+            );
         }
         println!(
-            "{},{time:e},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3}",
+            "{},{time:e},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.4},{percolating}",
             path.display(),
             aggs.len(),
             aggs.iter().map(|a| a.size()).sum::<usize>(),
@@ -543,12 +553,21 @@ fn analyse(path: &Path, frame: isize, gap: f64, csv: bool, header: bool) -> Resu
             sizes.mean,
             sizes.population_std,
             vx.mean,
-            vx.population_std
+            vx.population_std,
+            capped as f64 / aggs.len() as f64
         );
         return Ok(());
     }
     println!("t = {time:e} s: {} aggregates of {} particles (gap tolerance {gap:e} of the smaller radius)", aggs.len(), aggs.iter().map(|a| a.size()).sum::<usize>());
     println!("length (µm): mean {:.2}, population std {:.2}, sample std {:.2}", s.mean, s.population_std, s.sample_std);
+    println!(
+        "box-limited: {capped} of {} aggregates ({:.1} %) reach {:.0} % of the box's {:.1} µm along the field or percolate; \
+         {percolating} percolate through a periodic face (no finite length, left out of the mean)",
+        aggs.len(),
+        100.0 * capped as f64 / aggs.len() as f64,
+        100.0 * magdem::analysis::aggregates::BOX_LIMITED_FRACTION,
+        box_extent * 1e6
+    );
     let chains: Vec<f64> = aggs.iter().filter(|a| a.size() > 1).map(|a| a.orientation_deg).collect();
     if !chains.is_empty() {
         println!("orientation to the field (aggregates of 2+): mean {:.1}°", summary(&chains).mean);
@@ -561,7 +580,7 @@ fn analyse(path: &Path, frame: isize, gap: f64, csv: bool, header: bool) -> Resu
     print!("gap tolerance sensitivity (mean length µm):");
     for g in [1e-4, 1e-3, 1e-2, 5e-2] {
         let (_, a) = reader.aggregates(frame, g)?;
-        print!("  {g:e}: {:.2}", summary(&a.iter().map(|a| a.length * 1e6).collect::<Vec<_>>()).mean);
+        print!("  {g:e}: {:.2}", summary(&finite_lengths(&a)).mean * 1e6);
     }
     println!();
     Ok(())

@@ -107,6 +107,32 @@ impl From<SeriesLabelPosition> for Legend {
     }
 }
 
+/// How an axis maps values: linear, or logarithmic (base 10; values ≤ 0 are left out).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scale {
+    Linear,
+    Log,
+}
+
+impl Scale {
+    fn to_axis(self, v: f64) -> f64 {
+        match self {
+            Scale::Linear => v,
+            Scale::Log if v > 0.0 => v.log10(),
+            Scale::Log => f64::NAN,
+        }
+    }
+    fn label(self, v: &f64) -> String {
+        match self {
+            Scale::Linear => tick(v),
+            Scale::Log => {
+                let x = 10f64.powf(*v);
+                if x >= 100.0 { format!("{x:.0}") } else { format!("{:.2}", x).trim_end_matches('0').trim_end_matches('.').to_string() }
+            }
+        }
+    }
+}
+
 /// [`line_chart`] with the legend where the data leave room.
 pub fn line_chart_with_legend(
     path: &Path,
@@ -116,16 +142,38 @@ pub fn line_chart_with_legend(
     series: &[Series],
     legend: impl Into<Legend>,
 ) -> Result<(), Box<dyn std::error::Error>> {
+    chart(path, title, (x_label, y_label), series, legend, (Scale::Linear, Scale::Linear))
+}
+
+/// An x–y chart with the given axis scales (log axes are labelled with the values themselves).
+pub fn chart(
+    path: &Path,
+    title: &str,
+    (x_label, y_label): (&str, &str),
+    series: &[Series],
+    legend: impl Into<Legend>,
+    (sx, sy): (Scale, Scale),
+) -> Result<(), Box<dyn std::error::Error>> {
     register_font()?;
     let legend = legend.into();
+    // Points and error-bar ends on the axes' own scales.
+    let mapped: Vec<(Vec<(f64, f64)>, Vec<(f64, f64)>)> = series
+        .iter()
+        .map(|s| {
+            let pts: Vec<(f64, f64)> = s.points.iter().map(|&(x, y)| (sx.to_axis(x), sy.to_axis(y))).collect();
+            let bars = s.points.iter().zip(&s.errors).filter(|(_, e)| e.is_finite()).map(|(&(_, y), &e)| (sy.to_axis(y - e), sy.to_axis(y + e))).collect();
+            (pts, bars)
+        })
+        .collect();
     let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
-    for s in series {
-        for (k, &(x, y)) in s.points.iter().enumerate() {
-            let e = s.errors.get(k).copied().filter(|e| e.is_finite()).unwrap_or(0.0);
-            x0 = x0.min(x);
-            x1 = x1.max(x);
-            y0 = y0.min(y - e);
-            y1 = y1.max(y + e);
+    for (pts, bars) in &mapped {
+        for &(x, y) in pts.iter().filter(|(x, y)| x.is_finite() && y.is_finite()) {
+            (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+        }
+        for &(a, b) in bars {
+            for v in [a, b].into_iter().filter(|v| v.is_finite()) {
+                (y0, y1) = (y0.min(v), y1.max(v));
+            }
         }
     }
     let pad = |lo: f64, hi: f64| {
@@ -142,29 +190,35 @@ pub fn line_chart_with_legend(
         .x_label_area_size(50)
         .y_label_area_size(90)
         .build_cartesian_2d(x0..x1, y0..y1)?;
+    let (fx, fy) = (|v: &f64| sx.label(v), |v: &f64| sy.label(v));
     chart
         .configure_mesh()
         .x_desc(x_label)
         .y_desc(y_label)
         .label_style(("sans-serif", 16))
         .axis_desc_style(("sans-serif", 18))
-        .x_label_formatter(&tick)
-        .y_label_formatter(&tick)
+        .x_label_formatter(&fx)
+        .y_label_formatter(&fy)
         .draw()?;
-    for s in series {
+    for (s, (pts, _)) in series.iter().zip(&mapped) {
         let color = s.color;
-        chart.draw_series(s.points.iter().zip(&s.errors).filter(|(_, e)| e.is_finite()).map(move |(&(x, y), &e)| {
-            PathElement::new(vec![(x, y - e), (x, y + e)], color.stroke_width(2))
+        let bars = s.points.iter().zip(&s.errors).filter(|(_, e)| e.is_finite());
+        chart.draw_series(bars.map(move |(&(x, y), &e)| {
+            let x = sx.to_axis(x);
+            let (lo, hi) = (sy.to_axis(y - e), sy.to_axis(y + e));
+            // A log axis cannot show a bar reaching zero: it runs to the bottom of the chart.
+            PathElement::new(vec![(x, if lo.is_finite() { lo } else { y0 }), (x, hi)], color.stroke_width(2))
         }))?;
+        let pts: Vec<(f64, f64)> = pts.iter().copied().filter(|(x, y)| x.is_finite() && y.is_finite()).collect();
         match s.markers {
             Some(r) => {
-                let drawn = chart.draw_series(s.points.iter().map(move |&p| Circle::new(p, r, color.stroke_width(2))))?;
+                let drawn = chart.draw_series(pts.iter().map(move |&p| Circle::new(p, r, color.stroke_width(2))))?;
                 if !s.label.is_empty() {
                     drawn.label(s.label.as_str()).legend(move |(x, y)| Circle::new((x + 10, y), r, color.stroke_width(2)));
                 }
             }
             None => {
-                let drawn = chart.draw_series(LineSeries::new(s.points.iter().copied(), color.stroke_width(2)))?;
+                let drawn = chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2)))?;
                 if !s.label.is_empty() {
                     drawn.label(s.label.as_str()).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
                 }

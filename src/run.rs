@@ -16,6 +16,8 @@ pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 #[derive(Debug, Default, Clone)]
 pub struct RunOptions {
     pub resume: bool,
+    /// Replace an existing output file (otherwise it is refused, whatever its status).
+    pub overwrite: bool,
     pub progress: bool,
     /// Time each step phase (`Simulation::timers`); costs a few per cent on small scenes.
     pub timings: bool,
@@ -31,6 +33,65 @@ pub enum RunFailure {
     Unstable(#[from] RunError),
     #[error("interrupted at step {step} (t = {time:.6e} s); the checkpoint is saved: rerun with --resume to continue")]
     Interrupted { step: u64, time: f64 },
+    /// The output is not ours to write: it exists, or another process holds it (exit 2).
+    #[error("{0}")]
+    Refused(String),
+}
+
+/// An exclusive lock on `<output>.lock` for the life of a run: a second process writing the
+/// same file is refused at start. The operating system releases the lock when the process ends,
+/// however it ends (a `kill -9` leaves the lock file but not the lock).
+struct OutputLock {
+    path: std::path::PathBuf,
+    _file: std::fs::File,
+}
+
+impl OutputLock {
+    fn acquire(output: &Path) -> Result<Self, RunFailure> {
+        let mut name = output.as_os_str().to_owned();
+        name.push(".lock");
+        let path = std::path::PathBuf::from(name);
+        let file = std::fs::OpenOptions::new().create(true).truncate(false).write(true).open(&path).map_err(|e| RunFailure::Refused(format!("cannot create the lock {}: {e}", path.display())))?;
+        match file.try_lock() {
+            Ok(()) => Ok(Self { path, _file: file }),
+            Err(std::fs::TryLockError::WouldBlock) => Err(RunFailure::Refused(format!("{} is being written by another magdem process (it holds {})", output.display(), path.display()))),
+            Err(std::fs::TryLockError::Error(e)) => Err(RunFailure::Refused(format!("cannot lock {}: {e}", path.display()))),
+        }
+    }
+}
+
+impl Drop for OutputLock {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
+/// Refuses an existing output that `options` do not allow to touch: without `--resume` or
+/// `--overwrite` any existing file; with `--resume` a completed file of another scene.
+fn check_existing(scene: &Scene, output: &Path, options: &RunOptions) -> Result<(), RunFailure> {
+    if !output.exists() || options.overwrite {
+        return Ok(());
+    }
+    let described = crate::io::trajectory::Trajectory::open(output).ok().and_then(|t| Some((t.attr_string("status").ok()?, t.attr_string("scene_sha256").ok()?)));
+    let Some((state, hash)) = described else {
+        return Err(RunFailure::Refused(format!("{} exists and is not a readable magdem trajectory; give --overwrite to replace it", output.display())));
+    };
+    if !options.resume {
+        let same = if hash == scene.hash { "this scene" } else { "another scene" };
+        return Err(RunFailure::Refused(format!(
+            "{} exists (status {state}, {same}); give --overwrite to replace it{}",
+            output.display(),
+            if state == status::COMPLETED { "" } else { ", or --resume to continue it" }
+        )));
+    }
+    if state == status::COMPLETED && hash != scene.hash {
+        return Err(RunFailure::Refused(format!(
+            "{} is a completed run of a different scene (sha256 {}…); --resume continues only the same scene, --overwrite replaces it",
+            output.display(),
+            &hash[..12.min(hash.len())]
+        )));
+    }
+    Ok(())
 }
 
 /// How a finished run went.
@@ -46,6 +107,8 @@ pub struct RunSummary {
 /// executes on a thread of the current rayon pool, so that a step's parallel loops start from
 /// inside the pool instead of handing work over from outside it at every step.
 pub fn run(scene: &Scene, output: &Path, options: &RunOptions) -> Result<RunSummary, RunFailure> {
+    let _lock = OutputLock::acquire(output)?;
+    check_existing(scene, output, options)?;
     rayon::scope(|_| run_in_pool(scene, output, options))
 }
 

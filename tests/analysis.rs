@@ -1,7 +1,7 @@
 //! Aggregate analysis: geometry of synthetic aggregates, the gap tolerance, periodic boxes, and
 //! the paper's Table 4 → Table 3 arithmetic from `reference/paper/`.
 
-use magdem::analysis::aggregates::{aggregates, Frame};
+use magdem::analysis::aggregates::{aggregates, box_extent_along, finite_lengths, Frame};
 use magdem::analysis::stats::summary;
 use magdem::core::domain::Domain;
 use magdem::core::state::Vec3;
@@ -51,6 +51,47 @@ fn a_chain_across_a_periodic_boundary_is_one_aggregate_of_full_length() {
     let aggs = analyse(&pos, &domain, Vec3::x(), 1e-6);
     assert_eq!(aggs.len(), 1);
     assert!((aggs[0].length - 4.0 * D).abs() < 1e-12, "{}", aggs[0].length);
+    assert!(!aggs[0].percolating, "a chain across a face that does not span the box is finite");
+}
+
+/// n touching spheres (1 nm overlaps) along x starting at x = D/2: in a periodic box of n·(D − 1 nm)
+/// the last touches the first through the face.
+fn spanning_chain(n: usize) -> (Vec<Vec3>, f64) {
+    let step = D - 1e-9;
+    ((0..n).map(|k| Vec3::new(0.5 * D + k as f64 * step, 5e-5, 5e-5)).collect(), n as f64 * step)
+}
+
+#[test]
+fn a_chain_that_wraps_onto_itself_percolates_and_has_no_length() {
+    let (pos, l) = spanning_chain(12);
+    let periodic = Domain { lo: Vec3::zeros(), hi: Vec3::new(l, 1e-4, 1e-4), periodic: [true, true, false] };
+    let aggs = analyse(&pos, &periodic, Vec3::x(), 1e-3);
+    assert_eq!(aggs.len(), 1);
+    assert!(aggs[0].percolating);
+    assert!(aggs[0].length.is_nan(), "never reported as one box length: {}", aggs[0].length);
+    assert!(aggs[0].box_limited(l));
+    assert!(finite_lengths(&aggs).is_empty());
+    // Drop one sphere: the same chain no longer closes on itself, and is finite.
+    let aggs = analyse(&pos[..11], &periodic, Vec3::x(), 1e-3);
+    assert!(!aggs[0].percolating && (aggs[0].length - (10.0 * (D - 1e-9) + D)).abs() < 1e-12);
+}
+
+#[test]
+fn a_chain_spanning_a_walled_box_along_the_field_is_box_limited() {
+    let (pos, l) = spanning_chain(12);
+    let walled = Domain { lo: Vec3::zeros(), hi: Vec3::new(l + 1e-9, 1e-4, 1e-4), periodic: [false; 3] };
+    let box_extent = box_extent_along(&walled, &Vec3::x());
+    assert!((box_extent - (l + 1e-9)).abs() < 1e-18);
+    let aggs = analyse(&pos, &walled, Vec3::x(), 1e-3);
+    assert!(!aggs[0].percolating && aggs[0].box_limited(box_extent));
+    // A chain of 10 of the 12 spans 10/12 of the edge (< 0.9): not box-limited.
+    let aggs = analyse(&pos[..10], &walled, Vec3::x(), 1e-3);
+    assert!(!aggs[0].box_limited(box_extent), "{} of {}", aggs[0].field_extent, box_extent);
+    // The same 12 along y, field along x: its extent along the field is one diameter.
+    let across: Vec<Vec3> = pos.iter().map(|p| Vec3::new(5e-5, p.x, 5e-5)).collect();
+    let tall = Domain { lo: Vec3::zeros(), hi: Vec3::new(1e-4, l + 1e-9, 1e-4), periodic: [false; 3] };
+    let aggs = analyse(&across, &tall, Vec3::x(), 1e-3);
+    assert!((aggs[0].field_extent - D).abs() < 1e-15 && !aggs[0].box_limited(box_extent_along(&tall, &Vec3::x())));
 }
 
 fn table(path: &str) -> Vec<Vec<f64>> {

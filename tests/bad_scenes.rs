@@ -1,5 +1,7 @@
 //! Invalid scenes are refused with a one-line message naming the key, the value and why; the CLI
-//! exits with code 2.
+//! exits with code 2. The corpus is `tests/data/bad/` (one file per case, the expected fragments
+//! in its `expected.txt`); a seeded mutation fuzzer runs the shipped scenes through 10 000
+//! random edits, none of which may panic.
 
 mod common;
 
@@ -37,67 +39,34 @@ fn the_fixture_itself_is_valid() {
     Scene::parse(&good(), "good.toml").unwrap();
 }
 
+fn corpus() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bad")
+}
+
+/// The corpus `tests/data/bad/*.toml` with each file's expected fragments (`expected.txt`).
+fn cases() -> Vec<(String, Vec<String>)> {
+    let text = std::fs::read_to_string(corpus().join("expected.txt")).unwrap();
+    text.lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+        .map(|l| {
+            let (name, fragments) = l.split_once(": ").unwrap();
+            (name.to_string(), fragments.split(" | ").map(str::to_string).collect())
+        })
+        .collect()
+}
+
 #[test]
-fn bad_scenes_are_refused_with_a_message_naming_the_cause() {
-    let cases: Vec<(&str, String, &[&str])> = vec![
-        ("missing key", edit("diameter = 11.0e-6\n", ""), &["missing field `diameter`", "[[species]]"]),
-        ("negative diameter", edit("diameter = 11.0e-6", "diameter = -11.0e-6"), &["species[0].diameter = -0.000011", "positive"]),
-        (
-            "overlapping explicit particles",
-            edit("[8.0e-5, 5.0e-5, 5.0e-5]", "[2.5e-5, 5.0e-5, 5.0e-5]"),
-            &["particles[0].positions[1]", "overlaps particle 0"],
-        ),
-        ("particle outside the box", edit("[8.0e-5, 5.0e-5, 5.0e-5]", "[2.0e-4, 5.0e-5, 5.0e-5]"), &["particles[0].positions[1]", "x is outside the box"]),
-        ("particle through a wall", edit("[8.0e-5, 5.0e-5, 5.0e-5]", "[9.8e-5, 5.0e-5, 5.0e-5]"), &["overlaps a wall normal to x"]),
-        ("unknown force term", edit("[forces.drag]", "[forces.magnetic]"), &["unknown field `magnetic`", "expected one of"]),
-        ("misspelt key", edit("friction = 0.5", "frictoin = 0.5"), &["unknown field `frictoin`"]),
-        ("dt zero", edit("dt = 1.0e-8", "dt = 0.0"), &["integration.dt = 0", "positive"]),
-        ("dt negative", edit("dt = 1.0e-8", "dt = -1.0e-8"), &["integration.dt = -0.00000001", "positive"]),
-        (
-            "impossible induction tolerance",
-            edit("induction = \"exact\"", "induction = \"exact\"\ntolerance = 1.0e-20"),
-            &["forces.dipole.tolerance = 0.00000000000000000001", "impossible mutual-induction tolerance"],
-        ),
-        ("unknown induction level", edit("induction = \"exact\"", "induction = \"full\""), &["unknown variant `full`", "none", "paper", "exact"]),
-        ("unknown integrator", edit("dt = 1.0e-8", "scheme = \"rk45\"\ndt = 1.0e-8"), &["integration.scheme = rk45", "velocity-verlet"]),
-        ("poisson out of range", edit("poisson_ratio = 0.5", "poisson_ratio = 0.7"), &["species[0].poisson_ratio = 0.7", "[0, 0.5]"]),
-        ("restitution zero", edit("restitution = 0.5", "restitution = 0.0"), &["species[0].restitution = 0", "(0, 1]"]),
-        ("permeability below one", edit("relative_permeability = 12.3", "relative_permeability = 0.5"), &["relative_permeability = 0.5", "≥ 1"]),
-        ("unknown species", edit("species = \"p\"", "species = \"q\""), &["particles[0].species = q", "no such species"]),
-        ("numbering explicit particles", edit("species = \"p\"\npositions", "species = \"p\"\norder = \"spatial\"\npositions"), &["particles[0].order = spatial", "explicit positions"]),
-        ("unknown numbering", edit("species = \"p\"\npositions", "species = \"p\"\norder = \"hilbert\"\npositions"), &["unknown variant `hilbert`", "placement", "spatial"]),
-        ("empty box", edit("hi = [1.0e-4, 1.0e-4, 1.0e-4]", "hi = [1.0e-4, 0.0, 1.0e-4]"), &["domain.hi", "must exceed domain.lo"]),
-        ("wrong version", edit("version = 1", "version = 2"), &["version = 2", "scene version 1"]),
-        (
-            "adaptive step with the lagged induction",
-            edit("induction = \"exact\"", "induction = \"paper\"").replace("dt = 1.0e-8", "scheme = \"adaptive-verlet\"\ndt = 1.0e-8"),
-            &["integration.scheme = adaptive-verlet", "depend on the state alone"],
-        ),
-        ("adaptive tolerance", edit("dt = 1.0e-8", "scheme = \"adaptive-verlet\"\ntolerance = 2.0\ndt = 1.0e-8"), &["integration.tolerance = 2", "(0, 1)"]),
-        (
-            "overfull random placement",
-            edit("positions = [[2.0e-5, 5.0e-5, 5.0e-5], [8.0e-5, 5.0e-5, 5.0e-5]]", "count = 2000"),
-            &["particles[0].count = 2000", "could not place particle"],
-        ),
-        ("drag without fluid", edit("[fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n", ""), &["forces.drag", "[fluid]"]),
-        (
-            "periodic cut-off longer than half the box",
-            edit("[domain]\n", "[domain]\nboundary = { x = \"periodic\", y = \"wall\", z = \"wall\" }\n")
-                .replace("induction = \"exact\"", "induction = \"paper\""),
-            &["forces.dipole.paper_radius_diameters = 15", "half the periodic box"],
-        ),
-        (
-            "unstable dt refused",
-            edit("dt = 1.0e-8", "dt = 1.0e-6").replace("end_time = 1.0e-6", "end_time = 1.0e-5\n[stability]\non_unstable_dt = \"refuse\""),
-            &["integration.dt = 0.000001", "exceeds the estimated stable step", "Rayleigh time"],
-        ),
-    ];
-    for (label, text, expected) in &cases {
-        let err = Scene::parse(text, "bad.toml").expect_err(label).to_string();
-        println!("{label}: {err}");
-        assert!(!err.contains('\n'), "{label}: message is not one line: {err}");
-        for fragment in *expected {
-            assert!(err.contains(fragment), "{label}: {err:?} lacks {fragment:?}");
+fn every_bad_scene_of_the_corpus_is_refused_with_a_message_naming_the_cause() {
+    let cases = cases();
+    let files = std::fs::read_dir(corpus()).unwrap().filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "toml")).count();
+    assert_eq!(cases.len(), files, "every corpus file has its expectation, and no expectation lacks its file");
+    assert!(cases.len() >= 40, "{} cases", cases.len());
+    for (name, expected) in &cases {
+        let err = Scene::from_file(&corpus().join(name)).expect_err(name).to_string();
+        println!("{name}: {err}");
+        assert!(!err.contains('\n'), "{name}: message is not one line: {err}");
+        for fragment in expected {
+            assert!(err.contains(fragment.as_str()), "{name}: {err:?} lacks {fragment:?}");
         }
     }
 }
@@ -118,4 +87,87 @@ fn cli_exits_with_code_2_and_one_line_on_a_bad_scene() {
         assert_eq!(stderr.trim().lines().count(), 1, "{sub}: {stderr}");
         assert!(stderr.contains("integration.dt = 0"), "{sub}: {stderr}");
     }
+}
+
+#[test]
+fn the_cli_refuses_every_corpus_scene_with_code_2_and_one_line() {
+    for (name, _) in cases().iter().step_by(5) {
+        let path = corpus().join(name);
+        let out = Command::new(env!("CARGO_BIN_EXE_magdem")).args(["validate", path.to_str().unwrap()]).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{name}: {stderr}");
+        assert_eq!(stderr.trim().lines().count(), 1, "{name}: {stderr}");
+    }
+}
+
+/// One random edit of a scene's text: drop a line, replace a number by NaN, ±inf, 0, its
+/// negative or 1e300, or swap a value's type.
+fn mutate(text: &str, rng: &mut rand_chacha::ChaCha8Rng) -> String {
+    use rand::RngExt;
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let k = rng.random_range(0..lines.len());
+    let numbers = |line: &str| -> Vec<(usize, usize)> {
+        let bytes = line.as_bytes();
+        let mut spans = vec![];
+        let mut i = 0;
+        while i < bytes.len() {
+            let starts = bytes[i].is_ascii_digit() && (i == 0 || !bytes[i - 1].is_ascii_alphanumeric() && bytes[i - 1] != b'_');
+            if starts {
+                let j = (i..bytes.len()).find(|&j| !(bytes[j].is_ascii_alphanumeric() || b".+-_".contains(&bytes[j]))).unwrap_or(bytes.len());
+                spans.push((i, j));
+                i = j;
+            } else {
+                i += 1;
+            }
+        }
+        spans
+    };
+    match rng.random_range(0..4) {
+        0 => {
+            lines.remove(k);
+        }
+        1 | 2 => {
+            let spans = numbers(&lines[k]);
+            if let Some(&(a, b)) = spans.get(rng.random_range(0..spans.len().max(1))) {
+                let old = lines[k][a..b].to_string();
+                let new = ["nan", "inf", "-inf", "0", "0.0", &format!("-{old}"), "1e300", "-1e300", "1e-300", "\"x\"", "[1.0]", "true"][rng.random_range(0..12)].to_string();
+                lines[k].replace_range(a..b, &new);
+            }
+        }
+        _ => {
+            if let Some((key, value)) = lines[k].split_once(" = ") {
+                let swapped = if value.starts_with('"') { "1.0".to_string() } else if value.starts_with('[') { "0.5".into() } else { format!("\"{value}\"") };
+                lines[k] = format!("{key} = {swapped}");
+            }
+        }
+    }
+    lines.join("\n")
+}
+
+#[test]
+fn ten_thousand_random_edits_of_the_shipped_scenes_never_panic() {
+    use rand::SeedableRng;
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/scenes");
+    let mut scenes: Vec<String> = std::fs::read_dir(&dir).unwrap().map(|e| std::fs::read_to_string(e.unwrap().path()).unwrap()).collect();
+    scenes.sort();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(21);
+    let (mut valid, mut refused) = (0, 0);
+    let cases = 10_000;
+    for case in 0..cases {
+        let mut text = scenes[case % scenes.len()].clone();
+        for _ in 0..1 + case % 3 {
+            text = mutate(&text, &mut rng);
+        }
+        match std::panic::catch_unwind(|| Scene::parse(&text, "fuzz.toml").map(|_| ()).map_err(|e| e.to_string())) {
+            Ok(Ok(())) => valid += 1,
+            Ok(Err(message)) => {
+                assert!(!message.contains('\n') && !message.is_empty(), "case {case}: not one line: {message:?}\n{text}");
+                refused += 1;
+            }
+            Err(_) => panic!("case {case} panicked on:\n{text}"),
+        }
+    }
+    println!("{cases} mutated scenes: {valid} valid, {refused} refused with one line");
+    assert_eq!(valid + refused, cases);
+    assert!(refused > cases / 4 && valid > cases / 20, "the mutations reach both outcomes: {valid} valid, {refused} refused");
 }

@@ -222,6 +222,33 @@ fn terminal_velocity_under_a_gradient() {
     assert!((v / expected - 1.0).abs() < 0.005);
 }
 
+/// The Fröhlich–Kennelly law: an isolated particle's moment is χ_eff H Ms/(Ms + χ_eff H) V, so
+/// under a gradient it moves at V M G/(6π μ a) with that M (half the linear one here).
+#[test]
+fn frohlich_kennelly_terminal_velocity() {
+    let (ms, g, b0) = (1.0e6, 1.4, 0.5);
+    let s = scene(&format!(
+        "{WATER}[field]\nb0 = [{b0}, 0, 0]\ngradient = [[{g}, 0, 0], [0, 0, 0], [0, 0, 0]]\n{}\
+         [[particles]]\nspecies = \"p\"\npositions = [[0, 0, 0]]\n[forces.gradient]\n\
+         [forces.drag]\nlaw = \"stokes\"\nshielding = \"none\"\n[integration]\ndt = 1.0e-7\nend_time = 2.0e-4\n",
+        species(&format!("restitution = 0.5\nrelative_permeability = 12.3\nsaturation_magnetisation = {ms}\nsaturation_law = \"frohlich-kennelly\""))
+    ));
+    let mut sim = s.simulation(None);
+    sim.initialise().unwrap();
+    for _ in 0..s.total_steps() {
+        sim.step().unwrap();
+    }
+    let a: f64 = 5.5e-6;
+    let chi_eff = 3.0 * 11.3 / 14.3;
+    let linear = chi_eff * (b0 + g * sim.state.particles.position[0].x) / magdem::core::magnetisation::MU0;
+    let m = linear * ms / (ms + linear);
+    assert!(m < 0.6 * linear && m > 0.4 * linear, "the law bends here: M = {m:e}, linear {linear:e}");
+    let expected = 4.0 / 3.0 * PI * a.powi(3) * m * g / (6.0 * PI * 1.0e-3 * a);
+    let v = sim.state.particles.velocity[0].x;
+    println!("terminal velocity {v:.6e} m/s, V M G/(6π μ a) = {expected:.6e} m/s (M = {m:.4e} A/m)");
+    assert!((v / expected - 1.0).abs() < 0.005);
+}
+
 fn chain(n: usize, mu_r: f64) -> (Particles, Species) {
     let sp = Species {
         name: "p".into(),
@@ -232,7 +259,7 @@ fn chain(n: usize, mu_r: f64) -> (Particles, Species) {
         friction: 0.5,
         restitution: 0.5,
         susceptibility: 3.0 * (mu_r - 1.0) / (mu_r + 2.0),
-        saturation_magnetisation: None,
+        saturation: None,
         permanent_moment: None,
     };
     let mut p = Particles::default();

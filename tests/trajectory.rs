@@ -231,3 +231,57 @@ print("h5py ok", pos.shape)
         }
     }
 }
+
+/// A finished run is never replaced without `--overwrite`; a completed run of another scene is
+/// not resumed into; every refusal exits 2 with one line naming the file.
+#[test]
+fn an_existing_output_is_refused_unless_overwritten() {
+    let work = workdir("overwrite");
+    let dir = work.path();
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, scene_text().replace("end_time = 3.0e-4", "end_time = 4.0e-5")).unwrap();
+    let file = dir.join("run.h5");
+    assert!(magdem(&["run", path(&scene), "-q", "-o", path(&file)]).status.success());
+    let before = std::fs::read(&file).unwrap();
+    let out = magdem(&["run", path(&scene), "-q", "-o", path(&file)]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("run.h5 exists (status completed") && err.contains("--overwrite") && err.trim().lines().count() == 1, "{err}");
+    assert_eq!(std::fs::read(&file).unwrap(), before, "the refused run left the file as it was");
+    // A file that is not a trajectory is refused too.
+    let junk = dir.join("junk.h5");
+    std::fs::write(&junk, b"not hdf5").unwrap();
+    let out = magdem(&["run", path(&scene), "-q", "-o", path(&junk)]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not a readable magdem trajectory"));
+    // --overwrite replaces it: the junk file becomes the same run, bit for bit.
+    assert!(magdem(&["run", path(&scene), "-q", "-o", path(&junk), "--overwrite"]).status.success());
+    assert_identical(&file, &junk);
+}
+
+/// Two processes writing one file: the second is refused at start; a `kill -9` of the first
+/// leaves no stuck lock, and `--resume` continues its file.
+#[test]
+fn a_second_writer_is_refused_and_a_killed_one_leaves_no_lock() {
+    let work = workdir("lock");
+    let dir = work.path();
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, scene_text().replace("end_time = 3.0e-4", "end_time = 3.0e-3")).unwrap();
+    let file = dir.join("run.h5");
+    let mut first = Command::new(env!("CARGO_BIN_EXE_magdem")).args(["run", path(&scene), "-q", "-o", path(&file)]).spawn().unwrap();
+    // Wait for the first frames (the lock is taken before the file is created).
+    let started = std::time::Instant::now();
+    while Trajectory::open(&file).ok().and_then(|t| t.frames().ok()).unwrap_or(0) < 2 {
+        assert!(started.elapsed().as_secs() < 60, "the first run wrote no frames");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let out = magdem(&["run", path(&scene), "-q", "-o", path(&file), "--resume"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("being written by another magdem process"), "{err}");
+    Command::new("kill").args(["-9", &first.id().to_string()]).status().unwrap();
+    first.wait().unwrap();
+    let out = magdem(&["run", path(&scene), "-q", "-o", path(&file), "--resume"]);
+    assert!(out.status.success(), "after kill -9 the lock is free: {}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(Trajectory::open(&file).unwrap().attr_string("status").unwrap(), "completed");
+}

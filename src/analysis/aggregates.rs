@@ -8,9 +8,15 @@
 //!   of the centres' covariance) plus one diameter — for a straight chain of n touching spheres
 //!   it is n·d, the paper's "major axis length" (assumption: the paper does not define it);
 //! - orientation: the angle between the principal axis and the field (0° = along it);
-//! - centre-of-mass velocity.
+//! - centre-of-mass velocity;
+//! - field extent: the extent of the centres along the field plus one diameter, against which a
+//!   box edge caps a chain ([`Aggregate::box_limited`]);
+//! - percolating: the aggregate wraps through a periodic face onto itself, so that it has no
+//!   finite length (its `length` is then NaN, never one box length).
 //!
-//! Periodic boxes are handled by unwrapping each aggregate through its contacts.
+//! Periodic boxes are handled by unwrapping each aggregate through its contacts (minimum-image
+//! links). A cycle of links whose images add up to a non-zero lattice vector is a percolating
+//! aggregate: following it returns to a member displaced by a box length.
 
 use crate::core::domain::Domain;
 use crate::core::neighbours::CellList;
@@ -25,12 +31,39 @@ pub struct Aggregate {
     /// Angle between the principal axis and the field direction, 0°…90° (0 for a single particle).
     pub orientation_deg: f64,
     pub com_velocity: Vec3,
+    /// Extent of the centres along the field direction plus one diameter (m).
+    pub field_extent: f64,
+    /// Connected to itself through a periodic face: an infinite chain in the periodic model.
+    pub percolating: bool,
+    /// The members' centres unwrapped through their contacts, in `members` order (m).
+    pub positions: Vec<Vec3>,
 }
+
+/// An aggregate counts as held by the box when its extent along the field is at least this
+/// fraction of the box's extent along the field.
+pub const BOX_LIMITED_FRACTION: f64 = 0.9;
 
 impl Aggregate {
     pub fn size(&self) -> usize {
         self.members.len()
     }
+
+    /// Whether the box caps this aggregate: it percolates, or its field extent is at least
+    /// [`BOX_LIMITED_FRACTION`] of `box_extent`, the box's extent along the field.
+    pub fn box_limited(&self, box_extent: f64) -> bool {
+        self.percolating || self.field_extent >= BOX_LIMITED_FRACTION * box_extent
+    }
+}
+
+/// The box's extent along `direction`: Σ |dₐ| Lₐ (the edge length for a field along an axis).
+pub fn box_extent_along(domain: &Domain, direction: &Vec3) -> f64 {
+    let d = direction.try_normalize(0.0).unwrap_or_else(Vec3::x);
+    d.abs().dot(&domain.length())
+}
+
+/// Finite lengths of `aggregates` (percolating ones have none).
+pub fn finite_lengths(aggregates: &[Aggregate]) -> Vec<f64> {
+    aggregates.iter().filter(|a| !a.percolating).map(|a| a.length).collect()
 }
 
 /// The particles of one frame.
@@ -74,22 +107,30 @@ pub fn aggregates(frame: &Frame, domain: &Domain, field_direction: &Vec3, gap_to
         groups.entry(root).or_default().push(i);
     }
     let dir = field_direction.try_normalize(0.0).unwrap_or_else(Vec3::x);
-    let mut out: Vec<Aggregate> = groups.into_values().map(|members| describe(frame, &members, &links, &dir)).collect();
+    // A cycle returning more than half the shortest periodic edge away from where it started
+    // has wrapped around the box.
+    let wrap = (0..3).filter(|&k| domain.periodic[k]).map(|k| 0.5 * domain.length()[k]).fold(f64::INFINITY, f64::min);
+    let mut out: Vec<Aggregate> = groups.into_values().map(|members| describe(frame, &members, &links, &dir, wrap)).collect();
     out.sort_by(|a, b| b.size().cmp(&a.size()).then(a.members[0].cmp(&b.members[0])));
     out
 }
 
-fn describe(frame: &Frame, members: &[usize], links: &[Vec<(usize, Vec3)>], dir: &Vec3) -> Aggregate {
-    // Unwrap positions through the contact links (breadth first from the first member).
+fn describe(frame: &Frame, members: &[usize], links: &[Vec<(usize, Vec3)>], dir: &Vec3, wrap: f64) -> Aggregate {
+    // Unwrap positions through the contact links (breadth first from the first member); a link
+    // to a member already placed elsewhere by a box length closes a wrapping cycle.
     let mut place: std::collections::HashMap<usize, Vec3> = Default::default();
     let mut queue = std::collections::VecDeque::from([members[0]]);
     place.insert(members[0], frame.position[members[0]]);
+    let mut percolating = false;
     while let Some(i) = queue.pop_front() {
         let xi = place[&i];
         for &(j, offset) in &links[i] {
-            if let std::collections::hash_map::Entry::Vacant(e) = place.entry(j) {
-                e.insert(xi + offset);
-                queue.push_back(j);
+            match place.entry(j) {
+                std::collections::hash_map::Entry::Vacant(e) => {
+                    e.insert(xi + offset);
+                    queue.push_back(j);
+                }
+                std::collections::hash_map::Entry::Occupied(e) => percolating |= (e.get() - (xi + offset)).norm() > wrap,
             }
         }
     }
@@ -98,7 +139,8 @@ fn describe(frame: &Frame, members: &[usize], links: &[Vec<(usize, Vec3)>], dir:
     let com_velocity = members.iter().map(|&i| frame.velocity[i] * frame.mass[i]).sum::<Vec3>() / mass;
     let diameter = 2.0 * members.iter().map(|&i| frame.radius[i]).sum::<f64>() / members.len() as f64;
     if pts.len() == 1 {
-        return Aggregate { members: members.to_vec(), length: diameter, orientation_deg: 0.0, com_velocity };
+        let (length, field_extent) = (diameter, diameter);
+        return Aggregate { members: members.to_vec(), length, orientation_deg: 0.0, com_velocity, field_extent, percolating, positions: pts };
     }
     let centre = pts.iter().sum::<Vec3>() / pts.len() as f64;
     let cov: Matrix3<f64> = pts.iter().map(|p| (p - centre) * (p - centre).transpose()).sum();
@@ -108,5 +150,9 @@ fn describe(frame: &Frame, members: &[usize], links: &[Vec<(usize, Vec3)>], dir:
     let proj: Vec<f64> = pts.iter().map(|p| (p - centre).dot(&axis)).collect();
     let extent = proj.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b)) - proj.iter().fold(f64::INFINITY, |a, &b| a.min(b));
     let cos = axis.dot(dir).abs().min(1.0);
-    Aggregate { members: members.to_vec(), length: extent + diameter, orientation_deg: cos.acos().to_degrees(), com_velocity }
+    let along: Vec<f64> = pts.iter().map(|p| p.dot(dir)).collect();
+    let field_extent = along.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b)) - along.iter().fold(f64::INFINITY, |a, &b| a.min(b)) + diameter;
+    let length = if percolating { f64::NAN } else { extent + diameter };
+    let orientation_deg = cos.acos().to_degrees();
+    Aggregate { members: members.to_vec(), length, orientation_deg, com_velocity, field_extent, percolating, positions: pts }
 }

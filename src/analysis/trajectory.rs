@@ -37,6 +37,20 @@ impl<'a> FrameReader<'a> {
         &self.domain
     }
 
+    /// The applied field at the origin (its direction orients the analysis).
+    pub fn field(&self) -> &Vec3 {
+        &self.field
+    }
+
+    /// The box's extent along the field (m): what caps a chain along it.
+    pub fn box_extent(&self) -> f64 {
+        super::aggregates::box_extent_along(&self.domain, &self.field)
+    }
+
+    pub fn radius(&self) -> &[f64] {
+        &self.radius
+    }
+
     /// Aggregates of frame `k` (negative: from the end) at `gap_tolerance`, with its time.
     pub fn aggregates(&self, k: isize, gap_tolerance: f64) -> Result<(f64, Vec<Aggregate>), Error> {
         let frames = self.times.len() as isize;

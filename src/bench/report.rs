@@ -381,7 +381,7 @@ fn mpi_demo(bench: &mut Bench, progress: &indicatif::ProgressBar) -> Result<(), 
 fn last_frame(path: &Path, engine: &str, route: &'static str, procs: usize) -> Result<MpiRun, Error> {
     let trajectory = crate::io::trajectory::Trajectory::open(path)?;
     let (_, aggregates) = crate::analysis::trajectory::frame_aggregates(&trajectory, -1, 1e-3).map_err(|e| e.to_string())?;
-    let lengths: Vec<f64> = aggregates.iter().map(|a| a.length * 1e6).collect();
+    let lengths: Vec<f64> = crate::analysis::aggregates::finite_lengths(&aggregates).iter().map(|l| l * 1e6).collect();
     let mean = lengths.iter().sum::<f64>() / lengths.len() as f64;
     let std = (lengths.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / lengths.len() as f64).sqrt();
     let velocity = trajectory.all_vectors("velocity")?;

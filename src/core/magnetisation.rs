@@ -4,7 +4,7 @@
 //!   m_i = m_perm,i + sat(χ_eff V_i H_loc,i),  H_loc,i = H_ext(x_i) + Σ_j H_dip,j(x_i)
 //!   H_ext(x) = (B0 + G x) / μ0,  H_dip(r) = [3 (m·r̂) r̂ − m] / (4π r³)
 //!
-//! sat() caps |M| at the species' saturation magnetisation. Levels (DESIGN.md §2):
+//! sat() saturates |M| at the species' Ms (a cap, or the Fröhlich–Kennelly law). Levels (DESIGN.md §2):
 //! - `None`: H_loc = H_ext.
 //! - `Paper`: the paper's neighbourhood scheme as magdem reads it: dipoles within 15 diameters
 //!   contribute, using the moments stored at the previous step (one sweep per step; the
@@ -16,7 +16,7 @@
 use super::domain::Domain;
 use super::neighbours::{CellList, Pair, VerletList};
 use super::parallel;
-use super::state::{Particles, Species, Vec3};
+use super::state::{Particles, Saturation, Species, Vec3};
 use nalgebra::Matrix3;
 use std::f64::consts::PI;
 
@@ -58,7 +58,7 @@ pub struct Magnetisation {
     pub gradient: Matrix3<f64>,
     /// χ_eff of each species.
     susceptibility: Vec<f64>,
-    saturation: Vec<Option<f64>>,
+    saturation: Vec<Option<Saturation>>,
     cells: CellList,
     verlet: VerletList,
     pairs: Vec<Pair>,
@@ -76,7 +76,7 @@ impl Magnetisation {
             b0,
             gradient,
             susceptibility: species.iter().map(|s| s.susceptibility).collect(),
-            saturation: species.iter().map(|s| s.saturation_magnetisation).collect(),
+            saturation: species.iter().map(|s| s.saturation).collect(),
             cells: CellList::default(),
             verlet: VerletList::default(),
             pairs: vec![],
@@ -107,9 +107,9 @@ impl Magnetisation {
         let s = p.species[i] as usize;
         let volume = 4.0 / 3.0 * PI * p.radius[i].powi(3);
         let mut m = self.susceptibility[s] * volume * h;
-        if let Some(ms) = self.saturation[s] {
-            let cap = ms * volume;
+        if let Some(sat) = self.saturation[s] {
             let norm = m.norm();
+            let cap = sat.moment(norm / volume, volume);
             if norm > cap {
                 m *= cap / norm;
             }

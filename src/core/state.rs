@@ -5,6 +5,41 @@
 /// Three-vector of f64 used throughout the core (SI units).
 pub type Vec3 = nalgebra::Vector3<f64>;
 
+/// Saturation of the induced magnetisation at Ms (A/m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Saturation {
+    pub ms: f64,
+    pub law: SaturationLaw,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SaturationLaw {
+    /// |M| = min(χ_eff |H|, Ms).
+    Cap,
+    /// Fröhlich–Kennelly: |M| = χ_eff |H| · Ms / (Ms + χ_eff |H|) (Jiles 1998, §1.5): linear at
+    /// low field, Ms at infinite field, smooth in between.
+    FrohlichKennelly,
+}
+
+impl Saturation {
+    /// The saturated magnitude of a magnetisation whose linear value is `linear` (A/m, ≥ 0).
+    pub fn magnetisation(&self, linear: f64) -> f64 {
+        match self.law {
+            SaturationLaw::Cap => linear.min(self.ms),
+            SaturationLaw::FrohlichKennelly => linear * self.ms / (self.ms + linear),
+        }
+    }
+
+    /// The largest moment (A·m²) a sphere of `volume` whose linear magnetisation is `linear`
+    /// may carry: Ms·V for the cap, the law's moment otherwise.
+    pub fn moment(&self, linear: f64, volume: f64) -> f64 {
+        match self.law {
+            SaturationLaw::Cap => self.ms * volume,
+            SaturationLaw::FrohlichKennelly => self.magnetisation(linear) * volume,
+        }
+    }
+}
+
 /// Material, magnetic and geometric properties shared by the particles of one species.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Species {
@@ -23,8 +58,8 @@ pub struct Species {
     pub restitution: f64,
     /// Effective susceptibility of a sphere, χ_eff = 3(μr − 1)/(μr + 2) (Clausius–Mossotti).
     pub susceptibility: f64,
-    /// Saturation magnetisation Ms (A/m): |M_induced| ≤ Ms.
-    pub saturation_magnetisation: Option<f64>,
+    /// How the induced magnetisation saturates (none: linear at any field).
+    pub saturation: Option<Saturation>,
     /// Permanent moment (A·m²) each particle of the species carries, in its body frame at t = 0.
     pub permanent_moment: Option<Vec3>,
 }
@@ -206,7 +241,7 @@ pub(crate) fn test_sphere(radius: f64) -> Species {
         friction: 0.5,
         restitution: 0.5,
         susceptibility: 0.0,
-        saturation_magnetisation: None,
+        saturation: None,
         permanent_moment: None,
     }
 }

@@ -1,5 +1,6 @@
 //! Reports built from experiment runs (outside the physics core): the paper reproduction.
 
+pub mod convergence;
 pub mod paper;
 pub mod runs;
 pub mod tables;

@@ -2,6 +2,7 @@
 //! runs of `experiments/paper/*.toml` (and `opt-in/*.toml` when run), beside the paper's tables
 //! in `reference/paper/`. Every number in the report comes from the runs and those CSV files.
 
+use super::convergence::{self, Effect, Targets};
 use super::runs::{experiment_files, load_runs, Run};
 use super::tables::{markdown, write};
 use crate::analysis::stats::{ci95_half_width, summary};
@@ -9,7 +10,6 @@ use crate::plot::{bar_panels, box_panels, engine_colour, line_chart_with_legend,
 use crate::scene::Scene;
 use polars::prelude::{Column, CsvReadOptions, DataFrame, DataType, PolarsResult, SerReader};
 use std::collections::BTreeMap;
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 type Error = Box<dyn std::error::Error>;
@@ -76,6 +76,19 @@ fn completed<'a>(runs: &'a [Run], experiment: &str) -> Vec<&'a Run> {
     runs.iter().filter(|r| r.experiment == experiment && r.completed()).collect()
 }
 
+/// "1–20" for consecutive seeds, else the list.
+fn seed_list(seeds: &[u64]) -> String {
+    match (seeds.first(), seeds.last()) {
+        (Some(a), Some(b)) if seeds.len() > 2 && seeds.len() as u64 == b - a + 1 => format!("{a}–{b}"),
+        _ => seeds.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(", "),
+    }
+}
+
+/// The completed runs of the Table 3 ensemble (default seeds and the opt-in continuation).
+fn table3_ensemble(runs: &[Run]) -> Vec<&Run> {
+    runs.iter().filter(|r| convergence::TABLE3.contains(&r.experiment.as_str()) && r.completed()).collect()
+}
+
 /// Writes the report; returns the path of its README.md.
 pub fn write_report(options: &PaperReportOptions) -> Result<PathBuf, Error> {
     let files = experiment_files(&options.experiments, true)?;
@@ -89,14 +102,25 @@ pub fn write_report(options: &PaperReportOptions) -> Result<PathBuf, Error> {
     std::fs::create_dir_all(out)?;
     let tables = out.join("tables");
 
+    let targets = Targets {
+        concentration: floats(&paper.table3, "concentration_mg_per_ml")?,
+        paper: floats(&paper.table3, "sim_mean_length_um")?,
+        experiment: floats(&paper.table3, "exp_mean_length_um")?,
+    };
+    let mut effects: Vec<Effect> = vec![];
     let mut md = header(&runs, &files, options);
     md += &table3_section(&runs, &paper, out, &tables)?;
+    md += &convergence::seeds_section(&runs, &targets, &tables, &mut effects)?;
     md += &table4_section(&runs, &paper, out, &tables)?;
     md += &box_section(&runs, &paper, out)?;
+    md += &convergence::finite_size_section(&runs, &targets, out, &tables, &mut effects)?;
+    md += &convergence::growth_section(&runs, &targets, out, &tables, &mut effects)?;
+    md += &convergence::magnetisation_section(&runs, &targets, out, &tables, &mut effects)?;
+    md += &convergence::measurement_section(&runs, &targets, &tables, &mut effects)?;
+    md += &sensitivity_section(&runs, out, &tables, &mut effects)?;
+    md += &convergence::ranking_section(&effects, &targets, &runs, &tables)?;
     md += &case2_section(&runs, &paper, out, &tables)?;
     md += &approach_section(&runs, out)?;
-    md += &sensitivity_section(&runs, out, &tables)?;
-    md += &time_section(&runs, &paper, out, &tables)?;
     md += &box_effect_section(&runs, &paper, out, &tables)?;
     md += &reference_section(&runs, out, &tables)?;
     md += &runs_section(&runs, &tables)?;
@@ -148,13 +172,15 @@ struct Ensemble {
     particles: f64,
     aggregates: f64,
     seeds: Vec<u64>,
+    /// Mean over runs of the share of aggregates the box caps.
+    box_limited: f64,
 }
 
-fn ensembles(runs: &[Run], experiment: &str, concentrations: &[f64]) -> Vec<Ensemble> {
+fn ensembles(runs: &[Run], concentrations: &[f64]) -> Vec<Ensemble> {
     concentrations
         .iter()
         .map(|&c| {
-            let here: Vec<&Run> = completed(runs, experiment).into_iter().filter(|r| same(r.concentration, c)).collect();
+            let here = convergence::table3_runs(runs, c);
             Ensemble {
                 concentration: c,
                 runs: here.iter().map(|r| r.mean_length_um()).collect(),
@@ -162,6 +188,7 @@ fn ensembles(runs: &[Run], experiment: &str, concentrations: &[f64]) -> Vec<Ense
                 particles: mean(&here.iter().map(|r| r.particles as f64).collect::<Vec<_>>()),
                 aggregates: mean(&here.iter().map(|r| r.last.len() as f64).collect::<Vec<_>>()),
                 seeds: here.iter().map(|r| r.seed).collect(),
+                box_limited: mean(&here.iter().map(|r| r.box_limited_fraction()).collect::<Vec<_>>()),
             }
         })
         .collect()
@@ -169,7 +196,7 @@ fn ensembles(runs: &[Run], experiment: &str, concentrations: &[f64]) -> Vec<Ense
 
 fn table3_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Result<String, Error> {
     let conc = floats(&paper.table3, "concentration_mg_per_ml")?;
-    let ens = ensembles(runs, "paper-table3", &conc);
+    let ens = ensembles(runs, &conc);
     let mut df = frame(vec![
         col("concentration_mg_per_ml", conc.clone()),
         ucol("runs", ens.iter().map(|e| e.runs.len() as u64).collect()),
@@ -179,6 +206,7 @@ fn table3_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Res
         col("magdem_mean_length_um", ens.iter().map(|e| mean(&e.runs)).collect::<Vec<_>>()),
         col("magdem_ci95_um", ens.iter().map(|e| ci95_half_width(&e.runs)).collect::<Vec<_>>()),
         col("magdem_pop_std_um", ens.iter().map(|e| mean(&e.pop_std)).collect::<Vec<_>>()),
+        col("box_limited_fraction", ens.iter().map(|e| e.box_limited).collect::<Vec<_>>()),
         col("paper_sim_mean_um", floats(&paper.table3, "sim_mean_length_um")?),
         col("paper_sim_std_um", floats(&paper.table3, "sim_std_um")?),
         col("experiment_mean_um", floats(&paper.table3, "exp_mean_length_um")?),
@@ -187,33 +215,42 @@ fn table3_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Res
     write(&mut df, tables, "table3")?;
     let mut md = String::from("## Table 3: mean aggregate length in case 1 at t = 5 ms\n\n");
     md += &format!(
-        "magdem: the `experiments/paper/table3.toml` ensemble (scenes `experiments/scenes/case1-c*.toml`, seeds {}), r-RESPA \
-         integration (contact, drag and gravity at dt = 1e-8 s; moments and dipole forces every 10 steps: see the sensitivity \
-         section for what this choice does). Mean over seeds of each run's mean length, ± CI95 over seeds; the std column is \
-         the mean over seeds of each run's population std.\n\n",
-        ens.first().map_or(String::new(), |e| e.seeds.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(", "))
+        "magdem: the `experiments/paper/table3.toml` ensemble and its opt-in continuation \
+         `experiments/paper/opt-in/table3-seeds.toml` (scenes `experiments/scenes/case1-c*.toml`, seeds {}), velocity Verlet \
+         at dt = 1e-8 s (every force every step). Mean over seeds of each run's mean length, ± CI95 over seeds; the std \
+         column is the mean over seeds of each run's population std; `box-limited` is the mean share of aggregates whose \
+         extent along the field reaches 90 % of the box edge. Converged against: time step and integrator (the accuracy \
+         study; r-RESPA's bias below). Not converged against: box size and stopping time (sections below), which both \
+         still lengthen the chains.\n\n",
+        ens.iter().max_by_key(|e| e.seeds.len()).map_or(String::new(), |e| seed_list(&e.seeds))
     );
-    let stopped: Vec<String> = runs.iter().filter(|r| r.experiment == "paper-table3" && !r.completed()).map(|r| format!("{} ({}: {})", r.id, r.status, r.message)).collect();
+    let stopped: Vec<String> = runs.iter().filter(|r| convergence::TABLE3.contains(&r.experiment.as_str()) && !r.completed() && r.status != "missing").map(|r| format!("{} ({}: {})", r.id, r.status, r.message)).collect();
     if !stopped.is_empty() {
         md += &format!("Runs not in the table (not completed): {}.\n\n", stopped.join("; "));
     }
     md += &markdown(
         &df,
-        &["c (mg/ml)", "runs", "particles", "paper particles", "aggregates/run", "magdem mean (µm)", "± CI95", "magdem std", "paper sim mean", "paper sim std", "experiment mean", "experiment std"],
-        &[3, 0, 0, 0, 1, 1, 1, 1, 1, 1, 0, 0],
+        &["c (mg/ml)", "runs", "particles", "paper particles", "aggregates/run", "magdem mean (µm)", "± CI95", "magdem std", "box-limited", "paper sim mean", "paper sim std", "experiment mean", "experiment std"],
+        &[3, 0, 0, 0, 1, 1, 1, 1, 3, 1, 1, 0, 0],
     )?;
     let offset = |k: f64| conc.iter().map(move |&c| c * (1.0 + k)).collect::<Vec<f64>>();
     let pts = |x: Vec<f64>, y: Vec<f64>| x.into_iter().zip(y).collect::<Vec<_>>();
+    // Means (magdem with its CI95 over seeds; the paper's and the experiment's means carry no CI)
+    // and the intrinsic spread (population std of the lengths) in separate figures.
     let series = vec![
         Series::markers("magdem (mean ± CI95 over seeds)", pts(offset(0.0), ens.iter().map(|e| mean(&e.runs)).collect()), engine_colour("magdem"), 6)
             .with_errors(ens.iter().map(|e| ci95_half_width(&e.runs)).collect()),
-        Series::markers("paper simulation (± std)", pts(offset(0.04), floats(&paper.table3, "sim_mean_length_um")?), palette(3), 6)
-            .with_errors(floats(&paper.table3, "sim_std_um")?),
-        Series::markers("experiment, Mathieu & Martel (± std)", pts(offset(-0.04), floats(&paper.table3, "exp_mean_length_um")?), RGBColor(0, 0, 0), 6)
-            .with_errors(floats(&paper.table3, "exp_std_um")?),
+        Series::markers("paper simulation (mean)", pts(offset(0.04), floats(&paper.table3, "sim_mean_length_um")?), palette(3), 6),
+        Series::markers("experiment, Mathieu & Martel (mean)", pts(offset(-0.04), floats(&paper.table3, "exp_mean_length_um")?), RGBColor(0, 0, 0), 6),
     ];
     line_chart_with_legend(&out.join("table3.png"), "Case 1: mean aggregate length at 5 ms", "concentration (mg/ml)", "mean length (µm)", &series, SeriesLabelPosition::UpperLeft)?;
-    md += "\n![Table 3](table3.png)\n\n";
+    let spread = vec![
+        Series::markers("magdem (mean over seeds of each run's population std)", pts(offset(0.0), ens.iter().map(|e| mean(&e.pop_std)).collect()), engine_colour("magdem"), 6),
+        Series::markers("paper simulation (std)", pts(offset(0.04), floats(&paper.table3, "sim_std_um")?), palette(3), 6),
+        Series::markers("experiment (std)", pts(offset(-0.04), floats(&paper.table3, "exp_std_um")?), RGBColor(0, 0, 0), 6),
+    ];
+    line_chart_with_legend(&out.join("table3-spread.png"), "Case 1: spread of the aggregate lengths at 5 ms", "concentration (mg/ml)", "standard deviation of the lengths (µm)", &spread, SeriesLabelPosition::UpperLeft)?;
+    md += "\n![Table 3](table3.png)\n\n![Spread of the lengths](table3-spread.png)\n\n";
     // Honest reading of the comparison.
     let within: Vec<String> = ens
         .iter()
@@ -239,49 +276,69 @@ fn gap_sensitivity(runs: &[Run]) -> Result<String, Error> {
         gaps.iter().map(|g| format!("{g:e}")).collect::<Vec<_>>().join(" | "),
         "---|".repeat(gaps.len())
     );
-    let verlet = runs.iter().filter(|r| r.experiment == "paper-sensitivity" && r.variant == "verlet" && r.seed == 1 && r.completed());
-    for r in completed(runs, "paper-table3").into_iter().filter(|r| r.seed == 1).chain(verlet) {
+    let respa = runs.iter().filter(|r| r.experiment == "paper-sensitivity" && r.variant == "respa" && r.seed == 1 && r.completed());
+    // Largest relative change of each run's mean from 1e-3 to 5e-2, and below 1e-3.
+    let (mut above, mut below) = (0.0_f64, 0.0_f64);
+    for r in table3_ensemble(runs).into_iter().filter(|r| r.seed == 1).chain(respa) {
         let t = crate::io::trajectory::Trajectory::open(&r.file)?;
         let reader = crate::analysis::trajectory::FrameReader::new(&t)?;
-        let means: Vec<String> = gaps
+        let values: Vec<f64> = gaps
             .iter()
-            .map(|&g| reader.aggregates(-1, g).map(|(_, a)| format!("{:.1}", mean(&a.iter().map(|a| a.length * 1e6).collect::<Vec<_>>()))))
+            .map(|&g| reader.aggregates(-1, g).map(|(_, a)| 1e6 * mean(&crate::analysis::aggregates::finite_lengths(&a))))
             .collect::<Result<_, _>>()?;
-        md += &format!("| {} | {} |\n", r.id, means.join(" | "));
+        above = values[1..].iter().fold(above, |m, v| m.max((v / values[1] - 1.0).abs()));
+        below = below.max((values[0] / values[1] - 1.0).abs());
+        md += &format!("| {} | {} |\n", r.id, values.iter().map(|v| format!("{v:.1}")).collect::<Vec<_>>().join(" | "));
     }
     Ok(md
-        + "\nFrom 1e-3 to 5e-2 the answer does not move. Below 1e-3 (a gap of 5.5 nm) some r-RESPA runs split a chain: \
-           the magnetic kicks every 10 steps make chain contacts ring with nanometre amplitude, so at the last frame a \
-           contact can be momentarily open by 0.5–5 nm; the velocity Verlet run (last row) shows no such split. 1e-3 is \
-           the tolerance used throughout.\n\n")
+        + &format!(
+            "\nFrom 1e-3 to 5e-2 the mean moves by at most {:.1} %; at 1e-4 (a gap of 0.55 nm) by up to {:.1} %: a contact \
+             held by a magnetic attraction can be open by a fraction of a nanometre at a frame while it rings. 1e-3 is the \
+             tolerance used throughout.\n\n",
+            100.0 * above,
+            100.0 * below
+        ))
 }
 
 fn table4_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Result<String, Error> {
     let conc = floats(&paper.table3, "concentration_mg_per_ml")?;
     let paper_sizes: Vec<usize> = floats(&paper.table4, "particles_per_aggregate")?.iter().map(|&s| s as usize).collect();
-    let table3 = completed(runs, "paper-table3");
+    let table3 = table3_ensemble(runs);
     let largest = table3.iter().flat_map(|r| r.last.iter().map(|a| a.size())).chain(paper_sizes.iter().copied()).max().unwrap_or(1);
     let (mut c_col, mut size_col, mut magdem_col, mut paper_col) = (vec![], vec![], vec![], vec![]);
+    let (mut frac_col, mut frac_std_col, mut paper_frac_col) = (vec![], vec![], vec![]);
     let mut panels = vec![];
     let mut summary_rows: Vec<(f64, f64, f64, f64, f64, f64, f64)> = vec![];
     for &c in &conc {
         let here: Vec<&&Run> = table3.iter().filter(|r| same(r.concentration, c)).collect();
         let paper_counts = floats(&paper.table4, &format!("count_c{c}"))?;
-        let mut magdem = vec![0.0; largest];
-        for r in &here {
-            for a in &r.last {
-                magdem[a.size() - 1] += 1.0 / here.len() as f64;
-            }
-        }
+        // Each run's histogram as counts and as fractions of its aggregates.
+        let per_run: Vec<Vec<f64>> = here
+            .iter()
+            .map(|r| {
+                let mut h = vec![0.0; largest];
+                r.last.iter().for_each(|a| h[a.size() - 1] += 1.0);
+                h
+            })
+            .collect();
+        let magdem: Vec<f64> = (0..largest).map(|s| mean(&per_run.iter().map(|h| h[s]).collect::<Vec<_>>())).collect();
+        let fractions: Vec<Vec<f64>> = per_run.iter().map(|h| h.iter().map(|n| n / h.iter().sum::<f64>()).collect()).collect();
+        let fraction: Vec<f64> = (0..largest).map(|s| mean(&fractions.iter().map(|f| f[s]).collect::<Vec<_>>())).collect();
+        let fraction_std: Vec<f64> = (0..largest).map(|s| summary(&fractions.iter().map(|f| f[s]).collect::<Vec<_>>()).sample_std).collect();
         let mut paper_row = vec![0.0; largest];
         for (s, n) in paper_sizes.iter().zip(&paper_counts) {
             paper_row[s - 1] = *n;
         }
+        let paper_total: f64 = paper_row.iter().sum();
+        let paper_fraction: Vec<f64> = paper_row.iter().map(|n| n / paper_total).collect();
         for s in 1..=largest {
             c_col.push(c);
             size_col.push(s as u64);
             magdem_col.push(magdem[s - 1]);
             paper_col.push(paper_row[s - 1]);
+            frac_col.push(fraction[s - 1]);
+            frac_std_col.push(fraction_std[s - 1]);
+            paper_frac_col.push(paper_fraction[s - 1]);
         }
         let total = |v: &[f64]| v.iter().sum::<f64>();
         let max_size = |v: &[f64]| v.iter().rposition(|&n| n > 0.0).map_or(0.0, |k| (k + 1) as f64);
@@ -289,11 +346,11 @@ fn table4_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Res
         summary_rows.push((c, total(&paper_row), total(&magdem), paper_row[0], magdem[0], max_size(&paper_row), mean_max));
         panels.push(BarPanel {
             title: format!("{c} mg/ml"),
-            y_label: "aggregates".into(),
+            y_label: "fraction of aggregates".into(),
             categories: (1..=largest).map(|s| s.to_string()).collect(),
             groups: vec![
-                BarGroup { label: format!("magdem (mean of {} seeds)", here.len()), color: engine_colour("magdem"), values: magdem, errors: vec![] },
-                BarGroup { label: "paper simulation".into(), color: palette(3), values: paper_row, errors: vec![] },
+                BarGroup { label: format!("magdem: mean of {} seeds, bars ± std over seeds", here.len()), color: engine_colour("magdem"), values: fraction, errors: fraction_std },
+                BarGroup { label: "paper simulation (one run)".into(), color: palette(3), values: paper_fraction, errors: vec![] },
             ],
         });
     }
@@ -302,9 +359,12 @@ fn table4_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Res
         ucol("particles_per_aggregate", size_col),
         col("magdem_mean_count", magdem_col),
         col("paper_count", paper_col),
+        col("magdem_fraction", frac_col),
+        col("magdem_fraction_std_over_seeds", frac_std_col),
+        col("paper_fraction", paper_frac_col),
     ])?;
     write(&mut df, tables, "table4")?;
-    bar_panels(&out.join("table4.png"), "Case 1: aggregate size histograms at 5 ms (x: particles per aggregate)", &panels, 2, (760, 420))?;
+    bar_panels(&out.join("table4.png"), "Case 1: aggregate size distributions at 5 ms (x: particles per aggregate)", &panels, 2, (760, 420))?;
     let mut sdf = frame(vec![
         col("concentration_mg_per_ml", summary_rows.iter().map(|r| r.0).collect::<Vec<_>>()),
         col("paper_aggregates", summary_rows.iter().map(|r| r.1).collect::<Vec<_>>()),
@@ -317,7 +377,9 @@ fn table4_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Res
     write(&mut sdf, tables, "table4_summary")?;
     let mut md = String::from("## Table 4: aggregate size distributions\n\n");
     md += "Number of aggregates of each size (particles per aggregate) at 5 ms; magdem's counts are means over the seeds. \
-           The full histograms are in `tables/table4.csv`.\n\n";
+           The figure shows each size's fraction of the aggregates (magdem: mean over seeds, bars ± the std over seeds, the \
+           seed-to-seed spread; the paper: its one run). The full histograms, counts and fractions, are in \
+           `tables/table4.csv`.\n\n";
     md += &markdown(&sdf, &["c (mg/ml)", "paper aggregates", "magdem aggregates/run", "paper singles", "magdem singles/run", "paper largest", "magdem largest (mean)"], &[3, 0, 1, 0, 1, 0, 1])?;
     md += "\n![Table 4](table4.png)\n\n";
     Ok(md)
@@ -333,16 +395,18 @@ fn paper_lengths(paper: &Paper, c: f64) -> PolarsResult<Vec<f64>> {
 fn box_section(runs: &[Run], paper: &Paper, out: &Path) -> Result<String, Error> {
     let conc = floats(&paper.table3, "concentration_mg_per_ml")?;
     let (exp_mean, exp_std) = (floats(&paper.table3, "exp_mean_length_um")?, floats(&paper.table3, "exp_std_um")?);
-    let table3 = completed(runs, "paper-table3");
+    let table3 = table3_ensemble(runs);
     let mut panels = vec![];
     for (k, &c) in conc.iter().enumerate() {
-        let magdem: Vec<f64> = table3.iter().filter(|r| same(r.concentration, c)).flat_map(|r| r.lengths_um()).collect();
+        let here: Vec<&&Run> = table3.iter().filter(|r| same(r.concentration, c)).collect();
+        let magdem: Vec<f64> = here.iter().flat_map(|r| r.lengths_um()).collect();
+        let capped = here.iter().map(|r| r.last.iter().filter(|a| a.box_limited(r.box_extent)).count()).sum::<usize>();
         let boxes = [
             BoxStats::of("magdem (all seeds)", engine_colour("magdem"), &magdem),
             BoxStats::of("paper simulation", palette(3), &paper_lengths(paper, c)?),
         ];
         panels.push(BoxPanel {
-            title: format!("{}) {c} mg/ml", ["a", "b", "c", "d"][k % 4]),
+            title: format!("{}) {c} mg/ml; magdem: {capped} of {} lengths box-limited", ["a", "b", "c", "d"][k % 4], magdem.len()),
             y_label: "major axis length (µm)".into(),
             boxes: boxes.into_iter().flatten().collect(),
             markers: vec![("experiment (mean ± std)".into(), exp_mean[k], exp_std[k])],
@@ -548,43 +612,33 @@ fn approach_section(runs: &[Run], out: &Path) -> Result<String, Error> {
     ))
 }
 
-fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path) -> Result<String, Error> {
+fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Vec<Effect>) -> Result<String, Error> {
     let variants: Vec<&Run> = runs.iter().filter(|r| r.experiment == "paper-sensitivity").collect();
     let mut md = String::from("## Sensitivity: which choices move the case-1 answer\n\n");
     let Some(first) = variants.first() else {
         md += "No runs of `experiments/paper/sensitivity.toml`.\n\n";
         return Ok(md);
     };
-    let seeds: Vec<u64> = {
-        let mut s: Vec<u64> = variants.iter().map(|r| r.seed).collect();
-        s.sort();
-        s.dedup();
-        s
-    };
-    let baseline: Vec<&Run> = completed(runs, "paper-table3").into_iter().filter(|r| r.scene == first.scene && seeds.contains(&r.seed)).collect();
-    let base_mean = mean(&baseline.iter().map(|r| r.mean_length_um()).collect::<Vec<_>>());
     let mut groups: BTreeMap<String, Vec<&Run>> = BTreeMap::new();
     for r in &variants {
         groups.entry(r.variant.clone()).or_default().push(r);
     }
-    // A variant's change is what it sets beyond the Table 3 setting (its respa keys are shared).
-    let shared: Vec<String> = baseline.first().map(|r| r.variant_overrides.clone()).unwrap_or_default();
-    let mut names = vec!["table-3 setting".to_string()];
-    let mut labels = vec!["table-3 setting".to_string()];
-    let mut changes = vec![format!("({})", shared.join(", "))];
-    let mut done_runs = vec![baseline.len() as u64];
-    let mut means = vec![base_mean];
-    let mut cis = vec![ci95_half_width(&baseline.iter().map(|r| r.mean_length_um()).collect::<Vec<_>>())];
-    let mut outcome = vec![String::new()];
-    let mut cost = vec![mean(&baseline.iter().map(|r| r.wall_time).collect::<Vec<_>>())];
-    for (name, group) in &groups {
-        let ok: Vec<f64> = group.iter().filter(|r| r.completed()).map(|r| r.mean_length_um()).collect();
+    let reference: Vec<&Run> = groups.get("respa").map_or(vec![], |g| g.iter().copied().filter(|r| r.completed()).collect());
+    let base = convergence::Estimate::of(&reference.iter().map(|r| r.mean_length_um()).collect::<Vec<_>>());
+    let shared: Vec<String> = reference.first().map(|r| r.variant_overrides.clone()).unwrap_or_default();
+    let (mut names, mut changes, mut done_runs, mut means, mut deltas, mut delta_cis, mut outcome, mut cost) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
+    let mut capped = vec![];
+    let mut bars = vec![];
+    for (name, group) in groups.iter().filter(|(name, _)| name.as_str() != "respa") {
+        let ok: Vec<&Run> = group.iter().copied().filter(|r| r.completed()).collect();
+        let d = convergence::paired_change(&reference, &ok);
         names.push(name.clone());
-        labels.push(if ok.is_empty() { format!("{name} (unstable)") } else { name.clone() });
         changes.push(group[0].variant_overrides.iter().filter(|o| !shared.contains(o)).cloned().collect::<Vec<_>>().join(", "));
         done_runs.push(ok.len() as u64);
-        means.push(mean(&ok));
-        cis.push(ci95_half_width(&ok));
+        means.push(mean(&ok.iter().map(|r| r.mean_length_um()).collect::<Vec<_>>()));
+        capped.push(mean(&ok.iter().map(|r| r.box_limited_fraction()).collect::<Vec<_>>()));
+        deltas.push(d.mean);
+        delta_cis.push(d.ci95);
         let stopped: Vec<&&Run> = group.iter().filter(|r| r.status == "unstable").collect();
         outcome.push(match stopped.first() {
             Some(r) => format!("{} of {} stopped: {}", stopped.len(), group.len(), r.message.split(';').next().unwrap_or(&r.message)),
@@ -592,88 +646,57 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path) -> Result<String
             None => String::new(),
         });
         cost.push(mean(&group.iter().map(|r| r.wall_time).collect::<Vec<_>>()));
+        if d.n > 0 {
+            bars.push((name.clone(), d));
+            let explanation = match name.as_str() {
+                "no-induction" => Some("induction"),
+                "no-shielding" => Some("shielding"),
+                "restitution-0.2" | "restitution-0.9" => Some("restitution"),
+                "paper-pipeline" => Some("the paper's pipeline"),
+                _ => None,
+            };
+            if let Some(explanation) = explanation {
+                effects.push(Effect { concentration: first.concentration, explanation, what: format!("{name} against r-RESPA, paired over {} seeds", d.n), change: d });
+            }
+        }
     }
-    let change: Vec<f64> = means.iter().map(|m| 100.0 * (m / base_mean - 1.0)).collect();
     let mut df = frame(vec![
-        scol("variant", names.clone()),
+        scol("variant", names),
         scol("change", changes),
         ucol("runs", done_runs),
-        col("mean_length_um", means.clone()),
-        col("ci95_um", cis.clone()),
-        col("change_percent", change),
+        col("mean_length_um", means),
+        col("box_limited_fraction", capped),
+        col("paired_change_percent", deltas),
+        col("paired_change_ci95_percent", delta_cis),
         col("wall_time_per_run_s", cost),
         scol("outcome", outcome),
     ])?;
     write(&mut df, tables, "sensitivity")?;
     md += &format!(
-        "`experiments/paper/sensitivity.toml`: scene `{}`, seeds {}; one change at a time against the Table 3 setting (the same \
-         seeds of the Table 3 ensemble). A change matters when it moves the mean by more than the two CI95s together.\n\n",
+        "`experiments/paper/sensitivity.toml`: scene `{}`, seeds {}; one change at a time against the reference variant \
+         `respa` ({}: mean length {}) µm. Each change is paired seed by seed: each seed's difference over the \
+         reference mean, mean ± CI95 over the seeds. A change matters when its CI95 excludes zero.\n\n",
         first.scene,
-        seeds.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(", ")
+        seed_list(&reference.iter().map(|r| r.seed).collect::<Vec<_>>()),
+        shared.join(", "),
+        base.cell_text(1)
     );
-    md += &markdown(&df, &["variant", "change", "runs", "mean length (µm)", "± CI95", "Δ vs table-3 setting (%)", "wall time/run (s)", "outcome"], &[0, 0, 0, 1, 1, 0, 0, 0])?;
-    bar_panels(
+    md += &markdown(&df, &["variant", "change", "runs", "mean length (µm)", "box-limited", "paired change (%)", "± CI95", "wall time/run (s)", "outcome"], &[0, 0, 0, 1, 3, 1, 1, 0, 0])?;
+    let series: Vec<Series> = bars
+        .iter()
+        .enumerate()
+        .map(|(k, (name, d))| Series::markers(name.clone(), vec![(k as f64, d.mean)], palette(k), 7).with_errors(vec![d.ci95]))
+        .collect();
+    let zero = Series::line("", vec![(-0.5, 0.0), (bars.len() as f64 - 0.5, 0.0)], RGBColor(0, 0, 0));
+    line_chart_with_legend(
         &out.join("sensitivity.png"),
-        &format!("Case 1, {} mg/ml: mean length at 5 ms per variant (± CI95 over seeds)", first.concentration),
-        &[BarPanel {
-            title: String::new(),
-            y_label: "mean length (µm)".into(),
-            categories: labels,
-            groups: vec![BarGroup { label: String::new(), color: palette(1), values: means, errors: cis }],
-        }],
-        1,
-        (1300, 520),
+        &format!("Case 1, {} mg/ml: paired change of the mean length at 5 ms (± CI95 over seeds)", first.concentration),
+        "variant (see legend)",
+        "change against r-RESPA (%)",
+        &series.into_iter().chain([zero]).collect::<Vec<_>>(),
+        SeriesLabelPosition::UpperRight,
     )?;
     md += "\n![Sensitivity](sensitivity.png)\n\n";
-    Ok(md)
-}
-
-/// Mean over runs of the mean length at each frame time (µm), for runs sharing their frame times.
-fn mean_series(runs: &[&Run]) -> Vec<(f64, f64)> {
-    let Some(first) = runs.first() else { return vec![] };
-    (0..first.times.len())
-        .filter(|&k| runs.iter().all(|r| r.mean_length.len() > k))
-        .map(|k| (first.times[k] * 1e3, 1e6 * mean(&runs.iter().map(|r| r.mean_length[k]).collect::<Vec<_>>())))
-        .collect()
-}
-
-fn time_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Result<String, Error> {
-    let conc = floats(&paper.table3, "concentration_mg_per_ml")?;
-    let exp = floats(&paper.table3, "exp_mean_length_um")?;
-    let long = completed(runs, "paper-long");
-    let source = if long.is_empty() { completed(runs, "paper-table3") } else { long.clone() };
-    let mut series = vec![];
-    let (mut c_col, mut t_col, mut l_col) = (vec![], vec![], vec![]);
-    for (k, &c) in conc.iter().enumerate() {
-        let here: Vec<&Run> = source.iter().copied().filter(|r| same(r.concentration, c)).collect();
-        let s = mean_series(&here);
-        for &(t, l) in &s {
-            c_col.push(c);
-            t_col.push(t);
-            l_col.push(l);
-        }
-        series.push(Series::line(format!("{c} mg/ml ({} seeds)", here.len()), s, palette(k)));
-        series.push(Series::markers("", vec![(5.0, exp[k])], palette(k), 6));
-    }
-    let mut df = frame(vec![col("concentration_mg_per_ml", c_col), col("time_ms", t_col), col("mean_length_um", l_col)])?;
-    write(&mut df, tables, "length_vs_time")?;
-    line_chart_with_legend(&out.join("length-vs-time.png"), "Case 1: mean aggregate length against time (circles: experiment at 5 ms)", "time (ms)", "mean length (µm)", &series, SeriesLabelPosition::UpperLeft)?;
-    let mut md = String::from("## When to stop: mean length against time\n\n");
-    if long.is_empty() {
-        md += "From the Table 3 ensemble (to 5 ms). The opt-in `experiments/paper/opt-in/long.toml` continues the runs to 20 ms.\n\n";
-    } else {
-        md += &format!("From `experiments/paper/opt-in/long.toml` ({} runs to {} ms).\n\n", long.len(), long[0].times.last().map_or(0.0, |t| t * 1e3));
-        let at = |r: &Run, t: f64| r.times.iter().position(|&x| x >= t - 1e-12).map(|k| r.mean_length[k] * 1e6);
-        let mut rows = String::from("| c (mg/ml) | mean length at 5 ms (µm) | at the end (µm) | growth after 5 ms |\n|---|---|---|---|\n");
-        for &c in &conc {
-            let here: Vec<&&Run> = long.iter().filter(|r| same(r.concentration, c)).collect();
-            let a = mean(&here.iter().filter_map(|r| at(r, 5e-3)).collect::<Vec<_>>());
-            let b = mean(&here.iter().filter_map(|r| r.mean_length.last().map(|l| l * 1e6)).collect::<Vec<_>>());
-            let _ = writeln!(rows, "| {c} | {a:.1} | {b:.1} | {:+.0}% |", 100.0 * (b / a - 1.0));
-        }
-        md += &rows;
-    }
-    md += "\n![Mean length against time](length-vs-time.png)\n\n";
     Ok(md)
 }
 
@@ -687,7 +710,7 @@ fn box_effect_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) ->
     }
     let conc = floats(&paper.table3, "concentration_mg_per_ml")?;
     let exp = floats(&paper.table3, "exp_mean_length_um")?;
-    let table3 = completed(runs, "paper-table3");
+    let table3 = table3_ensemble(runs);
     let (mut c_col, mut v_col, mut n_col, mut p_col, mut m_col, mut ci_col, mut e_col) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
     let mut panels = vec![];
     for (k, &c) in conc.iter().enumerate() {
@@ -845,22 +868,28 @@ fn reference_ensemble(runs: &[Run], out: &Path, tables: &Path) -> Result<String,
             }
         }
     }
+    // The figure: each engine's difference to magdem, paired seed by seed (µm, mean ± CI95).
+    let paired_difference = |engine: &str, c: f64| {
+        let of = |e: &str| all.iter().filter(|r| r.completed() && r.engine == e && same(r.concentration, c)).map(|r| (r.seed, r.mean_length_um())).collect::<Vec<_>>();
+        let base = of("magdem");
+        let d: Vec<f64> = of(engine).iter().filter_map(|(s, l)| base.iter().find(|b| b.0 == *s).map(|b| l - b.1)).collect();
+        convergence::Estimate::of(&d)
+    };
     let panel = BarPanel {
-        title: "mean aggregate length at 5 ms, Stokes drag".into(),
-        y_label: "µm (± CI95 over seeds)".into(),
+        title: "engine minus magdem, mean aggregate length at 5 ms, Stokes drag".into(),
+        y_label: "µm (mean ± CI95 of the paired differences)".into(),
         categories: concentrations.iter().map(|c| format!("{c} mg/ml")).collect(),
-        groups: ENGINES
+        groups: ENGINES[1..]
             .iter()
-            .enumerate()
-            .map(|(k, engine)| BarGroup {
+            .map(|engine| BarGroup {
                 label: engine.to_string(),
                 color: engine_colour(engine),
-                values: m_col.iter().skip(k).step_by(ENGINES.len()).copied().collect(),
-                errors: ci_col.iter().skip(k).step_by(ENGINES.len()).copied().collect(),
+                values: concentrations.iter().map(|&c| paired_difference(engine, c).mean).collect(),
+                errors: concentrations.iter().map(|&c| paired_difference(engine, c).ci95).collect(),
             })
             .collect(),
     };
-    bar_panels(&out.join("reference-table3.png"), "Table 3 in magdem, LIGGGHTS and LAMMPS (same scenes, same seeds)", &[panel], 1, (900, 480))?;
+    bar_panels(&out.join("reference-table3.png"), "Table 3 in LIGGGHTS and LAMMPS against magdem (same scenes, same seeds)", &[panel], 1, (900, 480))?;
     let mut df = frame(vec![
         col("concentration_mg_per_ml", c_col),
         scol("engine", e_col),
@@ -913,22 +942,36 @@ fn runs_section(runs: &[Run], tables: &Path) -> Result<String, Error> {
         col("mean_length_um", runs.iter().map(|r| if r.completed() { r.mean_length_um() } else { f64::NAN }).collect::<Vec<_>>()),
         col("pop_std_um", runs.iter().map(|r| if r.completed() { summary(&r.lengths_um()).population_std } else { f64::NAN }).collect::<Vec<_>>()),
         col("sample_std_um", runs.iter().map(|r| if r.completed() { summary(&r.lengths_um()).sample_std } else { f64::NAN }).collect::<Vec<_>>()),
+        col("box_limited_fraction", runs.iter().map(|r| if r.completed() { r.box_limited_fraction() } else { f64::NAN }).collect::<Vec<_>>()),
+        ucol("percolating", runs.iter().map(|r| r.percolating() as u64).collect()),
         col("wall_time_s", runs.iter().map(|r| r.wall_time).collect::<Vec<_>>()),
     ])?;
     write(&mut df, tables, "runs")?;
     let (mut id, mut size, mut length, mut angle, mut vx) = (vec![], vec![], vec![], vec![], vec![]);
+    let (mut extent, mut capped) = (vec![], vec![]);
     for r in runs.iter().filter(|r| r.completed()) {
         for a in &r.last {
             id.push(r.id.clone());
             size.push(a.size() as u64);
             length.push(a.length * 1e6);
+            extent.push(a.field_extent * 1e6);
+            capped.push(a.box_limited(r.box_extent) as u64);
             angle.push(a.orientation_deg);
             vx.push(a.com_velocity.x * 1e6);
         }
     }
-    let mut aggs = frame(vec![scol("id", id), ucol("size", size), col("length_um", length), col("orientation_deg", angle), col("vx_um_per_s", vx)])?;
+    let mut aggs = frame(vec![
+        scol("id", id),
+        ucol("size", size),
+        col("length_um", length),
+        col("field_extent_um", extent),
+        ucol("box_limited", capped),
+        col("orientation_deg", angle),
+        col("vx_um_per_s", vx),
+    ])?;
     write(&mut aggs, tables, "aggregates")?;
     Ok("## All runs\n\nEvery run with its status, statistics and wall time: `tables/runs.csv` (and `.parquet`); every aggregate of every \
-        run's last frame (size, length, orientation to the field, x velocity): `tables/aggregates.csv`.\n"
+        run's last frame (size, length — empty for an aggregate that percolates through a periodic face —, extent along the \
+        field, whether the box caps it, orientation to the field, x velocity): `tables/aggregates.csv`.\n"
         .into())
 }

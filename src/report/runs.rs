@@ -1,7 +1,7 @@
 //! The runs behind a report: every point of a set of experiment files, with the aggregates of
 //! its last frame and the mean aggregate length at every frame.
 
-use crate::analysis::aggregates::Aggregate;
+use crate::analysis::aggregates::{finite_lengths, Aggregate};
 use crate::analysis::stats::summary;
 use crate::analysis::trajectory::FrameReader;
 use crate::io::trajectory::{status, Trajectory};
@@ -10,6 +10,7 @@ use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
 /// One point of an experiment and what its trajectory holds.
+#[derive(Default)]
 pub struct Run {
     pub experiment: String,
     pub id: String,
@@ -22,6 +23,11 @@ pub struct Run {
     pub engine: String,
     /// Mass concentration of the first particle group (mg/ml), NaN when placed otherwise.
     pub concentration: f64,
+    /// Magnetisation of an isolated particle of the first species in the applied field at the
+    /// box centre (A/m; saturation law applied, mutual induction not).
+    pub magnetisation: f64,
+    /// Fluid viscosity (Pa·s), NaN without a fluid.
+    pub viscosity: f64,
     pub particles: usize,
     pub overrides: String,
     /// `completed`, `unstable`, `running`, `interrupted` or `missing`.
@@ -30,8 +36,12 @@ pub struct Run {
     pub wall_time: f64,
     pub file: PathBuf,
     pub times: Vec<f64>,
-    /// Mean aggregate length at each frame (m).
+    /// Mean aggregate length at each frame (m), over the aggregates that do not percolate.
     pub mean_length: Vec<f64>,
+    /// Fraction of each frame's aggregates that the box caps ([`Aggregate::box_limited`]).
+    pub box_limited: Vec<f64>,
+    /// The box's extent along the field (m).
+    pub box_extent: f64,
     /// Aggregates of the last frame.
     pub last: Vec<Aggregate>,
     /// x velocity of each of `last`'s aggregates as its members' mean displacement over the last
@@ -48,9 +58,19 @@ impl Run {
         self.status == status::COMPLETED
     }
 
-    /// Lengths of the last frame's aggregates (µm).
+    /// Lengths of the last frame's aggregates (µm), percolating ones (no finite length) left out.
     pub fn lengths_um(&self) -> Vec<f64> {
-        self.last.iter().map(|a| a.length * 1e6).collect()
+        finite_lengths(&self.last).iter().map(|l| l * 1e6).collect()
+    }
+
+    /// Fraction of the last frame's aggregates that the box caps.
+    pub fn box_limited_fraction(&self) -> f64 {
+        self.box_limited.last().copied().unwrap_or(f64::NAN)
+    }
+
+    /// Aggregates of the last frame that percolate through a periodic face.
+    pub fn percolating(&self) -> usize {
+        self.last.iter().filter(|a| a.percolating).count()
     }
 
     pub fn mean_length_um(&self) -> f64 {
@@ -96,6 +116,8 @@ fn load(experiment: &Experiment, point: &crate::scene::experiment::Point, gap: f
         seed: spec.seed,
         engine: point.engine.clone(),
         concentration: spec.particles.first().and_then(|g| g.concentration).unwrap_or(f64::NAN),
+        magnetisation: applied_magnetisation(&point.scene),
+        viscosity: spec.fluid.as_ref().map_or(f64::NAN, |f| f.viscosity),
         particles: point.scene.initial.len(),
         overrides: point.overrides.iter().map(|(k, v)| format!("{k} = {v}")).collect::<Vec<_>>().join(", "),
         status: "missing".into(),
@@ -104,6 +126,8 @@ fn load(experiment: &Experiment, point: &crate::scene::experiment::Point, gap: f
         file: file.clone(),
         times: vec![],
         mean_length: vec![],
+        box_limited: vec![],
+        box_extent: f64::NAN,
         last: vec![],
         tracked_vx: vec![],
         at_x_wall: vec![],
@@ -121,10 +145,12 @@ fn load(experiment: &Experiment, point: &crate::scene::experiment::Point, gap: f
     if run.completed() {
         let reader = FrameReader::new(&t).map_err(|e| e.to_string())?;
         let frames = reader.times.len();
+        run.box_extent = reader.box_extent();
         for k in 0..frames {
             let (time, aggs) = reader.aggregates(k as isize, gap).map_err(|e| e.to_string())?;
             run.times.push(time);
-            run.mean_length.push(summary(&aggs.iter().map(|a| a.length).collect::<Vec<_>>()).mean);
+            run.mean_length.push(summary(&finite_lengths(&aggs)).mean);
+            run.box_limited.push(aggs.iter().filter(|a| a.box_limited(run.box_extent)).count() as f64 / aggs.len() as f64);
             if k + 1 == frames {
                 run.last = aggs;
             }
@@ -148,6 +174,16 @@ fn load(experiment: &Experiment, point: &crate::scene::experiment::Point, gap: f
             .collect();
     }
     Ok(run)
+}
+
+/// |M| of the first species in the applied field at the box centre (A/m).
+fn applied_magnetisation(scene: &crate::scene::Scene) -> f64 {
+    let (Some(field), Some(species)) = (scene.spec.field.as_ref(), scene.species.first()) else { return f64::NAN };
+    let centre = 0.5 * (scene.domain.lo + scene.domain.hi);
+    let gradient = nalgebra::Matrix3::from_fn(|a, b| field.gradient[a][b]);
+    let h = ((nalgebra::Vector3::from(field.b0) + gradient * centre) / crate::core::magnetisation::MU0).norm();
+    let linear = species.susceptibility * h;
+    species.saturation.map_or(linear, |s| s.magnetisation(linear))
 }
 
 /// Number of sweep axes (the last overrides of every point).

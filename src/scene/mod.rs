@@ -16,7 +16,7 @@ use crate::core::integrators;
 use crate::core::magnetisation::{Induction, Magnetisation, MU0};
 use crate::core::simulation::{ForceField, Simulation};
 use crate::core::stability::{Monitor, StepEstimate, StepEstimateInput};
-use crate::core::state::{Particles, Species, State, Vec3};
+use crate::core::state::{Particles, Saturation, SaturationLaw, Species, State, Vec3};
 use nalgebra::Matrix3;
 use sha2::{Digest, Sha256};
 pub use spec::*;
@@ -66,13 +66,16 @@ impl Scene {
 
     /// Parses and checks `text`; `origin` names it in messages.
     pub fn parse(text: &str, origin: &str) -> Result<Self, SceneError> {
-        let spec: SceneSpec = toml::from_str(text).map_err(|e| {
-            let line = e.span().map_or(0, |s| text[..s.start.min(text.len())].lines().count().max(1));
-            let at = e.span().and_then(|s| text[s.start.min(text.len())..].lines().next()).unwrap_or("");
-            let message = e.message().trim().replace('\n', " ");
-            let message = if at.trim_start().starts_with('[') { format!("in {}: {message}", at.trim()) } else { message };
-            SceneError::Syntax { origin: origin.to_string(), line, message }
-        })?;
+        // Every float anywhere in the scene must be finite (TOML allows nan and inf), and every
+        // vector has three components (serde would drop a fourth silently).
+        if let Ok(table) = toml::from_str::<toml::Table>(text) {
+            let table = toml::Value::Table(table);
+            if let Some((key, value)) = first_non_finite(&table, String::new()) {
+                return Err(invalid(key, value, "must be a finite number"));
+            }
+            check_shapes(&table, "", "")?;
+        }
+        let spec: SceneSpec = toml::from_str(text).map_err(|e| syntax_error(text, origin, &e))?;
         let mut hasher = Sha256::new();
         hasher.update(text.as_bytes());
         let hash = hasher.finalize().iter().map(|b| format!("{b:02x}")).collect();
@@ -318,6 +321,17 @@ fn check_species(k: usize, s: &SpeciesSpec) -> Result<Species, SceneError> {
     if let Some(ms) = s.saturation_magnetisation {
         positive(&key("saturation_magnetisation"), ms)?;
     }
+    if let (Some(law), None) = (s.saturation_law, s.saturation_magnetisation) {
+        let name = match law {
+            SaturationLawSpec::Cap => "cap",
+            SaturationLawSpec::FrohlichKennelly => "frohlich-kennelly",
+        };
+        return Err(invalid(key("saturation_law"), name, "needs saturation_magnetisation"));
+    }
+    let law = match s.saturation_law {
+        Some(SaturationLawSpec::FrohlichKennelly) => SaturationLaw::FrohlichKennelly,
+        Some(SaturationLawSpec::Cap) | None => SaturationLaw::Cap,
+    };
     Ok(Species {
         name: s.name.clone(),
         radius: 0.5 * s.diameter,
@@ -328,7 +342,7 @@ fn check_species(k: usize, s: &SpeciesSpec) -> Result<Species, SceneError> {
         restitution: s.restitution,
         // Clausius–Mossotti: χ_eff = 3(μr − 1)/(μr + 2) = 3χ/(χ + 3).
         susceptibility: 3.0 * chi / (chi + 3.0),
-        saturation_magnetisation: s.saturation_magnetisation,
+        saturation: s.saturation_magnetisation.map(|ms| Saturation { ms, law }),
         permanent_moment: s.permanent_moment.map(Vec3::from),
     })
 }
@@ -399,8 +413,8 @@ fn check_integration(spec: &SceneSpec) -> Result<(), SceneError> {
     if !integrators::NAMES.contains(&i.scheme.as_str()) {
         return Err(invalid("integration.scheme", &i.scheme, format!("unknown scheme; one of {}", integrators::NAMES.join(", "))));
     }
-    if i.slow_every == 0 || (i.slow_every > 1 && i.scheme != "respa") {
-        return Err(invalid("integration.slow_every", i.slow_every, "must be 1, or larger with scheme = \"respa\""));
+    if i.slow_every == 0 || (i.slow_every > 1 && !matches!(i.scheme.as_str(), "respa" | "subcycled-euler")) {
+        return Err(invalid("integration.slow_every", i.slow_every, "must be 1, or larger with scheme = \"respa\" or \"subcycled-euler\""));
     }
     positive("integration.dt", i.dt)?;
     positive("integration.end_time", i.end_time)?;
@@ -445,11 +459,11 @@ fn isolated_moment(spec: &SceneSpec, domain: &Domain, s: &Species) -> f64 {
     let centre = 0.5 * (domain.lo + domain.hi);
     let h = ((b0 + gradient * centre) / MU0).norm();
     let mut m = s.susceptibility * s.volume() * h;
-    if let Some(ms) = s.saturation_magnetisation {
-        m = m.min(ms * s.volume());
+    if let Some(sat) = s.saturation {
+        m = m.min(sat.moment(s.susceptibility * h, s.volume()));
     }
     let induced = matches!(f.dipole.as_ref().map(|d| d.induction), Some(InductionSpec::Paper | InductionSpec::Exact));
-    if induced && s.saturation_magnetisation.is_none() {
+    if induced && s.saturation.is_none() {
         m /= 1.0 - s.susceptibility / 12.0;
     }
     m + s.permanent_moment.map_or(0.0, |p| p.norm())
@@ -517,14 +531,57 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
             None => (domain.lo, domain.hi),
         };
         let count = match (group.count, group.concentration) {
-            (Some(n), _) => n,
+            (Some(n), _) => n as f64,
             (_, Some(c)) => {
                 positive(&key("concentration"), c)?;
                 let l = hi - lo;
-                (c * l.x * l.y * l.z / s.mass()).floor() as usize
+                (c * l.x * l.y * l.z / s.mass()).floor()
             }
             _ => unreachable!(),
         };
+        // Pairs index particles with 32 bits.
+        if particles.len() as f64 + count > u32::MAX as f64 {
+            let (name, value) = match group.count {
+                Some(n) => ("count", n.to_string()),
+                None => ("concentration", format!("{:e}", group.concentration.unwrap_or_default())),
+            };
+            return Err(invalid(key(name), value, format!("gives {count:.3e} particles; magdem holds at most {} (32-bit particle indices)", u32::MAX)));
+        }
+        let count = count as usize;
+        // Checked before anything is allocated: what the region can hold at random.
+        let l = hi - lo;
+        let fraction = count as f64 * s.volume() / (l.x * l.y * l.z);
+        if fraction > MAX_RANDOM_SOLID_FRACTION {
+            let (name, value) = match group.count {
+                Some(n) => ("count", n.to_string()),
+                None => ("concentration", group.concentration.unwrap_or_default().to_string()),
+            };
+            return Err(invalid(
+                key(name),
+                value,
+                format!(
+                    "{count} particles fill {fraction:.3e} of their region; random placement holds at most {MAX_RANDOM_SOLID_FRACTION} \
+                     (random sequential addition jams near 0.38); give explicit positions for denser packings"
+                ),
+            ));
+        }
+        let needed = memory_estimate(spec, domain, particles.len() + count, s.radius);
+        if let Some(available) = available_memory().filter(|&a| needed > a) {
+            let (name, value) = match group.count {
+                Some(n) => ("count", n.to_string()),
+                None => ("concentration", group.concentration.unwrap_or_default().to_string()),
+            };
+            return Err(invalid(
+                key(name),
+                value,
+                format!(
+                    "{} particles need about {:.2} GB (state, neighbour and dipole lists), more than the {:.2} GB of memory available",
+                    particles.len() + count,
+                    needed as f64 / 1e9,
+                    available as f64 / 1e9
+                ),
+            ));
+        }
         let existing: Vec<(Vec3, f64)> = (0..particles.len()).map(|j| (particles.position[j], particles.radius[j])).collect();
         let seed = spec.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(g as u64);
         let placed = placement::place_random(count, s.radius, lo, hi, domain, &existing, seed).map_err(|k| {
@@ -549,6 +606,121 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
     }
     Ok(particles)
 }
+
+/// A TOML or type error, located: the line, and the table and key it is in.
+fn syntax_error(text: &str, origin: &str, e: &toml::de::Error) -> SceneError {
+    let message = e.message().trim().replace('\n', " ");
+    let Some(start) = e.span().map(|s| s.start.min(text.len())) else {
+        return SceneError::Syntax { origin: origin.to_string(), line: 0, message };
+    };
+    let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
+    let line_text = text[line_start..].lines().next().unwrap_or("").trim();
+    let line = text[..start].matches('\n').count() + 1;
+    let (header, key) = if line_text.starts_with('[') {
+        (Some(line_text), None)
+    } else {
+        let header = text[..line_start].lines().rev().map(str::trim).find(|l| l.starts_with('['));
+        (header, line_text.split_once('=').map(|(k, _)| k.trim()).filter(|k| !k.is_empty()))
+    };
+    let message = match (header, key) {
+        (Some(h), Some(k)) => format!("in {h}, key {k}: {message}"),
+        (Some(h), None) => format!("in {h}: {message}"),
+        (None, Some(k)) => format!("key {k}: {message}"),
+        (None, None) => message,
+    };
+    SceneError::Syntax { origin: origin.to_string(), line, message }
+}
+
+/// Keys whose values are 3-vectors, lists of 3-vectors, or 3 × 3 matrices.
+const VECTOR_KEYS: [&str; 6] = ["lo", "hi", "b0", "g", "velocity", "permanent_moment"];
+const VECTOR_LIST_KEYS: [&str; 4] = ["positions", "velocities", "angular_velocities", "gradient"];
+
+/// Refuses a vector of `VECTOR_KEYS` (or an entry of `VECTOR_LIST_KEYS`) that has more or fewer
+/// than three components, naming the dotted key.
+fn check_shapes(value: &toml::Value, key: &str, name: &str) -> Result<(), SceneError> {
+    let three = |key: &str, v: &toml::Value| match v {
+        toml::Value::Array(a) if a.len() != 3 => Err(invalid(key, v.to_string(), format!("must have 3 components, not {}", a.len()))),
+        _ => Ok(()),
+    };
+    match value {
+        toml::Value::Table(table) => {
+            for (child, v) in table {
+                check_shapes(v, &if key.is_empty() { child.clone() } else { format!("{key}.{child}") }, child)?;
+            }
+        }
+        toml::Value::Array(items) if VECTOR_KEYS.contains(&name) => three(key, value)?,
+        toml::Value::Array(items) if VECTOR_LIST_KEYS.contains(&name) => {
+            if name == "gradient" {
+                three(key, value)?;
+            }
+            for (k, v) in items.iter().enumerate() {
+                three(&format!("{key}[{k}]"), v)?;
+            }
+        }
+        toml::Value::Array(items) => {
+            for (k, v) in items.iter().enumerate() {
+                check_shapes(v, &format!("{key}[{k}]"), name)?;
+            }
+        }
+        _ => {}
+    }
+    Ok(())
+}
+
+/// The dotted key (`species[0].permanent_moment[1]`) and value of the first NaN or infinite
+/// float in `value`, in document order.
+fn first_non_finite(value: &toml::Value, key: String) -> Option<(String, f64)> {
+    match value {
+        toml::Value::Float(f) if !f.is_finite() => Some((key, *f)),
+        toml::Value::Array(items) => items.iter().enumerate().find_map(|(k, v)| first_non_finite(v, format!("{key}[{k}]"))),
+        toml::Value::Table(table) => {
+            table.iter().find_map(|(name, v)| first_non_finite(v, if key.is_empty() { name.clone() } else { format!("{key}.{name}") }))
+        }
+        _ => None,
+    }
+}
+
+/// Bytes a run of `n` particles of radius `radius` is expected to hold: the particle state
+/// (about 30 vectors and scalars per particle with the checkpoint and output buffers, 600 B),
+/// the contact list (up to 13 neighbours within the skin, 48 B each), and the dipole and
+/// induction neighbourhoods (every pair within the larger cut-off plus its 1/15 skin, 88 B each:
+/// the pair and its two fields; all pairs without a cut-off are summed directly and stored only
+/// by the dense solve of exact induction, (3n)² × 8 B for n ≤ dense_max). An estimate to refuse
+/// what cannot fit, not an exact account.
+pub fn memory_estimate(spec: &SceneSpec, domain: &Domain, n: usize, radius: f64) -> u64 {
+    let n_f = n as f64;
+    let mut bytes = n_f * (600.0 + 13.0 * 48.0);
+    if let Some(d) = &spec.forces.dipole {
+        let diameters = match d.induction {
+            InductionSpec::Paper => d.cutoff_diameters.unwrap_or(0.0).max(d.paper_radius_diameters),
+            _ => d.cutoff_diameters.unwrap_or(0.0),
+        };
+        if diameters > 0.0 {
+            let range = diameters * 2.0 * radius * (1.0 + 1.0 / 15.0);
+            let l = domain.length();
+            let density = n_f / (l.x * l.y * l.z);
+            let neighbours = (density * 4.0 / 3.0 * std::f64::consts::PI * range.powi(3)).min(n_f);
+            bytes += n_f * neighbours / 2.0 * 88.0;
+        }
+        if matches!(d.induction, InductionSpec::Exact) && n <= d.dense_max {
+            bytes += (3.0 * n_f).powi(2) * 8.0;
+        }
+    }
+    bytes.min(u64::MAX as f64) as u64
+}
+
+/// MemAvailable of this machine (bytes), where the system says.
+fn available_memory() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// Random sequential addition of equal spheres jams near a solid fraction of 0.38 in 3-D (Feder
+/// 1980; Torquato, Uche & Stillinger 2006) and slows sharply well before; placement refuses
+/// more than this fraction of a region.
+pub const MAX_RANDOM_SOLID_FRACTION: f64 = 0.30;
 
 fn check_inside(key: &str, raw: &[f64; 3], x: Vec3, radius: f64, domain: &Domain) -> Result<(), SceneError> {
     for k in 0..3 {

@@ -113,8 +113,19 @@ pub struct SpeciesSpec {
     pub susceptibility: Option<f64>,
     /// Saturation magnetisation Ms (A/m).
     pub saturation_magnetisation: Option<f64>,
+    /// How the induced magnetisation reaches Ms: `cap` (default, |M| = min(χ_eff H, Ms)) or
+    /// `frohlich-kennelly` (M = χ_eff H · Ms / (Ms + χ_eff H)). Needs `saturation_magnetisation`.
+    pub saturation_law: Option<SaturationLawSpec>,
     /// Permanent moment (A·m²), turning with the particle.
     pub permanent_moment: Option<[f64; 3]>,
+}
+
+/// `species.saturation_law`.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum SaturationLawSpec {
+    Cap,
+    FrohlichKennelly,
 }
 
 /// `[[particles]]`: a group of particles of one species, given by exactly one of `positions`,
@@ -291,11 +302,12 @@ pub struct IntegrationSpec {
     /// `explicit-euler` | `semi-implicit-euler` | `velocity-verlet` (default) | `respa`
     /// (multiple time stepping: magnetic forces every `slow_every` steps) | `exponential-verlet`
     /// (linear drag integrated exactly) | `adaptive-verlet` (substeps under error control; dt is
-    /// the largest step).
+    /// the largest step) | `subcycled-euler` (the paper's pipeline: magnetic forces held over an
+    /// outer explicit-Euler step of `slow_every`·dt, contact, drag and gravity sub-stepped by Verlet).
     #[serde(default = "default_scheme")]
     pub scheme: String,
-    /// `respa`: fast steps per evaluation of the moments and magnetic forces (default 1). Must
-    /// divide the steps per output frame and the run.
+    /// `respa`, `subcycled-euler`: fast steps per evaluation of the moments and magnetic forces
+    /// (default 1). Must divide the steps per output frame and the run.
     #[serde(default = "default_slow_every")]
     pub slow_every: u64,
     /// `adaptive-verlet`: local error allowed per substep as a fraction of each particle's

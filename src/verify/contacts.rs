@@ -245,7 +245,7 @@ pub fn run_case(case: &Case, dir: &Path, engines: &[Engine]) -> Result<Vec<Outco
     let scene = Scene::parse(&case.scene_text(), &case.name)?;
     let mut outcomes = vec![];
     let native = dir.join(format!("{slug}.magdem.h5"));
-    run(&scene, &native, &RunOptions::default())?;
+    run(&scene, &native, &RunOptions { overwrite: true, ..Default::default() })?;
     let (metrics, force_overlap) = measure(case, &native)?;
     outcomes.push(Outcome { case: case.clone(), engine: "magdem", metrics, force_overlap });
     for &engine in engines {

@@ -100,7 +100,7 @@ pub fn compare(text: &str, name: &str, work: &Path, engines: &[Engine]) -> Resul
     std::fs::create_dir_all(work)?;
     let native = work.join(format!("{name}.magdem.h5"));
     let start = std::time::Instant::now();
-    run(&scene, &native, &RunOptions::default())?;
+    run(&scene, &native, &RunOptions { overwrite: true, ..Default::default() })?;
     let mut times = vec![("magdem".to_string(), start.elapsed().as_secs_f64())];
     let mut diffs = vec![];
     for &engine in engines {

@@ -7,6 +7,7 @@ mod explicit_euler;
 mod exponential_verlet;
 mod respa;
 mod semi_implicit_euler;
+mod subcycled_euler;
 mod velocity_verlet;
 
 pub use adaptive_verlet::AdaptiveVerlet;
@@ -14,6 +15,7 @@ pub use explicit_euler::ExplicitEuler;
 pub use exponential_verlet::ExponentialVerlet;
 pub use respa::Respa;
 pub use semi_implicit_euler::SemiImplicitEuler;
+pub use subcycled_euler::SubcycledEuler;
 pub use velocity_verlet::VelocityVerlet;
 
 use super::simulation::ForceGroup;
@@ -42,9 +44,11 @@ pub trait Integrator: Send {
 
 /// Scheme names a scene may give (`exponential-verlet` is built by the scene layer, which knows
 /// the drag coefficients).
-pub const NAMES: [&str; 6] = ["explicit-euler", "semi-implicit-euler", "velocity-verlet", "respa", "exponential-verlet", "adaptive-verlet"];
+pub const NAMES: [&str; 7] =
+    ["explicit-euler", "semi-implicit-euler", "velocity-verlet", "respa", "exponential-verlet", "adaptive-verlet", "subcycled-euler"];
 
-/// The integrator `name`; `slow_every` is the multiple-time-stepping ratio (RESPA only),
+/// The integrator `name`; `slow_every` is the multiple-time-stepping ratio (RESPA and
+/// sub-cycled Euler),
 /// `tolerance` the adaptive integrator's local error per substep (fraction of a radius).
 pub fn by_name(name: &str, slow_every: u64, tolerance: f64) -> Option<Box<dyn Integrator>> {
     match name {
@@ -53,6 +57,7 @@ pub fn by_name(name: &str, slow_every: u64, tolerance: f64) -> Option<Box<dyn In
         "semi-implicit-euler" => Some(Box::new(SemiImplicitEuler)),
         "velocity-verlet" => Some(Box::new(VelocityVerlet)),
         "respa" => Some(Box::new(Respa { slow_every })),
+        "subcycled-euler" => Some(Box::new(SubcycledEuler { slow_every })),
         _ => None,
     }
 }
