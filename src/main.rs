@@ -357,6 +357,7 @@ fn main() -> ExitCode {
                         RunFailure::Unstable(_) => ExitCode::from(3),
                         RunFailure::Trajectory(_) => ExitCode::from(1),
                         RunFailure::Refused(_) => ExitCode::from(2),
+                        RunFailure::DiskFull { .. } => ExitCode::from(1),
                     }
                 }
             }

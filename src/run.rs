@@ -36,6 +36,43 @@ pub enum RunFailure {
     /// The output is not ours to write: it exists, or another process holds it (exit 2).
     #[error("{0}")]
     Refused(String),
+    /// The disk holding the output is too full for the next frame; the run stopped before
+    /// writing it, so that the file ends on a complete frame and checkpoint (exit 1).
+    #[error(
+        "stopped before frame {frame} of {path}: its disk has {free} bytes free and a frame needs about {needed}; the file keeps \
+         frames 0-{last} and their checkpoint: free space and rerun with --resume"
+    )]
+    DiskFull { path: String, frame: usize, last: usize, free: u64, needed: u64 },
+}
+
+/// Free bytes for an unprivileged writer on the file system holding `path` (its directory).
+fn free_space(path: &Path) -> Option<u64> {
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let c = std::ffi::CString::new(dir.as_os_str().as_encoded_bytes()).ok()?;
+    let mut stat: libc::statvfs = unsafe { std::mem::zeroed() };
+    // SAFETY: `c` is a valid NUL-terminated path and `stat` a writable statvfs.
+    (unsafe { libc::statvfs(c.as_ptr(), &mut stat) } == 0).then(|| stat.f_bavail as u64 * stat.f_frsize as u64)
+}
+
+/// Bytes the next frame may take: twice the uncompressed frame and checkpoint (HDF5 may
+/// allocate the new chunks before it frees anything) plus 256 KiB for metadata.
+fn frame_budget(scene: &Scene, contacts: usize) -> u64 {
+    let n = scene.initial.len() as u64;
+    let vectors = if scene.spec.output.forces { 6 } else { 4 };
+    let frame = n * 24 * vectors + contacts as u64 * 16;
+    let checkpoint = n * 24 * 9 + contacts as u64 * 40;
+    2 * (frame + checkpoint) + 256 * 1024
+}
+
+/// Refuses to write frame `frame` when the disk cannot hold it.
+fn check_space(scene: &Scene, output: &Path, frame: usize, contacts: usize) -> Result<(), RunFailure> {
+    let needed = frame_budget(scene, contacts);
+    match free_space(output) {
+        Some(free) if free < needed => {
+            Err(RunFailure::DiskFull { path: output.display().to_string(), frame, last: frame.saturating_sub(1), free, needed })
+        }
+        _ => Ok(()),
+    }
 }
 
 /// An exclusive lock on `<output>.lock` for the life of a run: a second process writing the
@@ -156,6 +193,11 @@ fn run_in_pool(scene: &Scene, output: &Path, options: &RunOptions) -> Result<Run
         }
         let step = sim.state.step;
         if step % per_frame == 0 || step == total {
+            if let Err(e) = check_space(scene, output, writer.frames(), sim.state.contacts.pairs.len()) {
+                bar.abandon();
+                writer.finish(status::INTERRUPTED, &e.to_string(), start.elapsed())?;
+                return Err(e);
+            }
             writer.write_frame(&sim.state)?;
             if options.abort_after_frame == Some(writer.frames()) {
                 std::process::abort();

@@ -163,3 +163,49 @@ fn bad_variants_name_the_key() {
         assert!(err.contains(fragment), "{variant}: {err}");
     }
 }
+
+/// `kill -9` of `magdem experiment` mid-ensemble: every run it had finished stays finished (and
+/// is skipped, its file untouched), and rerunning the experiment resumes the interrupted ones.
+#[test]
+fn a_killed_ensemble_loses_no_finished_run_and_resumes_the_rest() {
+    let (_work, file, out) = setup("killed", "seed = [1, 2, 3, 4]\n");
+    let text = std::fs::read_to_string(&file).unwrap();
+    // Runs of about a second each, one at a time.
+    std::fs::write(&file, format!("{text}\"integration.end_time\" = [2.0e-4]\n")).unwrap();
+    let exp = Experiment::from_file(&file).unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_magdem")).args(["experiment", file.to_str().unwrap(), "-j", "1", "-q"]).spawn().unwrap();
+    let status = |p: &magdem::scene::experiment::Point| {
+        magdem::io::trajectory::Trajectory::open(&out.join(format!("{}.h5", p.id))).ok().and_then(|t| t.attr_string("status").ok())
+    };
+    let started = std::time::Instant::now();
+    loop {
+        let states: Vec<Option<String>> = exp.points.iter().map(status).collect();
+        let done = states.iter().filter(|s| s.as_deref() == Some("completed")).count();
+        if done >= 1 && states.iter().any(|s| s.as_deref() == Some("running")) {
+            break;
+        }
+        assert!(started.elapsed().as_secs() < 120 && done < exp.points.len(), "no moment with a finished and a running point: {states:?}");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    Command::new("kill").args(["-9", &child.id().to_string()]).status().unwrap();
+    child.wait().unwrap();
+    let finished: Vec<(String, std::time::SystemTime)> = exp
+        .points
+        .iter()
+        .filter(|p| status(p).as_deref() == Some("completed"))
+        .map(|p| (p.id.clone(), std::fs::metadata(out.join(format!("{}.h5", p.id))).unwrap().modified().unwrap()))
+        .collect();
+    assert!(!finished.is_empty());
+    let results = run_experiment(&exp, &ExperimentOptions { jobs: Some(1), ..Default::default() }).unwrap();
+    for (r, p) in results.iter().zip(&exp.points) {
+        match finished.iter().find(|(id, _)| id == &p.id) {
+            Some((_, modified)) => {
+                assert_eq!(r.outcome, Outcome::Skipped, "{}", p.id);
+                assert_eq!(std::fs::metadata(&r.file).unwrap().modified().unwrap(), *modified, "{} untouched", p.id);
+            }
+            None => assert!(matches!(r.outcome, Outcome::Resumed | Outcome::Completed), "{}: {}", p.id, r.outcome.label()),
+        }
+    }
+    assert!(results.iter().any(|r| r.outcome == Outcome::Resumed), "the point running at the kill is resumed");
+    assert!(exp.points.iter().all(|p| status(p).as_deref() == Some("completed")));
+}

@@ -117,6 +117,19 @@ fn report_tables_are_the_analysis_of_the_runs() {
     }
     assert!(text.contains("No completed case-2 runs"), "missing studies are said to be missing");
     assert!(text.contains("wrote this report took 12 s"));
+
+    // A damaged run file is marked and the report goes on with the others.
+    let damaged = runs.join("case1-c0.563__seed-3.h5");
+    let bytes = std::fs::read(&damaged).unwrap();
+    std::fs::write(&damaged, &bytes[..bytes.len() / 3]).unwrap();
+    let readme = write_report(&PaperReportOptions { experiments, reference: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("reference/paper"), out: out.clone(), gap: 1e-3, wall_time: None }).unwrap();
+    let text = std::fs::read_to_string(&readme).unwrap();
+    assert!(text.contains("Unreadable run files") && text.contains("case1-c0.563__seed-3.h5"), "the damaged run is named");
+    let runs_table = read_csv(&out.join("tables/runs.csv"));
+    let status: Vec<String> = runs_table.column("status").unwrap().str().unwrap().into_no_null_iter().map(str::to_string).collect();
+    assert_eq!(status.iter().filter(|s| *s == "unreadable").count(), 1, "{status:?}");
+    let table3 = read_csv(&out.join("tables/table3.csv"));
+    assert_eq!(table3.column("runs").unwrap().cast(&DataType::UInt64).unwrap().u64().unwrap().get(row), Some(2));
 }
 
 #[test]

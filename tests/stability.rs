@@ -122,3 +122,22 @@ fn extreme_cases_complete_or_stop_with_a_message() {
         assert!(!case.outcome.contains("non-finite values (a solver bug)"), "{}", case.name);
     }
 }
+
+/// r-RESPA holds the magnetic forces over K steps: its estimate adds the Verlet bound of the
+/// dipole contact spring (k = 4F/d, F = 3μ0 m²/(2π d⁴)) over the outer step, 2/(K ω), which at
+/// 1.5 T and K = 10 is below the contact oscillator's; at K = 1 there is no such bound.
+#[test]
+fn the_respa_estimate_accounts_for_the_outer_step() {
+    let base = collision("velocity-verlet", 1.0e-9);
+    let verlet = Scene::parse(&base, "verlet").unwrap().estimate;
+    let respa = Scene::parse(&base.replace("scheme = \"velocity-verlet\"", "scheme = \"respa\"\nslow_every = 10"), "respa").unwrap().estimate;
+    assert!(verlet.magnetic_bound.is_none());
+    let (mu0, d, rho): (f64, f64, f64) = (4.0e-7 * std::f64::consts::PI, 11.0e-6, 1087.0);
+    let volume = std::f64::consts::PI * d.powi(3) / 6.0;
+    let m = 3.0 * 11.3 / 14.3 * 1.5 / mu0 * volume; // no induction: the linear moment
+    let k = 4.0 * 3.0 * mu0 * m * m / (2.0 * std::f64::consts::PI * d.powi(5));
+    let expected = 2.0 / (10.0 * (k / (0.5 * rho * volume)).sqrt());
+    let bound = respa.magnetic_bound.expect("a bound for K = 10");
+    assert!((bound / expected - 1.0).abs() < 1e-12, "{bound:e} against {expected:e}");
+    assert!(respa.stable_dt == bound && bound < verlet.stable_dt, "{} against {}", respa.summary(1e-9), verlet.summary(1e-9));
+}

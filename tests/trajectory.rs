@@ -285,3 +285,84 @@ fn a_second_writer_is_refused_and_a_killed_one_leaves_no_lock() {
     assert!(out.status.success(), "after kill -9 the lock is free: {}", String::from_utf8_lossy(&out.stderr));
     assert_eq!(Trajectory::open(&file).unwrap().attr_string("status").unwrap(), "completed");
 }
+
+/// A small tmpfs mounted for one test and unmounted when dropped.
+struct Tmpfs(std::path::PathBuf);
+
+impl Tmpfs {
+    fn mount(size: &str) -> Option<Self> {
+        let dir = tempfile::Builder::new().prefix("magdem-full-").tempdir().unwrap().keep();
+        let ok = Command::new("mount").args(["-t", "tmpfs", "-o", &format!("size={size}"), "tmpfs", path(&dir)]).status().is_ok_and(|s| s.success());
+        if !ok {
+            println!("skipped: cannot mount a tmpfs here (needs root and mount permission)");
+            let _ = std::fs::remove_dir(&dir);
+            return None;
+        }
+        Some(Self(dir))
+    }
+    fn resize(&self, size: &str) {
+        assert!(Command::new("mount").args(["-o", &format!("remount,size={size}"), path(&self.0)]).status().unwrap().success());
+    }
+}
+
+impl Drop for Tmpfs {
+    fn drop(&mut self) {
+        let _ = Command::new("umount").arg(&self.0).status();
+        let _ = std::fs::remove_dir(&self.0);
+    }
+}
+
+/// A disk that fills up mid-run: the run stops before the frame that would not fit (exit 1, one
+/// line naming the file and the frame), the file keeps every frame before it, and `--resume`
+/// continues once there is space, ending bitwise equal to a run that had space throughout.
+#[test]
+fn a_full_disk_stops_the_run_cleanly_and_resume_continues() {
+    let Some(disk) = Tmpfs::mount("600k") else { return };
+    let work = workdir("full");
+    let dir = work.path();
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, scene_text().replace("interval = 2.0e-5", "interval = 2.0e-6").replace("end_time = 3.0e-4", "end_time = 2.0e-4")).unwrap();
+    let (full, file) = (dir.join("full.h5"), disk.0.join("run.h5"));
+    assert!(magdem(&["run", path(&scene), "-q", "-o", path(&full)]).status.success());
+    let out = magdem(&["run", path(&scene), "-q", "-o", path(&file)]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("stopped before frame") && err.contains("run.h5") && err.trim().lines().count() == 1, "{err}");
+    let t = Trajectory::open(&file).expect("the file stays readable");
+    let kept = t.frames().unwrap();
+    assert!(kept > 1 && kept < 101, "{kept} frames kept");
+    assert_eq!(t.attr_string("status").unwrap(), "interrupted");
+    drop(t);
+    disk.resize("8m");
+    let out = magdem(&["run", path(&scene), "-q", "-o", path(&file), "--resume"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_identical(&full, &file);
+}
+
+/// A truncated trajectory and an HDF5 file of another program get a one-line error naming the
+/// file from `info`, `analyse` and `run --resume`.
+#[test]
+fn damaged_and_foreign_files_are_refused_with_one_line_naming_them() {
+    let work = workdir("damaged");
+    let dir = work.path();
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, scene_text().replace("end_time = 3.0e-4", "end_time = 4.0e-5")).unwrap();
+    let good = dir.join("good.h5");
+    assert!(magdem(&["run", path(&scene), "-q", "-o", path(&good)]).status.success());
+    let bytes = std::fs::read(&good).unwrap();
+    let truncated = dir.join("truncated.h5");
+    std::fs::write(&truncated, &bytes[..bytes.len() / 2]).unwrap();
+    let foreign = dir.join("foreign.h5");
+    let f = hdf5::File::create(&foreign).unwrap();
+    f.new_dataset::<f64>().shape([4]).create("temperature").unwrap().write(&[1.0, 2.0, 3.0, 4.0]).unwrap();
+    drop(f);
+    for file in [&truncated, &foreign] {
+        let name = file.file_name().unwrap().to_str().unwrap();
+        for args in [vec!["info", path(file)], vec!["analyse", path(file)], vec!["run", path(&scene), "-q", "-o", path(file), "--resume"]] {
+            let out = magdem(&args);
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(!out.status.success(), "{args:?} accepted {name}");
+            assert!(err.contains(name) && err.trim().lines().count() == 1, "{args:?}: {err}");
+        }
+    }
+}

@@ -7,6 +7,10 @@
 //!   damping ratio ζ = −√(5/6) β. Central-difference schemes (Verlet, semi-implicit Euler) are
 //!   stable for dt < (2/ω)(√(1+ζ²) − ζ); explicit Euler only for dt < 2ζ/ω (never when e = 1).
 //! - Drag relaxation τ = m/(6π μ a): explicit schemes are stable for dt < 2τ.
+//! - Magnetic forces held over K steps (r-RESPA, sub-cycled Euler): the dipole attraction at
+//!   contact, F = 3μ0 m²/(2π d⁴), is a spring of stiffness |dF/dr| = 4F/d between touching
+//!   particles, integrated with the outer step K·dt: stable for K·dt < 2/ω_m, ω_m = √(k_m/m*)
+//!   (the Verlet bound on that spring; the stability map measures it).
 //!
 //! The largest expected overlap comes from the fastest expected impact: the relative speed at
 //! which two touching dipoles meet when all the magnetic energy μ0 m²/(2π d³) goes into motion,
@@ -30,6 +34,8 @@ pub struct StepEstimateInput<'a> {
     /// Largest isolated moment magnitude per species (A·m²), if magnetic terms are included.
     pub moments: Vec<f64>,
     pub max_initial_speed: f64,
+    /// Steps over which the magnetic forces are held (K of r-RESPA; 1 otherwise).
+    pub slow_every: u64,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -41,6 +47,8 @@ pub struct StepEstimate {
     pub contact_duration: Option<f64>,
     /// Stability bound of the contact oscillator for this integrator.
     pub contact_bound: Option<f64>,
+    /// Bound on dt from the magnetic contact spring held over K steps (K > 1 only).
+    pub magnetic_bound: Option<f64>,
     pub drag_relaxation_time: Option<f64>,
     /// The smallest of the hard bounds, and what sets it.
     pub stable_dt: f64,
@@ -88,6 +96,22 @@ impl StepEstimate {
                 contact_bound = Some(contact_bound.map_or(bound, |t: f64| t.min(bound)));
             }
         }
+        let magnetic_bound = (input.slow_every > 1)
+            .then(|| {
+                input
+                    .species
+                    .iter()
+                    .zip(&input.moments)
+                    .filter(|(_, &m)| m > 0.0)
+                    .map(|(s, &m)| {
+                        let d = 2.0 * s.radius;
+                        let stiffness = 4.0 * 3.0 * MU0 * m * m / (2.0 * PI * d.powi(5));
+                        let omega = (stiffness / (0.5 * s.mass())).sqrt();
+                        2.0 / (omega * input.slow_every as f64)
+                    })
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .filter(|b| b.is_finite());
         let drag_relaxation_time = input.drag_viscosity.map(|mu| {
             input
                 .species
@@ -101,13 +125,17 @@ impl StepEstimate {
             stable_dt = b;
             limited_by = "contact oscillator";
         }
+        if let Some(b) = magnetic_bound.filter(|&b| b < stable_dt) {
+            stable_dt = b;
+            limited_by = "magnetic contact spring held over slow_every steps";
+        }
         if let Some(tau) = drag_relaxation_time.filter(|_| input.integrator != "exponential-verlet") {
             if 2.0 * tau < stable_dt {
                 stable_dt = 2.0 * tau;
                 limited_by = "drag relaxation";
             }
         }
-        Self { rayleigh_time, impact_speed, contact_duration, contact_bound, drag_relaxation_time, stable_dt, limited_by }
+        Self { rayleigh_time, impact_speed, contact_duration, contact_bound, magnetic_bound, drag_relaxation_time, stable_dt, limited_by }
     }
 
     pub fn summary(&self, dt: f64) -> String {
@@ -121,6 +149,9 @@ impl StepEstimate {
                 "; impact speed up to {:.3e} m/s: Hertz contact {:.3e} s, stability bound {:.3e} s",
                 self.impact_speed, tc, b
             );
+        }
+        if let Some(b) = self.magnetic_bound {
+            s += &format!("; magnetic forces held over slow_every steps: bound {b:.3e} s");
         }
         if let Some(tau) = self.drag_relaxation_time {
             s += &format!("; drag relaxation {tau:.3e} s");

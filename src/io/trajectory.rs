@@ -18,7 +18,7 @@ pub const FORMAT_VERSION: u32 = 1;
 
 #[derive(Debug, thiserror::Error)]
 pub enum TrajectoryError {
-    #[error("HDF5 error on {path}: {source}")]
+    #[error("HDF5 error on {path}: {}", .source.to_string().split_whitespace().collect::<Vec<_>>().join(" "))]
     Hdf5 { path: String, source: hdf5::Error },
     #[error("{path}: {message}")]
     Mismatch { path: String, message: String },
@@ -30,6 +30,8 @@ pub mod status {
     pub const COMPLETED: &str = "completed";
     pub const INTERRUPTED: &str = "interrupted";
     pub const UNSTABLE: &str = "unstable";
+    /// Not a status a file holds: what a report marks a file it cannot read as.
+    pub const UNREADABLE: &str = "unreadable";
 }
 
 type H5Result<T> = hdf5::Result<T>;

@@ -132,6 +132,7 @@ pub fn write_report(options: &PaperReportOptions) -> Result<PathBuf, Error> {
 fn header(runs: &[Run], files: &[PathBuf], options: &PaperReportOptions) -> String {
     let done = runs.iter().filter(|r| r.completed()).count();
     let unstable = runs.iter().filter(|r| r.status == "unstable").count();
+    let unreadable: Vec<String> = runs.iter().filter(|r| r.status == crate::io::trajectory::status::UNREADABLE).map(|r| format!("`{}` ({})", r.file.display(), r.message)).collect();
     let core_seconds: f64 = runs.iter().filter(|r| r.wall_time.is_finite()).map(|r| r.wall_time).sum();
     let mut md = format!(
         "# Reproducing the paper's case 1 and case 2\n\n\
@@ -158,6 +159,9 @@ fn header(runs: &[Run], files: &[PathBuf], options: &PaperReportOptions) -> Stri
         options.wall_time.map_or(String::new(), |w| format!("; the `make reproduce` call that wrote this report took {:.0} s of wall time ({:.1} min) for its runs", w, w / 60.0)),
         options.gap
     );
+    if !unreadable.is_empty() {
+        md += &format!("Unreadable run files, left out of every table: {}.\n\n", unreadable.join("; "));
+    }
     md += "Experiment files: ";
     md += &files.iter().map(|f| format!("`{}`", f.display())).collect::<Vec<_>>().join(", ");
     md += "\n\n";

@@ -132,12 +132,24 @@ fn load(experiment: &Experiment, point: &crate::scene::experiment::Point, gap: f
         tracked_vx: vec![],
         at_x_wall: vec![],
     };
-    let Ok(t) = Trajectory::open(&file) else {
+    if !file.exists() {
         return Ok(run);
-    };
+    }
+    // A file that cannot be read is marked as such; the report goes on with the others.
+    if let Err(e) = read_run(&mut run, point, &file, gap) {
+        run.status = status::UNREADABLE.into();
+        run.message = e.to_string().split_whitespace().collect::<Vec<_>>().join(" ");
+        (run.times, run.mean_length, run.box_limited, run.last) = (vec![], vec![], vec![], vec![]);
+    }
+    Ok(run)
+}
+
+/// Fills `run` from its trajectory `file`.
+fn read_run(run: &mut Run, point: &crate::scene::experiment::Point, file: &Path, gap: f64) -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
+    let t = Trajectory::open(file).map_err(|e| e.to_string())?;
     if t.attr_string("scene_sha256").ok().as_deref() != Some(point.scene.hash.as_str()) {
         run.status = "stale (another scene)".into();
-        return Ok(run);
+        return Ok(());
     }
     run.status = t.attr_string("status").map_err(|e| e.to_string())?;
     run.message = t.attr_string("status_message").unwrap_or_default();
@@ -173,7 +185,7 @@ fn load(experiment: &Experiment, point: &crate::scene::experiment::Point, gap: f
             .map(|a| !domain.periodic[0] && a.members.iter().any(|&i| now[i].x - domain.lo.x < 3.0 * radius[i] || domain.hi.x - now[i].x < 3.0 * radius[i]))
             .collect();
     }
-    Ok(run)
+    Ok(())
 }
 
 /// |M| of the first species in the applied field at the box centre (A/m).

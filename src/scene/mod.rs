@@ -113,6 +113,7 @@ impl Scene {
             drag_viscosity: spec.forces.drag.as_ref().and(spec.fluid.as_ref()).map(|f| f.viscosity),
             moments,
             max_initial_speed: initial.velocity.iter().map(|v| v.norm()).fold(0.0, f64::max),
+            slow_every: spec.integration.slow_every,
         });
         let dt = spec.integration.dt;
         // The adaptive integrator's dt is only its largest step.
