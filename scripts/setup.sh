@@ -8,9 +8,11 @@ packages=(libhdf5-dev pkg-config)
 packages+=(hdf5-tools)
 # Figures: DejaVu Sans, loaded at run time by the plotting code.
 packages+=(fonts-dejavu-core)
-# The reference codes (about 1.9 GB with their VTK dependencies; skip with MAGDEM_NO_REFERENCE=1).
+# The reference codes (about 1.9 GB with their VTK dependencies; skip with MAGDEM_NO_REFERENCE=1),
+# and ParaView with a virtual X server: the tests open and render trajectories with pvpython and
+# pvbatch.
 if [ "${MAGDEM_NO_REFERENCE:-0}" != 1 ]; then
-    packages+=(liggghts libliggghts-dev lammps liblammps-dev)
+    packages+=(liggghts libliggghts-dev lammps liblammps-dev paraview xvfb xauth)
 fi
 
 missing=()
@@ -36,7 +38,11 @@ if ((${#missing[@]})); then
     done
 fi
 
-# Python reader check in the tests uses h5py when Python is present.
+# Python reader check in the tests uses h5py when Python is present, and OVITO's module reads
+# the LAMMPS-dump export.
 if command -v python3 >/dev/null && ! python3 -c "import h5py" 2>/dev/null; then
     python3 -m pip install --quiet h5py 2>/dev/null || echo "setup: h5py not installed; tests fall back to h5dump"
+fi
+if [ "${MAGDEM_NO_REFERENCE:-0}" != 1 ] && command -v python3 >/dev/null && ! python3 -c "import ovito" 2>/dev/null; then
+    python3 -m pip install --quiet ovito 2>/dev/null || echo "setup: ovito not installed; its test is skipped"
 fi

@@ -146,7 +146,14 @@ pub struct RunSummary {
 pub fn run(scene: &Scene, output: &Path, options: &RunOptions) -> Result<RunSummary, RunFailure> {
     let _lock = OutputLock::acquire(output)?;
     check_existing(scene, output, options)?;
-    rayon::scope(|_| run_in_pool(scene, output, options))
+    let result = rayon::scope(|_| run_in_pool(scene, output, options));
+    // The XDMF sidecar describes whatever frames the file holds, however the run ended.
+    if output.exists() {
+        if let Err(e) = crate::io::export::write_xdmf(output) {
+            eprintln!("warning: no XDMF sidecar for {}: {e}", output.display());
+        }
+    }
+    result
 }
 
 fn run_in_pool(scene: &Scene, output: &Path, options: &RunOptions) -> Result<RunSummary, RunFailure> {

@@ -1,3 +1,5 @@
-//! Input/output outside the physics core: HDF5 trajectories with checkpoints.
+//! Input/output outside the physics core: HDF5 trajectories with checkpoints, and their XDMF
+//! and LAMMPS-dump exports.
 
+pub mod export;
 pub mod trajectory;

@@ -1,0 +1,168 @@
+//! Trajectories in the tools of the field: ParaView (pvpython, pvbatch) reads the XDMF sidecar
+//! that `run` writes, and OVITO's Python module reads `magdem export --format lammps-dump`; both
+//! give the HDF5 file's points, frames and positions. Each test is skipped, with the reason
+//! printed, where its program is not installed (`make setup` installs them).
+
+mod common;
+
+use magdem::io::trajectory::Trajectory;
+use std::path::Path;
+use std::process::Command;
+
+/// 40 magnetic particles with contacts, drag and gravity; six frames.
+fn scene() -> String {
+    common::scene(
+        r#"version = 1
+name = "export-test"
+seed = 3
+[domain]
+lo = [0.0, 0.0, 0.0]
+hi = [1.2e-4, 1.2e-4, 1.2e-4]
+boundary = { x = "periodic", y = "wall", z = "wall" }
+"#,
+        r#"[[particles]]
+species = "p"
+count = 40
+[forces.contact]
+[forces.dipole]
+induction = "paper"
+cutoff_diameters = 4.0
+paper_radius_diameters = 4.0
+[forces.drag]
+[forces.gravity]
+[integration]
+dt = 1.0e-8
+end_time = 5.0e-5
+[output]
+interval = 1.0e-5
+"#,
+    )
+}
+
+fn has(program: &str, probe: &[&str]) -> bool {
+    Command::new(program).args(probe).output().is_ok_and(|o| o.status.success())
+}
+
+fn path(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// A finished run in a fresh directory: (guard, trajectory).
+fn run() -> (tempfile::TempDir, std::path::PathBuf) {
+    let work = tempfile::Builder::new().prefix("magdem-export-").tempdir().unwrap();
+    let scene_file = work.path().join("scene.toml");
+    std::fs::write(&scene_file, scene()).unwrap();
+    let h5 = work.path().join("run.h5");
+    let out = Command::new(env!("CARGO_BIN_EXE_magdem")).args(["run", path(&scene_file), "-q", "-o", path(&h5)]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    (work, h5)
+}
+
+/// Particle count, frame count, and the last frame's position of particle 7 (HDF5).
+fn truth(h5: &Path) -> (usize, usize, [f64; 3]) {
+    let t = Trajectory::open(h5).unwrap();
+    let frames = t.frames().unwrap();
+    let x = t.frame_vectors("position", frames - 1).unwrap();
+    (x.len(), frames, [x[7].x, x[7].y, x[7].z])
+}
+
+fn numbers(stdout: &[u8], key: &str) -> Vec<f64> {
+    let text = String::from_utf8_lossy(stdout);
+    let line = text.lines().find(|l| l.starts_with(key)).unwrap_or_else(|| panic!("no {key} in {text}"));
+    line[key.len()..].split_whitespace().map(|v| v.parse().unwrap()).collect()
+}
+
+#[test]
+fn paraview_reads_the_xdmf_sidecar_and_renders_a_frame() {
+    if !has("pvpython", &["--version"]) {
+        println!("skipped: pvpython (Debian's paraview) is not installed");
+        return;
+    }
+    let (_work, h5) = run();
+    let xdmf = h5.with_extension("xdmf");
+    assert!(xdmf.exists(), "run writes the sidecar beside the file");
+    let (n, frames, x7) = truth(&h5);
+    let script = r#"
+import sys
+from paraview.simple import XDMFReader
+from paraview import servermanager
+r = XDMFReader(FileNames=[sys.argv[1]])
+r.UpdatePipelineInformation()
+times = r.TimestepValues
+r.UpdatePipeline(times[-1])
+data = servermanager.Fetch(r)
+print("frames", len(times))
+print("points", data.GetNumberOfPoints())
+print("x7", *data.GetPoint(7))
+names = [data.GetPointData().GetArrayName(i) for i in range(data.GetPointData().GetNumberOfArrays())]
+print("arrays", len(names), " ".join(names))
+"#;
+    let work = h5.parent().unwrap();
+    std::fs::write(work.join("check.py"), script).unwrap();
+    let out = Command::new("pvpython").args([path(&work.join("check.py")), path(&xdmf)]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(numbers(&out.stdout, "frames ")[0] as usize, frames);
+    assert_eq!(numbers(&out.stdout, "points ")[0] as usize, n);
+    let x = numbers(&out.stdout, "x7 ");
+    for k in 0..3 {
+        assert!((x[k] - x7[k]).abs() <= 1e-12 * x7[k].abs().max(1e-9), "ParaView {x:?} against HDF5 {x7:?}");
+    }
+    let text = String::from_utf8_lossy(&out.stdout);
+    for array in ["radius", "species", "velocity", "angular_velocity", "moment"] {
+        assert!(text.contains(array), "{array} in {text}");
+    }
+    if !has("xvfb-run", &["--help"]) {
+        println!("skipped the render: xvfb-run (Debian's xvfb) is not installed");
+        return;
+    }
+    let png = work.join("frame.png");
+    let script = magdem::io::export::PARAVIEW_RENDER;
+    std::fs::write(work.join("render.py"), script).unwrap();
+    let render = || Command::new("xvfb-run").args(["-a", "pvbatch", path(&work.join("render.py")), path(&xdmf), path(&png)]).output().unwrap();
+    let mut out = render();
+    if !out.status.success() {
+        // pvbatch under a fresh X server occasionally aborts at start-up; one more try.
+        println!("first render failed, trying once more: {}", String::from_utf8_lossy(&out.stderr).lines().last().unwrap_or(""));
+        out = render();
+    }
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // A white image compresses to a few kB; spheres on it do not.
+    let size = std::fs::metadata(&png).map(|m| m.len()).unwrap_or(0);
+    assert!(size > 15_000, "rendered PNG of {size} bytes");
+}
+
+#[test]
+fn ovito_reads_the_lammps_dump_export() {
+    if !has("python3", &["-c", "import ovito"]) {
+        println!("skipped: the ovito Python module is not installed");
+        return;
+    }
+    let (_work, h5) = run();
+    let dump = h5.with_extension("dump");
+    let out = Command::new(env!("CARGO_BIN_EXE_magdem")).args(["export", path(&h5), "--format", "lammps-dump"]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let (n, frames, x7) = truth(&h5);
+    let script = r#"
+import sys
+from ovito.io import import_file
+p = import_file(sys.argv[1])
+print("frames", p.source.num_frames)
+data = p.compute(p.source.num_frames - 1)
+print("points", data.particles.count)
+ids = list(data.particles.identifiers)
+k = ids.index(8)
+print("x7", *data.particles.positions[k])
+print("r7", data.particles["Radius"][k])
+"#;
+    let work = h5.parent().unwrap();
+    std::fs::write(work.join("check.py"), script).unwrap();
+    let out = Command::new("python3").args([path(&work.join("check.py")), path(&dump)]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(numbers(&out.stdout, "frames ")[0] as usize, frames);
+    assert_eq!(numbers(&out.stdout, "points ")[0] as usize, n);
+    let x = numbers(&out.stdout, "x7 ");
+    for k in 0..3 {
+        assert!((x[k] - x7[k]).abs() <= 1e-12 * x7[k].abs().max(1e-9), "OVITO {x:?} against HDF5 {x7:?}");
+    }
+    assert!((numbers(&out.stdout, "r7 ")[0] - 5.5e-6).abs() < 1e-18);
+}
