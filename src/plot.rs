@@ -107,6 +107,39 @@ impl From<SeriesLabelPosition> for Legend {
     }
 }
 
+/// A linear coordinate with its own tick positions (bold: labelled; light: grid only).
+struct Axis {
+    inner: plotters::coord::types::RangedCoordf64,
+    bold: Vec<f64>,
+    light: Vec<f64>,
+}
+
+impl Axis {
+    fn new(range: std::ops::Range<f64>, bold: Vec<f64>, light: Vec<f64>) -> Self {
+        Self { inner: range.into(), bold, light }
+    }
+}
+
+impl plotters::coord::ranged1d::Ranged for Axis {
+    type ValueType = f64;
+    type FormatOption = plotters::coord::ranged1d::NoDefaultFormatting;
+    fn range(&self) -> std::ops::Range<f64> {
+        self.inner.range()
+    }
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        self.inner.map(value, limit)
+    }
+    fn key_points<H: plotters::coord::ranged1d::KeyPointHint>(&self, hint: H) -> Vec<f64> {
+        if hint.weight().allow_light_points() { self.light.clone() } else { self.bold.clone() }
+    }
+}
+
+impl plotters::coord::ranged1d::ValueFormatter<f64> for Axis {
+    fn format(value: &f64) -> String {
+        tick(value)
+    }
+}
+
 /// How an axis maps values: linear, or logarithmic (base 10; values ≤ 0 are left out).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Scale {
@@ -122,12 +155,41 @@ impl Scale {
             Scale::Log => f64::NAN,
         }
     }
+    /// Tick positions on the axis (axis units) between `lo` and `hi`: round numbers (1, 2, 5 ×
+    /// 10^k steps) on a linear axis, 1, 2 and 5 of every decade on a log axis; and the light
+    /// grid lines between them.
+    fn ticks(self, lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>) {
+        match self {
+            Scale::Linear => {
+                let raw = (hi - lo) / 8.0;
+                let decade = 10f64.powf(raw.log10().floor());
+                let step = [1.0, 2.0, 5.0, 10.0].iter().map(|m| m * decade).find(|&s| s >= raw).unwrap_or(10.0 * decade);
+                let on = |step: f64| ((lo / step).ceil() as i64..=(hi / step).floor() as i64).map(|k| k as f64 * step).collect::<Vec<_>>();
+                (on(step), on(step / 5.0))
+            }
+            Scale::Log => {
+                let (mut bold, mut light) = (vec![], vec![]);
+                for k in lo.floor() as i64..=hi.ceil() as i64 {
+                    for m in 1..10 {
+                        let v = (m as f64).log10() + k as f64;
+                        if v >= lo && v <= hi {
+                            if [1, 2, 5].contains(&m) { &mut bold } else { &mut light }.push(v);
+                        }
+                    }
+                }
+                (bold, light)
+            }
+        }
+    }
+
     fn label(self, v: &f64) -> String {
         match self {
             Scale::Linear => tick(v),
             Scale::Log => {
+                // Ticks sit at 1, 2, 5 × 10^k: one significant digit names them.
                 let x = 10f64.powf(*v);
-                if x >= 100.0 { format!("{x:.0}") } else { format!("{:.2}", x).trim_end_matches('0').trim_end_matches('.').to_string() }
+                let digits = (-x.log10().floor()).max(0.0) as usize;
+                if x >= 1e5 || x < 1e-3 { format!("{x:.0e}") } else { format!("{x:.digits$}") }
             }
         }
     }
@@ -184,12 +246,13 @@ pub fn chart(
     let (y0, y1) = pad(y0, y1 + legend.headroom * (y1 - y0));
     let root = BitMapBackend::new(path, (960, 640)).into_drawing_area();
     root.fill(&WHITE)?;
+    let ((bx, lx), (by, ly)) = (sx.ticks(x0, x1), sy.ticks(y0, y1));
     let mut chart = ChartBuilder::on(&root)
         .caption(title, ("sans-serif", 24))
         .margin(20)
         .x_label_area_size(50)
         .y_label_area_size(90)
-        .build_cartesian_2d(x0..x1, y0..y1)?;
+        .build_cartesian_2d(Axis::new(x0..x1, bx, lx), Axis::new(y0..y1, by, ly))?;
     let (fx, fy) = (|v: &f64| sx.label(v), |v: &f64| sy.label(v));
     chart
         .configure_mesh()

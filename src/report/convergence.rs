@@ -325,8 +325,7 @@ pub fn growth_section(runs: &[Run], t: &Targets, out: &Path, tables: &Path, effe
     let mut long: Vec<&Run> = runs.iter().filter(|r| r.experiment == "paper-long" && r.completed()).collect();
     let source = if long.is_empty() {
         long = runs.iter().filter(|r| TABLE3.contains(&r.experiment.as_str()) && r.completed()).collect();
-        md += "From the Table 3 ensemble, to its end; `experiments/paper/opt-in/long.toml` continues the case-1 scenes to 20 ms.\n\n";
-        "the Table 3 ensemble (velocity Verlet)"
+        "The Table 3 ensemble (velocity Verlet; the opt-in `experiments/paper/opt-in/long.toml` continues the scenes to 20 ms)"
     } else {
         "`experiments/paper/opt-in/long.toml` (r-RESPA)"
     };
@@ -343,6 +342,8 @@ pub fn growth_section(runs: &[Run], t: &Targets, out: &Path, tables: &Path, effe
             continue;
         }
         let z = |a: f64, b: f64| Estimate::of(&here.iter().map(|r| growth_exponent(r, a, b)).collect::<Vec<_>>());
+        // Quantities after 5 ms exist only for runs that go on past it.
+        let later = |v: f64| if end > 5.5e-3 { v } else { f64::NAN };
         let zz = z(1e-3, end);
         let g = Estimate::of(&here.iter().map(|r| 100.0 * (length_at(r, end) / length_at(r, 5e-3) - 1.0)).collect::<Vec<_>>());
         let mean = mean_series(&here);
@@ -353,13 +354,13 @@ pub fn growth_section(runs: &[Run], t: &Targets, out: &Path, tables: &Path, effe
         z_all.push(zz.mean);
         z_all_ci.push(zz.ci95);
         z_early.push(z(1e-3, 5e-3).mean);
-        z_late.push(z(5e-3, end).mean);
+        z_late.push(later(z(5e-3, end).mean));
         l5.push(Estimate::of(&here.iter().map(|r| length_at(r, 5e-3)).collect::<Vec<_>>()).mean);
-        lend.push(Estimate::of(&here.iter().map(|r| length_at(r, end)).collect::<Vec<_>>()).mean);
-        growth.push(g.mean);
-        growth_ci.push(g.ci95);
+        lend.push(later(Estimate::of(&here.iter().map(|r| length_at(r, end)).collect::<Vec<_>>()).mean));
+        growth.push(later(g.mean));
+        growth_ci.push(later(g.ci95));
         cap5.push(cap_at(5e-3));
-        capend.push(cap_at(end));
+        capend.push(later(cap_at(end)));
         reach.push(crossing);
         if end > 5.5e-3 {
             effects.push(Effect { concentration: c, explanation: "stopping time", what: format!("{:.0} ms against 5 ms, paired over {} seeds", end * 1e3, g.n), change: g });

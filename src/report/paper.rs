@@ -3,6 +3,7 @@
 //! in `reference/paper/`. Every number in the report comes from the runs and those CSV files.
 
 use super::convergence::{self, Effect, Targets};
+use super::figures;
 use super::runs::{experiment_files, load_runs, Run};
 use super::tables::{markdown, write};
 use crate::analysis::stats::{ci95_half_width, summary};
@@ -113,13 +114,19 @@ pub fn write_report(options: &PaperReportOptions) -> Result<PathBuf, Error> {
     md += &convergence::seeds_section(&runs, &targets, &tables, &mut effects)?;
     md += &table4_section(&runs, &paper, out, &tables)?;
     md += &box_section(&runs, &paper, out)?;
+    let mut seed1: Vec<&Run> = table3_ensemble(&runs).into_iter().filter(|r| r.seed == 1).collect();
+    seed1.sort_by(|a, b| a.concentration.total_cmp(&b.concentration));
+    md += &figures::chain_figures(&seed1, out)?;
+    md += &figures::paraview_section(seed1.iter().copied().find(|r| same(r.concentration, 2.25)).or(seed1.first().copied()), out)?;
     md += &convergence::finite_size_section(&runs, &targets, out, &tables, &mut effects)?;
     md += &convergence::growth_section(&runs, &targets, out, &tables, &mut effects)?;
     md += &convergence::magnetisation_section(&runs, &targets, out, &tables, &mut effects)?;
     md += &convergence::measurement_section(&runs, &targets, &tables, &mut effects)?;
     md += &sensitivity_section(&runs, out, &tables, &mut effects)?;
     md += &convergence::ranking_section(&effects, &targets, &runs, &tables)?;
+    md += &figures::shielding_figure(out)?;
     md += &case2_section(&runs, &paper, out, &tables)?;
+    md += &figures::case2_figure(runs.iter().find(|r| r.experiment == "paper-case2" && r.seed == 1 && r.completed()), out)?;
     md += &approach_section(&runs, out)?;
     md += &box_effect_section(&runs, &paper, out, &tables)?;
     md += &reference_section(&runs, out, &tables)?;
@@ -628,6 +635,11 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
         groups.entry(r.variant.clone()).or_default().push(r);
     }
     let reference: Vec<&Run> = groups.get("respa").map_or(vec![], |g| g.iter().copied().filter(|r| r.completed()).collect());
+    if reference.is_empty() {
+        md += "Not run: `experiments/paper/opt-in/sensitivity.toml` (its reference variant `respa` has no completed runs) enters here \
+               when its runs exist.\n\n";
+        return Ok(md);
+    }
     let base = convergence::Estimate::of(&reference.iter().map(|r| r.mean_length_um()).collect::<Vec<_>>());
     let shared: Vec<String> = reference.first().map(|r| r.variant_overrides.clone()).unwrap_or_default();
     let (mut names, mut changes, mut done_runs, mut means, mut deltas, mut delta_cis, mut outcome, mut cost) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
@@ -677,7 +689,7 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
     ])?;
     write(&mut df, tables, "sensitivity")?;
     md += &format!(
-        "`experiments/paper/sensitivity.toml`: scene `{}`, seeds {}; one change at a time against the reference variant \
+        "`experiments/paper/opt-in/sensitivity.toml`: scene `{}`, seeds {}; one change at a time against the reference variant \
          `respa` ({}: mean length {}) µm. Each change is paired seed by seed: each seed's difference over the \
          reference mean, mean ± CI95 over the seeds. A change matters when its CI95 excludes zero.\n\n",
         first.scene,
