@@ -721,7 +721,7 @@ fn available_memory() -> Option<u64> {
 /// Random sequential addition of equal spheres jams near a solid fraction of 0.38 in 3-D (Feder
 /// 1980; Torquato, Uche & Stillinger 2006) and slows sharply well before; placement refuses
 /// more than this fraction of a region.
-pub const MAX_RANDOM_SOLID_FRACTION: f64 = 0.30;
+pub const MAX_RANDOM_SOLID_FRACTION: f64 = 0.35;
 
 fn check_inside(key: &str, raw: &[f64; 3], x: Vec3, radius: f64, domain: &Domain) -> Result<(), SceneError> {
     for k in 0..3 {
