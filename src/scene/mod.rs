@@ -540,26 +540,24 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
             }
             _ => unreachable!(),
         };
+        // A count refused names the key that set it.
+        let refuse_count = |why: String| match (group.count, group.concentration) {
+            (Some(n), _) => invalid(key("count"), n, why),
+            (None, c) => {
+                let c = c.unwrap_or_default();
+                invalid(key("concentration"), if (1e-3..1e6).contains(&c.abs()) { c.to_string() } else { format!("{c:e}") }, why)
+            }
+        };
         // Pairs index particles with 32 bits.
         if particles.len() as f64 + count > u32::MAX as f64 {
-            let (name, value) = match group.count {
-                Some(n) => ("count", n.to_string()),
-                None => ("concentration", format!("{:e}", group.concentration.unwrap_or_default())),
-            };
-            return Err(invalid(key(name), value, format!("gives {count:.3e} particles; magdem holds at most {} (32-bit particle indices)", u32::MAX)));
+            return Err(refuse_count(format!("gives {count:.3e} particles; magdem holds at most {} (32-bit particle indices)", u32::MAX)));
         }
         let count = count as usize;
         // Checked before anything is allocated: what the region can hold at random.
         let l = hi - lo;
         let fraction = count as f64 * s.volume() / (l.x * l.y * l.z);
         if fraction > MAX_RANDOM_SOLID_FRACTION {
-            let (name, value) = match group.count {
-                Some(n) => ("count", n.to_string()),
-                None => ("concentration", group.concentration.unwrap_or_default().to_string()),
-            };
-            return Err(invalid(
-                key(name),
-                value,
+            return Err(refuse_count(
                 format!(
                     "{count} particles fill {fraction:.3e} of their region; random placement holds at most {MAX_RANDOM_SOLID_FRACTION} \
                      (random sequential addition jams near 0.38); give explicit positions for denser packings"
@@ -568,13 +566,7 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
         }
         let needed = memory_estimate(spec, domain, particles.len() + count, s.radius);
         if let Some(available) = available_memory().filter(|&a| needed > a) {
-            let (name, value) = match group.count {
-                Some(n) => ("count", n.to_string()),
-                None => ("concentration", group.concentration.unwrap_or_default().to_string()),
-            };
-            return Err(invalid(
-                key(name),
-                value,
+            return Err(refuse_count(
                 format!(
                     "{} particles need about {:.2} GB (state, neighbour and dipole lists), more than the {:.2} GB of memory available",
                     particles.len() + count,
