@@ -160,7 +160,7 @@ fn run_in_pool(scene: &Scene, output: &Path, options: &RunOptions) -> Result<Run
     let start = Instant::now();
     let total = scene.total_steps();
     let per_frame = scene.steps_per_frame();
-    let info = RunInfo { engine: "magdem", integrator: &scene.spec.integration.scheme };
+    let info = RunInfo { engine: "magdem", integrator: scene.spec.integration.scheme.name() };
 
     let (mut writer, mut sim) = if options.resume && output.exists() {
         let (writer, state) = TrajectoryWriter::resume(output, scene)?;

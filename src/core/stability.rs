@@ -18,6 +18,7 @@
 //! F = 3μ0 m²/(2π d⁴), or the fastest initial speed if larger; Hertz theory gives the overlap.
 
 use super::forces::drag::Drag;
+use super::integrators::Scheme;
 use super::state::{Particles, Species, State, Vec3};
 use super::magnetisation::MU0;
 use rayon::prelude::*;
@@ -27,7 +28,7 @@ use std::f64::consts::PI;
 #[derive(Debug, Clone)]
 pub struct StepEstimateInput<'a> {
     pub species: &'a [Species],
-    pub integrator: &'a str,
+    pub scheme: Scheme,
     pub contact: bool,
     /// Viscosity if drag is included.
     pub drag_viscosity: Option<f64>,
@@ -87,7 +88,7 @@ impl StepEstimate {
                 let omega = (2.0 * e_star * (r_eff * overlap).sqrt() / m_eff).sqrt();
                 let ln_e = s.restitution.ln();
                 let zeta = -(5.0_f64 / 6.0).sqrt() * ln_e / (ln_e * ln_e + PI * PI).sqrt();
-                let bound = if input.integrator == "explicit-euler" {
+                let bound = if input.scheme.forward_euler_in_contact() {
                     2.0 * zeta / omega
                 } else {
                     2.0 / omega * ((1.0 + zeta * zeta).sqrt() - zeta)
@@ -129,7 +130,7 @@ impl StepEstimate {
             stable_dt = b;
             limited_by = "magnetic contact spring held over slow_every steps";
         }
-        if let Some(tau) = drag_relaxation_time.filter(|_| input.integrator != "exponential-verlet") {
+        if let Some(tau) = drag_relaxation_time.filter(|_| !input.scheme.integrates_linear_drag()) {
             if 2.0 * tau < stable_dt {
                 stable_dt = 2.0 * tau;
                 limited_by = "drag relaxation";

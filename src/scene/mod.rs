@@ -108,7 +108,7 @@ impl Scene {
         let moments = species.iter().map(|s| isolated_moment(&spec, &domain, s)).collect();
         let estimate = StepEstimate::new(&StepEstimateInput {
             species: &species,
-            integrator: &spec.integration.scheme,
+            scheme: spec.integration.scheme,
             contact: spec.forces.contact.is_some(),
             drag_viscosity: spec.forces.drag.as_ref().and(spec.fluid.as_ref()).map(|f| f.viscosity),
             moments,
@@ -117,7 +117,7 @@ impl Scene {
         });
         let dt = spec.integration.dt;
         // The adaptive integrator's dt is only its largest step.
-        if dt > estimate.stable_dt && spec.integration.scheme != "adaptive-verlet" {
+        if dt > estimate.stable_dt && !spec.integration.scheme.dt_is_a_cap() {
             let why = format!("exceeds the estimated stable step: {}", estimate.summary(dt));
             match spec.stability.on_unstable_dt {
                 OnUnstable::Refuse => {
@@ -196,8 +196,8 @@ impl Scene {
     /// The scene's integrator; the exponential one gets each particle's Stokes coefficients.
     fn integrator(&self) -> Box<dyn integrators::Integrator> {
         let i = &self.spec.integration;
-        if i.scheme != "exponential-verlet" {
-            return integrators::by_name(&i.scheme, i.slow_every, i.tolerance).expect("scheme checked at load");
+        if let Some(integrator) = i.scheme.integrator(i.slow_every, i.tolerance) {
+            return integrator;
         }
         let drag = self.spec.forces.drag.as_ref();
         let fluid = self.spec.fluid.as_ref();
@@ -236,7 +236,7 @@ impl Scene {
                 ShieldingSpec::Paper => Shielding::Paper,
             };
             let mut drag = Drag::new(law, shielding, d.rotational, fluid.density, fluid.viscosity, Vec3::from(fluid.velocity), d.touch_tolerance);
-            drag.exclude_linear = spec.integration.scheme == "exponential-verlet";
+            drag.exclude_linear = spec.integration.scheme.integrates_linear_drag();
             terms.push(Box::new(drag));
         }
         if let Some(g) = &f.gravity {
@@ -411,18 +411,15 @@ fn check_forces(spec: &SceneSpec, domain: &Domain, species: &[Species], warnings
 
 fn check_integration(spec: &SceneSpec) -> Result<(), SceneError> {
     let i = &spec.integration;
-    if !integrators::NAMES.contains(&i.scheme.as_str()) {
-        return Err(invalid("integration.scheme", &i.scheme, format!("unknown scheme; one of {}", integrators::NAMES.join(", "))));
-    }
-    if i.slow_every == 0 || (i.slow_every > 1 && !matches!(i.scheme.as_str(), "respa" | "subcycled-euler")) {
+    if i.slow_every == 0 || (i.slow_every > 1 && !i.scheme.multiple_time_stepping()) {
         return Err(invalid("integration.slow_every", i.slow_every, "must be 1, or larger with scheme = \"respa\" or \"subcycled-euler\""));
     }
     positive("integration.dt", i.dt)?;
     positive("integration.end_time", i.end_time)?;
-    if i.scheme == "adaptive-verlet" && spec.forces.dipole.as_ref().is_some_and(|d| matches!(d.induction, InductionSpec::Paper)) {
+    if i.scheme == integrators::Scheme::AdaptiveVerlet && spec.forces.dipole.as_ref().is_some_and(|d| matches!(d.induction, InductionSpec::Paper)) {
         return Err(invalid(
             "integration.scheme",
-            &i.scheme,
+            i.scheme,
             "needs forces that depend on the state alone, and the paper's induction advances its moments by one sweep per \
              force evaluation (step doubling would compare one sweep with two); use forces.dipole.induction = \"exact\" or \"none\"",
         ));

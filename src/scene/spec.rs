@@ -1,6 +1,7 @@
 //! The scene file format (TOML, SI units throughout). Every table denies unknown keys, so a
 //! misspelt key or an unknown force term is an error, never silently ignored.
 
+use crate::core::integrators::Scheme;
 use serde::Deserialize;
 
 fn default_true() -> bool {
@@ -304,8 +305,8 @@ pub struct IntegrationSpec {
     /// (linear drag integrated exactly) | `adaptive-verlet` (substeps under error control; dt is
     /// the largest step) | `subcycled-euler` (the paper's pipeline: magnetic forces held over an
     /// outer explicit-Euler step of `slow_every`·dt, contact, drag and gravity sub-stepped by Verlet).
-    #[serde(default = "default_scheme")]
-    pub scheme: String,
+    #[serde(default = "default_scheme", deserialize_with = "scheme")]
+    pub scheme: Scheme,
     /// `respa`, `subcycled-euler`: fast steps per evaluation of the moments and magnetic forces
     /// (default 1). Must divide the steps per output frame and the run.
     #[serde(default = "default_slow_every")]
@@ -328,8 +329,17 @@ fn default_substep_tolerance() -> f64 {
     1e-6
 }
 
-fn default_scheme() -> String {
-    "velocity-verlet".into()
+fn default_scheme() -> Scheme {
+    Scheme::VelocityVerlet
+}
+
+/// `integration.scheme` by name.
+fn scheme<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Scheme, D::Error> {
+    let name = String::deserialize(d)?;
+    Scheme::from_name(&name).ok_or_else(|| {
+        let names: Vec<&str> = Scheme::ALL.iter().map(|s| s.name()).collect();
+        serde::de::Error::custom(format!("unknown scheme `{name}`, expected one of {}", names.join(", ")))
+    })
 }
 
 /// `[output]`

@@ -42,23 +42,88 @@ pub trait Integrator: Send {
     fn step(&mut self, state: &mut State, dt: f64, evaluate: &mut Evaluate);
 }
 
-/// Scheme names a scene may give (`exponential-verlet` is built by the scene layer, which knows
-/// the drag coefficients).
-pub const NAMES: [&str; 7] =
-    ["explicit-euler", "semi-implicit-euler", "velocity-verlet", "respa", "exponential-verlet", "adaptive-verlet", "subcycled-euler"];
+/// The time-integration schemes, parsed once from the scene; what depends on the scheme is a
+/// method here, not a comparison of names.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scheme {
+    ExplicitEuler,
+    SemiImplicitEuler,
+    VelocityVerlet,
+    Respa,
+    ExponentialVerlet,
+    AdaptiveVerlet,
+    SubcycledEuler,
+}
 
-/// The integrator `name`; `slow_every` is the multiple-time-stepping ratio (RESPA and
-/// sub-cycled Euler),
-/// `tolerance` the adaptive integrator's local error per substep (fraction of a radius).
-pub fn by_name(name: &str, slow_every: u64, tolerance: f64) -> Option<Box<dyn Integrator>> {
-    match name {
-        "adaptive-verlet" => Some(Box::new(AdaptiveVerlet::new(tolerance))),
-        "explicit-euler" => Some(Box::new(ExplicitEuler)),
-        "semi-implicit-euler" => Some(Box::new(SemiImplicitEuler)),
-        "velocity-verlet" => Some(Box::new(VelocityVerlet)),
-        "respa" => Some(Box::new(Respa { slow_every })),
-        "subcycled-euler" => Some(Box::new(SubcycledEuler { slow_every })),
-        _ => None,
+impl Scheme {
+    pub const ALL: [Scheme; 7] = [
+        Scheme::ExplicitEuler,
+        Scheme::SemiImplicitEuler,
+        Scheme::VelocityVerlet,
+        Scheme::Respa,
+        Scheme::ExponentialVerlet,
+        Scheme::AdaptiveVerlet,
+        Scheme::SubcycledEuler,
+    ];
+
+    /// The name a scene gives (`integration.scheme`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Scheme::ExplicitEuler => "explicit-euler",
+            Scheme::SemiImplicitEuler => "semi-implicit-euler",
+            Scheme::VelocityVerlet => "velocity-verlet",
+            Scheme::Respa => "respa",
+            Scheme::ExponentialVerlet => "exponential-verlet",
+            Scheme::AdaptiveVerlet => "adaptive-verlet",
+            Scheme::SubcycledEuler => "subcycled-euler",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|s| s.name() == name)
+    }
+
+    /// Holds the slow (magnetic) forces over `slow_every` steps.
+    pub fn multiple_time_stepping(self) -> bool {
+        matches!(self, Scheme::Respa | Scheme::SubcycledEuler)
+    }
+
+    /// dt is only the largest step (error control splits it).
+    pub fn dt_is_a_cap(self) -> bool {
+        self == Scheme::AdaptiveVerlet
+    }
+
+    /// Integrates the linear (Stokes) drag itself, so the drag term leaves it out and the drag
+    /// relaxation time does not bound dt.
+    pub fn integrates_linear_drag(self) -> bool {
+        self == Scheme::ExponentialVerlet
+    }
+
+    /// Forward Euler in the contact force: stable only for dt < 2ζ/ω (central-difference
+    /// schemes for dt < (2/ω)(√(1+ζ²) − ζ)).
+    pub fn forward_euler_in_contact(self) -> bool {
+        self == Scheme::ExplicitEuler
+    }
+
+    /// The integrator, for all but exponential Verlet (which needs each particle's drag
+    /// coefficients: the scene layer builds it); `slow_every` is K of the multiple-time-stepping
+    /// schemes, `tolerance` the adaptive integrator's local error per substep.
+    pub fn integrator(self, slow_every: u64, tolerance: f64) -> Option<Box<dyn Integrator>> {
+        match self {
+            Scheme::AdaptiveVerlet => Some(Box::new(AdaptiveVerlet::new(tolerance))),
+            Scheme::ExplicitEuler => Some(Box::new(ExplicitEuler)),
+            Scheme::SemiImplicitEuler => Some(Box::new(SemiImplicitEuler)),
+            Scheme::VelocityVerlet => Some(Box::new(VelocityVerlet)),
+            Scheme::Respa => Some(Box::new(Respa { slow_every })),
+            Scheme::SubcycledEuler => Some(Box::new(SubcycledEuler { slow_every })),
+            Scheme::ExponentialVerlet => None,
+        }
+    }
+}
+
+impl std::fmt::Display for Scheme {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
     }
 }
 
