@@ -177,6 +177,11 @@ impl Scale {
                         }
                     }
                 }
+                // A range within one decade gets every integer multiple labelled.
+                if bold.len() < 3 {
+                    bold.append(&mut light);
+                    bold.sort_by(f64::total_cmp);
+                }
                 (bold, light)
             }
         }
@@ -186,7 +191,7 @@ impl Scale {
         match self {
             Scale::Linear => tick(v),
             Scale::Log => {
-                // Ticks sit at 1, 2, 5 × 10^k: one significant digit names them.
+                // Ticks sit at integer multiples of 10^k: one significant digit names them.
                 let x = 10f64.powf(*v);
                 let digits = (-x.log10().floor()).max(0.0) as usize;
                 if x >= 1e5 || x < 1e-3 { format!("{x:.0e}") } else { format!("{x:.digits$}") }

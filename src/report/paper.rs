@@ -690,7 +690,7 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
     write(&mut df, tables, "sensitivity")?;
     md += &format!(
         "`experiments/paper/opt-in/sensitivity.toml`: scene `{}`, seeds {}; one change at a time against the reference variant \
-         `respa` ({}: mean length {}) µm. Each change is paired seed by seed: each seed's difference over the \
+         `respa` ({}: mean length {} µm). Each change is paired seed by seed: each seed's difference over the \
          reference mean, mean ± CI95 over the seeds. A change matters when its CI95 excludes zero.\n\n",
         first.scene,
         seed_list(&reference.iter().map(|r| r.seed).collect::<Vec<_>>()),
@@ -710,7 +710,7 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
         "variant (see legend)",
         "change against r-RESPA (%)",
         &series.into_iter().chain([zero]).collect::<Vec<_>>(),
-        SeriesLabelPosition::UpperRight,
+        crate::plot::Legend { position: SeriesLabelPosition::UpperRight, headroom: 0.7 },
     )?;
     md += "\n![Sensitivity](sensitivity.png)\n\n";
     Ok(md)
