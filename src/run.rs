@@ -78,8 +78,9 @@ fn check_space(scene: &Scene, output: &Path, frame: usize, contacts: usize) -> R
 /// An exclusive lock on `<output>.lock` for the life of a run: a second process writing the
 /// same file is refused at start. The operating system releases the lock when the process ends,
 /// however it ends (a `kill -9` leaves the lock file but not the lock).
+/// The lock file is left in place: removing it while locked would let a process that opened it
+/// just before and one that creates it anew both hold "the" lock.
 struct OutputLock {
-    path: std::path::PathBuf,
     _file: std::fs::File,
 }
 
@@ -90,18 +91,13 @@ impl OutputLock {
         let path = std::path::PathBuf::from(name);
         let file = std::fs::OpenOptions::new().create(true).truncate(false).write(true).open(&path).map_err(|e| RunFailure::Refused(format!("cannot create the lock {}: {e}", path.display())))?;
         match file.try_lock() {
-            Ok(()) => Ok(Self { path, _file: file }),
+            Ok(()) => Ok(Self { _file: file }),
             Err(std::fs::TryLockError::WouldBlock) => Err(RunFailure::Refused(format!("{} is being written by another magdem process (it holds {})", output.display(), path.display()))),
             Err(std::fs::TryLockError::Error(e)) => Err(RunFailure::Refused(format!("cannot lock {}: {e}", path.display()))),
         }
     }
 }
 
-impl Drop for OutputLock {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.path);
-    }
-}
 
 /// Refuses an existing output that `options` do not allow to touch: without `--resume` or
 /// `--overwrite` any existing file; with `--resume` a completed file of another scene.

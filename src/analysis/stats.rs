@@ -15,7 +15,8 @@ pub struct Summary {
 
 pub fn summary(values: &[f64]) -> Summary {
     let n = values.len();
-    let mean = values.iter().sum::<f64>() / n.max(1) as f64;
+    // No values, no mean (NaN, so that an empty set is never averaged in as zero).
+    let mean = if n > 0 { values.iter().sum::<f64>() / n as f64 } else { f64::NAN };
     let ss: f64 = values.iter().map(|v| (v - mean).powi(2)).sum();
     Summary {
         n,

@@ -10,7 +10,8 @@
 //! - Magnetic forces held over K steps (r-RESPA, sub-cycled Euler): the dipole attraction at
 //!   contact, F = 3μ0 m²/(2π d⁴), is a spring of stiffness |dF/dr| = 4F/d between touching
 //!   particles, integrated with the outer step K·dt: stable for K·dt < 2/ω_m, ω_m = √(k_m/m*)
-//!   (the Verlet bound on that spring; the stability map measures it).
+//!   (the Verlet bound on that spring, for r-RESPA; sub-cycled Euler holds the force as forward
+//!   Euler does and is bounded more tightly; the stability map measures r-RESPA).
 //!
 //! The largest expected overlap comes from the fastest expected impact: the relative speed at
 //! which two touching dipoles meet when all the magnetic energy μ0 m²/(2π d³) goes into motion,

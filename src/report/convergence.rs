@@ -201,8 +201,8 @@ pub fn seeds_section(runs: &[Run], t: &Targets, tables: &Path, effects: &mut Vec
         &["c (mg/ml)", "seeds", "mean length (µm)", "± CI95", "CI95 % (5 seeds)", "CI95 % (10)", "CI95 % (all)", "r-RESPA bias (%)", "± CI95", "paired seeds"],
         &[3, 0, 1, 1, 1, 1, 1, 1, 1, 0],
     )?;
-    md += "\nr-RESPA is used below only where its bias is small against the effect measured (magnetisation, box size, time), \
-           and the bias is carried into the ranking of explanations.\n\n";
+    md += "\nThe opt-in sweeps below (magnetisation, box size, time) use r-RESPA; its paired bias here is the *integration* row \
+           of the ranking of explanations, against which their effects can be read.\n\n";
     Ok(md)
 }
 
@@ -224,8 +224,8 @@ pub fn finite_size_section(runs: &[Run], t: &Targets, out: &Path, tables: &Path,
     let (mut c_col, mut f_col, mut p_col, mut n_col, mut m_col, mut ci_col, mut cap_col, mut perc_col, mut wall_col) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
     let mut series = vec![];
     let mut findings = vec![];
-    let (mut x_lo, mut x_hi) = (f64::INFINITY, 0.0_f64);
     for (k, (&c, &exp)) in t.concentration.iter().zip(&t.experiment).enumerate() {
+        let (mut x_lo, mut x_hi) = (f64::INFINITY, 0.0_f64);
         let mut by_factor: BTreeMap<u64, Vec<&Run>> = BTreeMap::new();
         for r in sized.iter().filter(|r| same(r.concentration, c)) {
             by_factor.entry(box_factor(&r.variant).unwrap_or(0.0) as u64).or_default().push(r);
@@ -429,26 +429,35 @@ fn crossing(curve: &[(f64, f64)], target: f64) -> Option<f64> {
 }
 
 /// The magnetisation at which the mean length meets `target`, and its bootstrap 95 % interval
-/// (seeds resampled with replacement at every M; 2 000 resamples).
+/// (seeds resampled with replacement at every M; 2 000 resamples). A resample whose curve never
+/// meets the target counts at the end of the range it falls off: 0 below the smallest M (the
+/// target is shorter than every length), infinity above the largest; an interval bound there is
+/// open-ended.
 fn infer_m(points: &[(f64, Vec<f64>)], target: f64) -> (Option<f64>, f64, f64) {
     let curve: Vec<(f64, f64)> = points.iter().map(|(m, l)| (*m, summary(l).mean)).collect();
     let best = crossing(&curve, target);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(20);
-    let mut found = vec![];
     let resamples = 2000;
-    for _ in 0..resamples {
-        let curve: Vec<(f64, f64)> = points.iter().map(|(m, l)| (*m, (0..l.len()).map(|_| l[rng.random_range(0..l.len())]).sum::<f64>() / l.len() as f64)).collect();
-        if let Some(m) = crossing(&curve, target) {
-            found.push(m);
-        }
-    }
+    let mut found: Vec<f64> = (0..resamples)
+        .map(|_| {
+            let curve: Vec<(f64, f64)> = points.iter().map(|(m, l)| (*m, (0..l.len()).map(|_| l[rng.random_range(0..l.len())]).sum::<f64>() / l.len() as f64)).collect();
+            crossing(&curve, target).unwrap_or_else(|| if curve.iter().all(|p| p.1 > target) { 0.0 } else { f64::INFINITY })
+        })
+        .collect();
     found.sort_by(f64::total_cmp);
-    // Resamples that never meet the target count at the edge they fall off (outside the range).
-    if found.len() < resamples / 2 {
-        return (best, f64::NAN, f64::NAN);
-    }
     let q = |p: f64| found[((p * found.len() as f64) as usize).min(found.len() - 1)];
     (best, q(0.025), q(0.975))
+}
+
+/// An interval bound of [`infer_m`] as text (`< M₀` or `> M₁` where it falls off the range).
+fn bound(m: f64, (m0, m1): (f64, f64)) -> String {
+    if m == 0.0 {
+        format!("< {m0:.1e}")
+    } else if m.is_infinite() {
+        format!("> {m1:.1e}")
+    } else {
+        format!("{m:.2e}")
+    }
 }
 
 /// Magnetisation: the mean length against M at every concentration, the M that meets each
@@ -485,25 +494,26 @@ pub fn magnetisation_section(runs: &[Run], t: &Targets, out: &Path, tables: &Pat
             l_col.push(e.mean);
             ci_col.push(e.ci95);
             cap_col.push(box_limited(&here));
-            // The Fröhlich–Kennelly point shares the curve: M is what sets the force.
-            points.push((*m, lengths(&here)));
+            points.push((*m, lengths(&here), name.clone()));
             pts.push((*m, e.mean));
             errs.push(e.ci95);
         }
         if points.is_empty() {
             continue;
         }
+        // The saturation-cap curve: the Fröhlich–Kennelly point is another law, shown but not
+        // interpolated through.
         let by_m: Vec<(f64, Vec<f64>)> = {
-            let mut p = points.clone();
+            let mut p: Vec<(f64, Vec<f64>)> = points.iter().filter(|(_, _, name)| !name.starts_with("fk-")).map(|(m, l, _)| (*m, l.clone())).collect();
             p.sort_by(|a, b| a.0.total_cmp(&b.0));
             p
         };
         for (label, target) in [("paper simulation", paper), ("experiment", exp)] {
             let (best, lo, hi) = infer_m(&by_m, target);
-            let (m0, m1) = (by_m[0].0, by_m[by_m.len() - 1].0);
-            let cell = best.map_or(format!("outside {m0:.1e}–{m1:.1e}"), |m| format!("{m:.2e}"));
-            let interval = if lo.is_finite() { format!("{lo:.2e}–{hi:.2e}") } else { "–".into() };
-            let _ = writeln!(inferred, "| {c} | {label} | {target:.0} | {cell} | {interval} |");
+            let range = (by_m[0].0, by_m[by_m.len() - 1].0);
+            let below = by_m.iter().all(|p| summary(&p.1).mean > target);
+            let cell = best.map_or_else(|| if below { format!("below {:.1e}", range.0) } else { format!("above {:.1e}", range.1) }, |m| format!("{m:.2e}"));
+            let _ = writeln!(inferred, "| {c} | {label} | {target:.0} | {cell} | {} to {} |", bound(lo, range), bound(hi, range));
         }
         if let (Some(bulk), Some(linear)) = (variants.iter().find(|v| v.0 == "ms-4.8e5"), variants.iter().find(|v| v.0 == "linear")) {
             let a = select(runs, &["paper-magnetisation"], &linear.0, c);
@@ -528,7 +538,8 @@ pub fn magnetisation_section(runs: &[Run], t: &Targets, out: &Path, tables: &Pat
            unsaturated linear law (7.5e5 A/m); r-RESPA, t = 5 ms, the paper's walled box. M is an isolated bead's \
            magnetisation in the applied 0.4 T (mutual induction adds to it near neighbours, up to Ms).\n\n";
     md += &markdown(&df, &["variant", "M (A/m)", "c (mg/ml)", "seeds", "mean length (µm)", "± CI95", "box-limited"], &[0, 0, 3, 0, 1, 1, 3])?;
-    md += "\nThe M at which the mean length at 5 ms meets each target, interpolated log-linearly between the swept values:\n\n";
+    md += "\nThe M at which the mean length at 5 ms meets each target, interpolated log-linearly between the swept saturation \
+           values (the Fröhlich–Kennelly point is another law and is left out of the curve):\n\n";
     md += &inferred;
     chart(
         &out.join("magnetisation.png"),
@@ -556,6 +567,9 @@ fn collapse(runs: &[Run], variants: &[(String, f64)], out: &Path) -> Result<Stri
         let Some(first) = here.first() else { continue };
         let tau = first.viscosity / (MU0 * m * m);
         let pts: Vec<(f64, f64)> = mean_series(&here).into_iter().filter(|p| p.0 > 0.0).map(|(t, l)| (t / tau, l)).collect();
+        if pts.len() < 2 {
+            continue;
+        }
         series.push(Series::line(format!("{name}: M = {m:.2e} A/m"), pts.clone(), palette(k)));
         curves.push((*m, pts));
     }
@@ -618,7 +632,7 @@ pub fn measurement_section(runs: &[Run], t: &Targets, tables: &Path, effects: &m
         table.push((0..6).map(column).collect());
         done.push((c, exp, here.len()));
         let change = Estimate::of(&per_run.iter().map(|m| 100.0 * (m[2] / m[0] - 1.0)).collect::<Vec<_>>());
-        effects.push(Effect { concentration: c, explanation: "measurement", what: "each aggregate's projected MajorAxisLength against its 3-D length, paired".into(), change });
+        effects.push(Effect { concentration: c, explanation: "measurement", what: "each run's mean projected MajorAxisLength against its mean 3-D length, mean over runs".into(), change });
     }
     if done.is_empty() {
         return Ok(md + "No Table 3 runs.\n\n");
@@ -683,8 +697,8 @@ pub fn ranking_section(effects: &[Effect], t: &Targets, runs: &[Run], tables: &P
     md += "Each explanation's effect on the mean aggregate length at 5 ms, as a change of magdem's answer (%, mean ± CI95), \
            ranked by its size at each concentration. The effects come from the sections above and from the sensitivity \
            study, and each row names what it compares. For *seeds* the number is the CI95 of the Table 3 mean, the \
-           statistical uncertainty the other effects must clear. Against these, magdem's Table 3 mean (velocity Verlet) \
-           exceeds the experiment's and the paper's by the amounts in the first line of each block.\n\n";
+           statistical uncertainty the other effects must clear. The first line of each block gives how far magdem's Table 3 \
+           mean (velocity Verlet) lies from the experiment's and the paper's.\n\n";
     let (mut c_col, mut e_col, mut w_col, mut m_col, mut ci_col, mut n_col) = (vec![], vec![], vec![], vec![], vec![], vec![]);
     for (&c, (&exp, &paper)) in t.concentration.iter().zip(t.experiment.iter().zip(&t.paper)) {
         let mut here: Vec<&Effect> = effects.iter().filter(|e| same(e.concentration, c) && e.change.mean.is_finite()).collect();
@@ -765,9 +779,8 @@ fn closest_combination(runs: &[Run], t: &Targets, effects: &[Effect]) -> String 
          bulk magnetite's saturation (4.8e5 A/m; composite beads of 1087 kg/m³ hold less), at the paper's box and 5 ms, \
          measured in 3-D or as projected MajorAxisLength. Over the swept values, the choice that minimises the RMS \
          log-ratio to the experiment is {name}, {} ({}). The RMS log-ratio is {score:.2}, a factor {:.2} typical. \
-         Larger boxes and later times both lengthen the chains, so they move away from the experiment rather than \
-         towards it. The experiment's time and depth of field are unknown, and the ranking above says how much each \
-         would move the answer.\n\n",
+         The box and the stopping time are left out of the combination: the experiment held about 10⁶ particles, and its \
+         observation time is not stated. Their effects, ranked above, say how much each would move the answer.\n\n",
         if imaged { "projected" } else { "3-D" },
         rows.join("; "),
         score.exp()

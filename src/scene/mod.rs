@@ -658,7 +658,7 @@ fn check_shapes(value: &toml::Value, key: &str, name: &str) -> Result<(), SceneE
 }
 
 /// The dotted key (`species[0].permanent_moment[1]`) and value of the first NaN or infinite
-/// float in `value`, in document order.
+/// float in `value` (keys of a table in alphabetical order).
 fn first_non_finite(value: &toml::Value, key: String) -> Option<(String, f64)> {
     match value {
         toml::Value::Float(f) if !f.is_finite() => Some((key, *f)),
