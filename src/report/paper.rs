@@ -643,7 +643,7 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
     let base = convergence::Estimate::of(&reference.iter().map(|r| r.mean_length_um()).collect::<Vec<_>>());
     let shared: Vec<String> = reference.first().map(|r| r.variant_overrides.clone()).unwrap_or_default();
     let (mut names, mut changes, mut done_runs, mut means, mut deltas, mut delta_cis, mut outcome, mut cost) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
-    let mut capped = vec![];
+    let (mut capped, mut fastest) = (vec![], vec![]);
     let mut bars = vec![];
     for (name, group) in groups.iter().filter(|(name, _)| name.as_str() != "respa") {
         let ok: Vec<&Run> = group.iter().copied().filter(|r| r.completed()).collect();
@@ -653,6 +653,8 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
         done_runs.push(ok.len() as u64);
         means.push(mean(&ok.iter().map(|r| r.mean_length_um()).collect::<Vec<_>>()));
         capped.push(mean(&ok.iter().map(|r| r.box_limited_fraction()).collect::<Vec<_>>()));
+        // A held force that pumps energy into contacts shows as aggregates still flying at the end.
+        fastest.push(ok.iter().flat_map(|r| r.last.iter().map(|a| a.com_velocity.norm())).fold(f64::NAN, f64::max));
         deltas.push(d.mean);
         delta_cis.push(d.ci95);
         let stopped: Vec<&&Run> = group.iter().filter(|r| r.status == "unstable").collect();
@@ -682,6 +684,7 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
         ucol("runs", done_runs),
         col("mean_length_um", means),
         col("box_limited_fraction", capped),
+        col("fastest_aggregate_at_end_m_per_s", fastest),
         col("paired_change_percent", deltas),
         col("paired_change_ci95_percent", delta_cis),
         col("wall_time_per_run_s", cost),
@@ -697,7 +700,15 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
         shared.join(", "),
         base.cell_text(1)
     );
-    md += &markdown(&df, &["variant", "change", "runs", "mean length (µm)", "box-limited", "paired change (%)", "± CI95", "wall time/run (s)", "outcome"], &[0, 0, 0, 1, 3, 1, 1, 0, 0])?;
+    md += &markdown(
+        &df,
+        &["variant", "change", "runs", "mean length (µm)", "box-limited", "fastest aggregate at 5 ms (m/s)", "paired change (%)", "± CI95", "wall time/run (s)", "outcome"],
+        &[0, 0, 0, 1, 3, 4, 1, 1, 0, 0],
+    )?;
+    md += "\nThe paper's pipeline holds the moments and dipole forces over each 1e-6 s outer step while contacts are resolved at \
+           1e-8 s. A contact closes and reopens within about 7e-8 s, so the held attraction keeps pulling on a pair that has already \
+           rebounded. The fastest-aggregate column (the largest centre-of-mass speed of any aggregate in the last frame, collisions \
+           under way included) shows whether that pumped energy into the particles; compare it across the variants.\n";
     let series: Vec<Series> = bars
         .iter()
         .enumerate()
