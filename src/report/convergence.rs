@@ -4,12 +4,12 @@
 //! differ. Every number comes from the runs; a section whose runs do not exist says so.
 
 use super::runs::Run;
-use super::tables::{markdown, write};
+use super::tables::{col, markdown, same, scol, write};
 use crate::analysis::image::Imaging;
 use crate::analysis::stats::{ci95_half_width, summary};
 use crate::core::magnetisation::MU0;
 use crate::plot::{chart, palette, Legend, RGBColor, Scale, Series, SeriesLabelPosition};
-use polars::prelude::{Column, DataFrame};
+use polars::prelude::DataFrame;
 use rand::{RngExt, SeedableRng};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -43,11 +43,7 @@ impl Estimate {
     }
 
     /// "mean ± CI95" with `digits` decimals ("mean (n = …)" without a CI, "–" without a mean).
-    pub fn cell_text(&self, digits: usize) -> String {
-        self.cell(digits)
-    }
-
-    fn cell(&self, digits: usize) -> String {
+    pub fn cell(&self, digits: usize) -> String {
         match (self.mean.is_finite(), self.ci95.is_finite()) {
             (false, _) => "–".into(),
             (true, false) => format!("{:.digits$} (n = {})", self.mean, self.n),
@@ -62,18 +58,6 @@ pub struct Effect {
     pub explanation: &'static str,
     pub what: String,
     pub change: Estimate,
-}
-
-fn same(a: f64, b: f64) -> bool {
-    (a - b).abs() <= 1e-9 * b.abs()
-}
-
-fn col(name: &str, values: Vec<f64>) -> Column {
-    Column::new(name.into(), values)
-}
-
-fn scol(name: &str, values: Vec<String>) -> Column {
-    Column::new(name.into(), values)
 }
 
 /// Completed runs of `experiments` with `variant` at concentration `c`, by seed (one per seed).

@@ -5,7 +5,7 @@
 use super::convergence::{self, Effect, Targets};
 use super::figures;
 use super::runs::{experiment_files, load_runs, Run};
-use super::tables::{markdown, write};
+use super::tables::{col, markdown, same, scol, ucol, write};
 use crate::analysis::stats::{ci95_half_width, summary};
 use crate::plot::{bar_panels, box_panels, engine_colour, line_chart_with_legend, palette, BarGroup, BarPanel, BoxPanel, BoxStats, RGBColor, Series, SeriesLabelPosition};
 use crate::scene::Scene;
@@ -49,23 +49,6 @@ fn strings(df: &DataFrame, name: &str) -> PolarsResult<Vec<String>> {
 
 fn frame(columns: Vec<Column>) -> PolarsResult<DataFrame> {
     DataFrame::new(columns)
-}
-
-fn col(name: &str, values: Vec<f64>) -> Column {
-    Column::new(name.into(), values)
-}
-
-fn scol(name: &str, values: Vec<String>) -> Column {
-    Column::new(name.into(), values)
-}
-
-fn ucol(name: &str, values: Vec<u64>) -> Column {
-    Column::new(name.into(), values)
-}
-
-/// Same concentration (the scenes store 0.563 … 4.5 exactly as the paper prints them).
-fn same(a: f64, b: f64) -> bool {
-    (a - b).abs() <= 1e-9 * b.abs()
 }
 
 /// Mean, NaN for no values.
@@ -698,7 +681,7 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
         first.scene,
         seed_list(&reference.iter().map(|r| r.seed).collect::<Vec<_>>()),
         shared.join(", "),
-        base.cell_text(1)
+        base.cell(1)
     );
     md += &markdown(
         &df,

@@ -4,6 +4,26 @@
 use polars::prelude::*;
 use std::path::Path;
 
+/// A float column.
+pub fn col(name: &str, values: Vec<f64>) -> Column {
+    Column::new(name.into(), values)
+}
+
+/// A string column.
+pub fn scol(name: &str, values: Vec<String>) -> Column {
+    Column::new(name.into(), values)
+}
+
+/// An unsigned integer column.
+pub fn ucol(name: &str, values: Vec<u64>) -> Column {
+    Column::new(name.into(), values)
+}
+
+/// Same concentration (the scenes store 0.563 … 4.5 exactly as the paper prints them).
+pub fn same(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-9 * b.abs()
+}
+
 /// Writes `df` as `<dir>/<stem>.csv` and `<dir>/<stem>.parquet`.
 pub fn write(df: &mut DataFrame, dir: &Path, stem: &str) -> PolarsResult<()> {
     std::fs::create_dir_all(dir)?;
