@@ -2,9 +2,10 @@
 
 use magdem::core::forces::drag::{Drag, DragLaw, Shielding};
 use magdem::core::forces::shielding::lens_area;
-use magdem::core::forces::{ForceContext, ForceTerm};
+use magdem::core::forces::ForceTerm;
 use magdem::core::magnetisation::{Induction, Magnetisation, MU0};
-use magdem::core::neighbours::CellList;
+use magdem::core::neighbours::{PairRange, Skins};
+use magdem::core::simulation::ForceField;
 use magdem::core::state::{Particles, Species, State, Vec3};
 use magdem::scene::Scene;
 use std::f64::consts::PI;
@@ -297,7 +298,7 @@ fn direct_chain_moments(p: &Particles, chi_v: f64, h0: Vec3) -> Vec<Vec3> {
 
 #[test]
 fn five_sphere_chain_moments_match_a_direct_solve() {
-    let (mut p, sp) = chain(5, 12.3);
+    let (p, sp) = chain(5, 12.3);
     let domain = magdem::core::domain::Domain { lo: Vec3::repeat(-1e-3), hi: Vec3::repeat(1e-3), periodic: [false; 3] };
     let b0 = Vec3::new(0.4, 0.0, 0.0);
     let h0 = b0 / MU0;
@@ -308,12 +309,16 @@ fn five_sphere_chain_moments_match_a_direct_solve() {
         ("dense", Induction::Exact { tolerance: 1e-12, max_iterations: 500, dense_max: 150 }),
         ("iterative", Induction::Exact { tolerance: 1e-12, max_iterations: 500, dense_max: 0 }),
     ] {
-        let mut mag = Magnetisation::new(induction, b0, nalgebra::Matrix3::zeros(), std::slice::from_ref(&sp));
-        mag.update(&mut p, &domain).unwrap();
-        let ratios: Vec<f64> = p.moment.iter().map(|m| m.x / isolated).collect();
-        println!("{label}: moments / isolated = {ratios:.4?} ({} sweeps)", mag.last_iterations);
+        let mag = Magnetisation::new(induction, b0, nalgebra::Matrix3::zeros(), std::slice::from_ref(&sp), Skins::default());
+        let mut field = ForceField::new(domain.clone(), vec![Box::new(mag) as Box<dyn ForceTerm>]);
+        let mut state = State::new(p.clone());
+        field.evaluate(&mut state, 1e-8);
+        assert!(field.take_induction_error().is_none(), "{label}: the induction converged");
+        let moment = &state.fields.moment;
+        let ratios: Vec<f64> = moment.iter().map(|m| m.x / isolated).collect();
+        println!("{label}: moments / isolated = {ratios:.4?}");
         for i in 0..5 {
-            assert!((p.moment[i] - direct[i]).norm() <= 1e-9 * direct[i].norm(), "{label} particle {i}");
+            assert!((moment[i] - direct[i]).norm() <= 1e-9 * direct[i].norm(), "{label} particle {i}");
             assert!((ratios[i] - expected[i]).abs() < 0.005, "{label} particle {i}: {} vs {}", ratios[i], expected[i]);
         }
     }
@@ -346,17 +351,14 @@ fn chain_moving_along_its_axis_has_drag_only_on_its_leading_sphere() {
     let (mut p, _) = chain(3, 12.3);
     let u = Vec3::new(1e-4, 0.0, 0.0);
     p.velocity.iter_mut().for_each(|v| *v = u);
-    let mut state = State { particles: p, ..State::default() };
     let domain = magdem::core::domain::Domain { lo: Vec3::repeat(-1e-3), hi: Vec3::repeat(1e-3), periodic: [false; 3] };
-    let mut pairs = vec![];
-    CellList::default().pairs_within(&state.particles.position, &domain, Some(11.0e-6 * 1.001), &mut pairs);
-    let ctx = ForceContext { domain: &domain, near_pairs: &pairs, near_rebuilt: None, dt: 1e-8, magnetic_pairs: None };
+    let near = PairRange::Within { range: 11.0e-6 * 1.001, skin: 0.0 };
     for (shielding, expect_shielded) in [(Shielding::Paper, true), (Shielding::None, false)] {
-        state.particles.force.iter_mut().for_each(|f| *f = Vec3::zeros());
-        let mut drag = Drag::new(DragLaw::Stokes, shielding, false, 1000.0, 1.0e-3, Vec3::zeros(), 1e-3);
-        drag.apply(&ctx, &mut state);
+        let mut state = State::new(p.clone());
+        let drag = Drag::new(DragLaw::Stokes, shielding, false, 1000.0, 1.0e-3, Vec3::zeros(), 1e-3, near);
+        ForceField::new(domain.clone(), vec![Box::new(drag)]).evaluate(&mut state, 1e-8);
         let stokes = -6.0 * PI * 1.0e-3 * 5.5e-6 * u.x;
-        let f: Vec<f64> = state.particles.force.iter().map(|f| f.x).collect();
+        let f: Vec<f64> = state.fields.force.iter().map(|f| f.x).collect();
         println!("{shielding:?}: drag {f:?} N (Stokes {stokes:.4e} N)");
         // The leading sphere is the one furthest along +x (index 2).
         assert!((f[2] / stokes - 1.0).abs() < 1e-12);

@@ -262,7 +262,7 @@ pub fn time_lammps_dipoles(scene: &Scene, dir: &Path) -> Result<f64, Error> {
     let mut state = scene.initial_state();
     field.evaluate(&mut state, scene.dt());
     let rc = dipole_check::lammps_cutoff(scene, cutoff)?;
-    dipole_check::write_deck(&state.particles, &scene.domain, rc, dir, &scene.hash, Some((scene.total_steps(), scene.dt())))?;
+    dipole_check::write_deck(&state, &scene.domain, rc, dir, &scene.hash, Some((scene.total_steps(), scene.dt())))?;
     time_engine(Engine::Lammps, dir, "in.dipole", 1)
 }
 

@@ -4,7 +4,9 @@
 //!   m_i = m_perm,i + sat(χ_eff V_i H_loc,i),  H_loc,i = H_ext(x_i) + Σ_j H_dip,j(x_i)
 //!   H_ext(x) = (B0 + G x) / μ0,  H_dip(r) = [3 (m·r̂) r̂ − m] / (4π r³)
 //!
-//! sat() saturates |M| at the species' Ms (a cap, or the Fröhlich–Kennelly law). Levels (DESIGN.md §2):
+//! sat() saturates |M| at the species' Ms (a cap, or the Fröhlich–Kennelly law). The moments are
+//! a force term of their own ("moments", slow): it adds no force, it writes the moments that the
+//! dipole and gradient terms after it read. Levels (docs/model.md):
 //! - `None`: H_loc = H_ext.
 //! - `Paper`: the paper's neighbourhood scheme as magdem reads it: dipoles within 15 diameters
 //!   contribute, using the moments stored at the previous step (one sweep per step; the
@@ -13,10 +15,10 @@
 //!   (I − D T) m = m_perm + D H_ext for N ≤ `dense_max` without saturation, otherwise fixed-point
 //!   sweeps warm-started from the previous moments until max|Δm| ≤ tolerance · max|m|.
 
-use super::domain::Domain;
-use super::neighbours::{CellList, Pair, VerletList};
+use super::forces::{Context, ForceTerm, Forces};
+use super::neighbours::{Pair, PairRange, Skins};
 use super::parallel;
-use super::state::{Particles, Saturation, Species, Vec3};
+use super::state::{Particles, Saturation, Species, State, Vec3};
 use nalgebra::Matrix3;
 use std::f64::consts::PI;
 
@@ -59,9 +61,8 @@ pub struct Magnetisation {
     /// χ_eff of each species.
     susceptibility: Vec<f64>,
     saturation: Vec<Option<Saturation>>,
-    cells: CellList,
-    verlet: VerletList,
-    pairs: Vec<Pair>,
+    /// The pairs the local fields sum over (`None` for induction `none`).
+    range: Option<PairRange>,
     field: Vec<Vec3>,
     pair_fields: Vec<(Vec3, Vec3)>,
     moments: Vec<Vec3>,
@@ -70,30 +71,23 @@ pub struct Magnetisation {
 }
 
 impl Magnetisation {
-    pub fn new(induction: Induction, b0: Vec3, gradient: Matrix3<f64>, species: &[Species]) -> Self {
+    pub fn new(induction: Induction, b0: Vec3, gradient: Matrix3<f64>, species: &[Species], skins: Skins) -> Self {
+        let range = match induction {
+            Induction::None => None,
+            Induction::Paper { radius } => Some(PairRange::Within { range: radius, skin: radius * skins.magnetic }),
+            Induction::Exact { .. } => Some(PairRange::All),
+        };
         Self {
             induction,
             b0,
             gradient,
             susceptibility: species.iter().map(|s| s.susceptibility).collect(),
             saturation: species.iter().map(|s| s.saturation).collect(),
-            cells: CellList::default(),
-            verlet: VerletList::default(),
-            pairs: vec![],
+            range,
             field: vec![],
             pair_fields: vec![],
             moments: vec![],
             last_iterations: 0,
-        }
-    }
-
-    /// The pairs the last update summed over and their range (`None` = all pairs); `None` for
-    /// induction `none`, which needs no pairs.
-    pub fn pairs(&self) -> Option<(Option<f64>, &[Pair])> {
-        match self.induction {
-            Induction::None => None,
-            Induction::Paper { radius } => Some((Some(radius), &self.pairs)),
-            Induction::Exact { .. } => Some((None, &self.pairs)),
         }
     }
 
@@ -118,20 +112,18 @@ impl Magnetisation {
     }
 
     /// Sets every moment from the local fields in `self.field` (in parallel for many particles).
-    fn set_moments(&mut self, p: &mut Particles) {
+    fn set_moments(&mut self, p: &Particles) {
         let mut moments = std::mem::take(&mut self.moments);
         parallel::map_ordered(p.len(), &mut moments, |i| self.moment_in(p, i, &self.field[i]));
-        p.moment.copy_from_slice(&moments);
         self.moments = moments;
     }
 
-    /// Local fields from the applied field and the current moments over `self.pairs`.
-    fn sweep_fields(&mut self, p: &Particles) {
+    /// Local fields from the applied field and the moments `moment` over `pairs`.
+    fn sweep_fields(&mut self, p: &Particles, moment: &[Vec3], pairs: &[Pair]) {
         let mut field = std::mem::take(&mut self.field);
         field.clear();
         field.extend(p.position.iter().map(|x| self.external_field(x)));
-        let pairs = &self.pairs;
-        let pair_fields = |pair: &Pair| pair_dipole_fields(&p.moment[pair.i as usize], &p.moment[pair.j as usize], pair);
+        let pair_fields = |pair: &Pair| pair_dipole_fields(&moment[pair.i as usize], &moment[pair.j as usize], pair);
         if parallel::worth_it(pairs.len()) {
             let mut buffer = std::mem::take(&mut self.pair_fields);
             parallel::map_ordered(pairs.len(), &mut buffer, |k| pair_fields(&pairs[k]));
@@ -150,8 +142,9 @@ impl Magnetisation {
         self.field = field;
     }
 
-    /// Updates `p.moment` for the current positions.
-    pub fn update(&mut self, p: &mut Particles, domain: &Domain) -> Result<(), InductionError> {
+    /// Computes the moments for the current positions into `self.moments`; `previous` are the
+    /// last evaluation's (the paper's lagged sweep reads them, the iteration starts from them).
+    fn update(&mut self, p: &Particles, previous: &[Vec3], pairs: &[Pair]) -> Result<(), InductionError> {
         match self.induction {
             Induction::None => {
                 let mut field = std::mem::take(&mut self.field);
@@ -160,47 +153,50 @@ impl Magnetisation {
                 self.field = field;
                 self.set_moments(p);
             }
-            Induction::Paper { radius } => {
-                // Skin radius/15: one diameter at the paper's 15-diameter neighbourhood.
-                self.verlet.pairs_within(&p.position, domain, radius, radius / 15.0, &mut self.pairs);
-                self.sweep_fields(p);
+            Induction::Paper { .. } => {
+                self.sweep_fields(p, previous, pairs);
                 self.set_moments(p);
             }
             Induction::Exact { tolerance, max_iterations, dense_max } => {
-                self.cells.pairs_within(&p.position, domain, None, &mut self.pairs);
                 if p.len() <= dense_max && self.saturation.iter().all(Option::is_none) {
-                    self.solve_dense(p);
+                    self.solve_dense(p, pairs);
                     self.last_iterations = 1;
                 } else {
-                    self.iterate(p, tolerance, max_iterations)?;
+                    self.moments.clear();
+                    self.moments.extend_from_slice(previous);
+                    self.iterate(p, pairs, tolerance, max_iterations)?;
                 }
             }
         }
         Ok(())
     }
 
-    fn iterate(&mut self, p: &mut Particles, tolerance: f64, max_iterations: usize) -> Result<(), InductionError> {
+    /// Fixed-point sweeps on `self.moments` (the current iterate).
+    fn iterate(&mut self, p: &Particles, pairs: &[Pair], tolerance: f64, max_iterations: usize) -> Result<(), InductionError> {
         let mut residual = f64::INFINITY;
+        let mut moments = std::mem::take(&mut self.moments);
         for iteration in 1..=max_iterations {
-            self.sweep_fields(p);
+            self.sweep_fields(p, &moments, pairs);
             let (mut change, mut largest) = (0.0_f64, 0.0_f64);
-            for i in 0..p.len() {
+            for (i, moment) in moments.iter_mut().enumerate() {
                 let m = self.moment_in(p, i, &self.field[i]);
-                change = change.max((m - p.moment[i]).norm());
+                change = change.max((m - *moment).norm());
                 largest = largest.max(m.norm());
-                p.moment[i] = m;
+                *moment = m;
             }
             residual = if largest > 0.0 { change / largest } else { 0.0 };
             if residual <= tolerance {
                 self.last_iterations = iteration;
+                self.moments = moments;
                 return Ok(());
             }
         }
+        self.moments = moments;
         Err(InductionError { residual, iterations: max_iterations, tolerance })
     }
 
     /// Dense solve of (I − D T) m = m_perm + D H_ext (no saturation).
-    fn solve_dense(&mut self, p: &mut Particles) {
+    fn solve_dense(&mut self, p: &Particles, pairs: &[Pair]) {
         let n = p.len();
         let chi_v = |i: usize| {
             self.susceptibility[p.species[i] as usize] * 4.0 / 3.0 * PI * p.radius[i].powi(3)
@@ -213,7 +209,7 @@ impl Magnetisation {
                 rhs[(3 * i + k, 0)] = chi_v(i) * h[k] + p.permanent_moment[i][k];
             }
         }
-        for pair in &self.pairs {
+        for pair in pairs {
             let (i, j) = (pair.i as usize, pair.j as usize);
             let rhat = pair.r / pair.dist;
             // T_ij = (3 r̂ r̂ᵀ − I) / (4π r³), symmetric and equal for (i, j) and (j, i).
@@ -227,8 +223,26 @@ impl Magnetisation {
         }
         use faer::linalg::solvers::Solve;
         let m = a.partial_piv_lu().solve(&rhs);
-        for i in 0..n {
-            p.moment[i] = Vec3::new(m[(3 * i, 0)], m[(3 * i + 1, 0)], m[(3 * i + 2, 0)]);
-        }
+        self.moments.clear();
+        self.moments.extend((0..n).map(|i| Vec3::new(m[(3 * i, 0)], m[(3 * i + 1, 0)], m[(3 * i + 2, 0)])));
+    }
+}
+
+impl ForceTerm for Magnetisation {
+    fn name(&self) -> &'static str {
+        "moments"
+    }
+    fn is_slow(&self) -> bool {
+        true
+    }
+    fn pairs(&self) -> Option<PairRange> {
+        self.range
+    }
+    fn prepare(&mut self, ctx: &Context, state: &State) -> Result<(), InductionError> {
+        let pairs = self.range.map_or(&[][..], |r| ctx.neighbours.pairs(r));
+        self.update(&state.particles, &state.fields.moment, pairs)
+    }
+    fn apply(&mut self, _ctx: &Context, _p: &Particles, out: &mut Forces) {
+        out.moment.copy_from_slice(&self.moments);
     }
 }

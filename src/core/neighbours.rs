@@ -221,6 +221,105 @@ fn filter(candidates: &[(u32, u32)], positions: &[Vec3], range: f64, out: &mut V
     });
 }
 
+/// The pairs a force term needs from the neighbour layer.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PairRange {
+    /// Pairs closer than `range`, through a Verlet list with candidates out to `range + skin`.
+    Within { range: f64, skin: f64 },
+    /// Every pair, rebuilt at each evaluation.
+    All,
+}
+
+/// Verlet skins, as fractions of the range they pad: the one numerical setting of the neighbour
+/// layer. A skin changes how often candidates are rebuilt, never which pairs a search returns.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Skins {
+    /// Contact and shielding lists (range about one diameter): 0.2, as in the reference decks.
+    pub near: f64,
+    /// Magnetic lists (dipole cut-off, the paper's 15-diameter neighbourhood): 1/15, one diameter
+    /// at 15 diameters.
+    pub magnetic: f64,
+}
+
+impl Default for Skins {
+    fn default() -> Self {
+        Skins { near: 0.2, magnetic: 1.0 / 15.0 }
+    }
+}
+
+/// One pair list of the neighbour layer.
+#[derive(Debug, Default, Clone)]
+struct Listed {
+    range: Option<PairRange>,
+    verlet: VerletList,
+    cells: CellList,
+    pairs: Vec<Pair>,
+    /// The skin, when the candidates were rebuilt in the last update.
+    rebuilt: Option<f64>,
+}
+
+/// The neighbour layer: one pair list per distinct range the force terms declare, each brought
+/// up to date once per evaluation that needs it and shared by every term that declared it.
+#[derive(Debug, Default, Clone)]
+pub struct Neighbours {
+    lists: Vec<Listed>,
+}
+
+impl Neighbours {
+    /// A layer serving `ranges` (equal ranges share one list).
+    pub fn new(ranges: impl IntoIterator<Item = PairRange>) -> Self {
+        let mut lists: Vec<Listed> = vec![];
+        for range in ranges {
+            if !lists.iter().any(|l| l.range == Some(range)) {
+                lists.push(Listed { range: Some(range), ..Listed::default() });
+            }
+        }
+        Self { lists }
+    }
+
+    /// Brings the lists of `ranges` up to date for `positions`.
+    pub fn update(&mut self, positions: &[Vec3], domain: &Domain, wanted: impl Fn(PairRange) -> bool) {
+        for list in &mut self.lists {
+            let Some(range) = list.range.filter(|&r| wanted(r)) else { continue };
+            list.rebuilt = match range {
+                PairRange::Within { range, skin } => {
+                    list.verlet.pairs_within(positions, domain, range, skin, &mut list.pairs).then_some(skin)
+                }
+                PairRange::All => {
+                    list.cells.pairs_within(positions, domain, None, &mut list.pairs);
+                    None
+                }
+            };
+        }
+    }
+
+    fn list(&self, range: PairRange) -> Option<&Listed> {
+        self.lists.iter().find(|l| l.range == Some(range))
+    }
+
+    /// The pairs of `range` (i < j, in (i, j) order); empty for a range no term declared.
+    pub fn pairs(&self, range: PairRange) -> &[Pair] {
+        self.list(range).map_or(&[], |l| &l.pairs)
+    }
+
+    /// The pairs within `range` (`None`: all pairs) when some term declared that range, with any
+    /// skin: a term that can sum over listed pairs reuses them instead of searching again.
+    pub fn listed(&self, range: Option<f64>) -> Option<&[Pair]> {
+        let same = |r: &PairRange| match (r, range) {
+            (PairRange::Within { range: a, .. }, Some(b)) => *a == b,
+            (PairRange::All, None) => true,
+            _ => false,
+        };
+        self.lists.iter().find(|l| l.range.as_ref().is_some_and(same)).map(|l| l.pairs.as_slice())
+    }
+
+    /// `Some(skin)` when the candidates of `range` were rebuilt in the last update: until the next
+    /// rebuild no particle moves more than skin/2 from where it is now.
+    pub fn rebuilt(&self, range: PairRange) -> Option<f64> {
+        self.list(range).and_then(|l| l.rebuilt)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

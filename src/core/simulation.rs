@@ -1,13 +1,13 @@
 //! One simulation: state, force pipeline, integrator and monitor. A step runs the named phases
-//! neighbours → seed (forces start from the constant term's, torques from zero) → moments → one
-//! phase per other force term (inside the integrator's force evaluation), then integrate and
+//! neighbours → seed (forces start from the constant term's, torques from zero) → one phase per
+//! force term, the moments first (inside the integrator's force evaluation), then integrate and
 //! monitor; each is timed.
 
 use super::domain::Domain;
-use super::forces::{ConstantForce, ForceContext, ForceTerm};
+use super::forces::{ConstantForce, Context, ForceGroup, ForceTerm, Forces};
 use super::integrators::Integrator;
-use super::magnetisation::{InductionError, Magnetisation};
-use super::neighbours::{Pair, VerletList};
+use super::magnetisation::InductionError;
+use super::neighbours::Neighbours;
 use super::parallel;
 use super::stability::{Instability, Monitor, StepEstimate};
 use super::state::{State, Vec3};
@@ -15,56 +15,32 @@ use super::timers::PhaseTimers;
 use rayon::prelude::*;
 use std::time::Duration;
 
-/// Which forces an evaluation computes (multiple time stepping splits them).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ForceGroup {
-    /// Everything, into `force`/`torque`.
-    All,
-    /// Every term that is not slow, into `force`/`torque`.
-    Fast,
-    /// Moments and the slow (magnetic) terms, into `slow_force`/`slow_torque`.
-    Slow,
-}
-
 /// Everything that turns a state into forces and torques.
 pub struct ForceField {
     pub domain: Domain,
-    pub magnetisation: Option<Magnetisation>,
+    /// The terms in evaluation order: a constant one first (it seeds the force), the moments
+    /// before the terms that read them, the rest in the order given.
     pub terms: Vec<Box<dyn ForceTerm>>,
-    /// Range of the near-pair search (contact and shielding), if a term needs it.
-    near_range: Option<f64>,
-    near: VerletList,
-    near_pairs: Vec<Pair>,
+    neighbours: Neighbours,
     pub timers: PhaseTimers,
     /// Time spent in evaluations, to separate integration time from force time.
     evaluation_time: Duration,
-    /// An induction failure inside an evaluation (reported after the step).
+    /// A term's failure inside an evaluation (reported after the step).
     induction_error: Option<InductionError>,
 }
 
 impl ForceField {
-    /// `near_range`: largest contact distance times (1 + touch tolerance).
-    pub fn new(domain: Domain, magnetisation: Option<Magnetisation>, given: Vec<Box<dyn ForceTerm>>, near_range: f64) -> Self {
-        // Constant terms first, so that one can seed each evaluation's force; otherwise in order.
-        // (Asking a term for its force on no particles tells whether it has a constant one.)
-        let (mut terms, mut others) = (vec![], vec![]);
-        for mut term in given {
-            let constant = term.constant_force(&Default::default()).is_some();
-            if constant { &mut terms } else { &mut others }.push(term);
-        }
-        terms.append(&mut others);
-        let needs = terms.iter().any(|t| t.needs_near_pairs());
-        Self {
-            domain,
-            magnetisation,
-            terms,
-            near_range: needs.then_some(near_range),
-            near: VerletList::default(),
-            near_pairs: vec![],
-            timers: PhaseTimers::default(),
-            evaluation_time: Duration::ZERO,
-            induction_error: None,
-        }
+    /// The force field of `terms`, in the order given but with a constant term first; the
+    /// moments term, if any, must come before the terms that read moments.
+    pub fn new(domain: Domain, mut terms: Vec<Box<dyn ForceTerm>>) -> Self {
+        terms.sort_by_key(|t| !t.is_constant());
+        let neighbours = Neighbours::new(terms.iter().filter_map(|t| t.pairs()));
+        Self { domain, terms, neighbours, timers: PhaseTimers::default(), evaluation_time: Duration::ZERO, induction_error: None }
+    }
+
+    /// The first induction failure since the last call, if any.
+    pub fn take_induction_error(&mut self) -> Option<InductionError> {
+        self.induction_error.take()
     }
 
     /// Computes `force`, `torque` and `moment` for the current state.
@@ -75,61 +51,36 @@ impl ForceField {
     /// Computes one group of forces (see [`ForceGroup`]).
     pub fn evaluate_group(&mut self, state: &mut State, dt: f64, group: ForceGroup) {
         let started = self.timers.start();
-        let p = &mut state.particles;
+        state.fields.fit(state.particles.len());
         if self.domain.periodic.contains(&true) {
-            p.position.iter_mut().for_each(|x| self.domain.wrap(x));
+            state.particles.position.iter_mut().for_each(|x| self.domain.wrap(x));
         }
-        if group == ForceGroup::Slow {
-            // Slow terms add into force/torque: point those at the slow arrays for this pass.
-            std::mem::swap(&mut p.force, &mut p.slow_force);
-            std::mem::swap(&mut p.torque, &mut p.slow_torque);
-        }
-        let mut near_rebuilt = None;
-        if let Some(range) = self.near_range.filter(|_| group != ForceGroup::Slow) {
-            // Skin 0.2 of the contact range (0.2 diameters), as in the reference decks.
-            let (near, pairs, skin) = (&mut self.near, &mut self.near_pairs, 0.2 * range);
-            if self.timers.time("neighbours", || near.pairs_within(&p.position, &self.domain, range, skin, pairs)) {
-                near_rebuilt = Some(skin);
+        let terms = &self.terms;
+        let wanted = |range| terms.iter().any(|t| group.has(t.as_ref()) && t.pairs() == Some(range));
+        let (neighbours, positions, domain) = (&mut self.neighbours, &state.particles.position, &self.domain);
+        self.timers.time("neighbours", || neighbours.update(positions, domain, wanted));
+        let ctx = Context { domain: &self.domain, neighbours: &self.neighbours, dt };
+        for term in self.terms.iter_mut().filter(|t| group.has(t.as_ref())) {
+            let t0 = self.timers.start();
+            if let Err(e) = term.prepare(&ctx, state) {
+                self.induction_error.get_or_insert(e);
             }
+            self.timers.stop(term.name(), t0);
         }
-        let wanted = |term: &dyn ForceTerm| match group {
-            ForceGroup::All => true,
-            ForceGroup::Fast => !term.is_slow(),
-            ForceGroup::Slow => term.is_slow(),
-        };
-        // The first term, if wanted and constant, seeds the force (the constant terms come first).
+        let (particles, mut out) = Forces::of(state, group);
+        // The first term, if evaluated and constant, seeds the force (the constant terms come first).
         let t0 = self.timers.start();
         let seed = match self.terms.first_mut() {
-            Some(first) if wanted(first.as_ref()) => first.constant_force(p),
+            Some(first) if group.has(first.as_ref()) => first.constant_force(particles),
             _ => None,
         };
         let seeded = seed.is_some();
-        start_forces(&mut p.force, &mut p.torque, seed);
+        start_forces(out.force, out.torque, seed);
         self.timers.stop("seed", t0);
-        if let Some(mag) = self.magnetisation.as_mut().filter(|_| group != ForceGroup::Fast) {
-            let result = self.timers.time("moments", || mag.update(p, &self.domain));
-            if let Err(e) = result {
-                self.induction_error.get_or_insert(e);
-            }
-        }
-        let ctx = ForceContext {
-            domain: &self.domain,
-            near_pairs: &self.near_pairs,
-            near_rebuilt,
-            dt,
-            magnetic_pairs: self.magnetisation.as_ref().and_then(|m| m.pairs()),
-        };
-        for term in self.terms.iter_mut().skip(seeded as usize) {
-            if wanted(term.as_ref()) {
-                let t0 = self.timers.start();
-                term.apply(&ctx, state);
-                self.timers.stop(term.name(), t0);
-            }
-        }
-        if group == ForceGroup::Slow {
-            let p = &mut state.particles;
-            std::mem::swap(&mut p.force, &mut p.slow_force);
-            std::mem::swap(&mut p.torque, &mut p.slow_torque);
+        for term in self.terms.iter_mut().skip(seeded as usize).filter(|t| group.has(t.as_ref())) {
+            let t0 = self.timers.start();
+            term.apply(&ctx, particles, &mut out);
+            self.timers.stop(term.name(), t0);
         }
         if let Some(t0) = started {
             self.evaluation_time += t0.elapsed();
@@ -222,7 +173,7 @@ impl Simulation {
     }
 
     fn check(&mut self) -> Result<(), RunError> {
-        let cause = match self.field.induction_error.take() {
+        let cause = match self.field.take_induction_error() {
             Some(e) => Err(Instability::Induction(e)),
             None => self.monitor.check(&self.state, &self.field.domain, self.dt),
         };

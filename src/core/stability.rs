@@ -245,14 +245,16 @@ impl Monitor {
         };
         let first = if any { particles().position(suspect) } else { None };
         match first {
-            Some(i) => Err(self.diagnose(p, i, domain, dt)),
+            Some(i) => Err(self.diagnose(state, i, domain, dt)),
             None => Ok(()),
         }
     }
 
     /// What is wrong with particle `i`, which failed the quick test.
-    fn diagnose(&self, p: &Particles, i: usize, domain: &super::domain::Domain, dt: f64) -> Instability {
-        for (q, v) in [("position", &p.position[i]), ("velocity", &p.velocity[i]), ("force", &p.force[i])] {
+    fn diagnose(&self, state: &State, i: usize, domain: &super::domain::Domain, dt: f64) -> Instability {
+        let p = &state.particles;
+        let force = state.fields.force.get(i).copied().unwrap_or_else(Vec3::zeros);
+        for (q, v) in [("position", &p.position[i]), ("velocity", &p.velocity[i]), ("force", &force)] {
             if !v.iter().all(|c| c.is_finite()) {
                 return Instability::NotFinite { quantity: q, particle: i };
             }

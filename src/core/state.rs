@@ -131,14 +131,6 @@ pub struct Particles {
     pub position: Vec<Vec3>,
     pub velocity: Vec<Vec3>,
     pub angular_velocity: Vec<Vec3>,
-    /// Force and torque at the current state (the integrators keep this invariant). With
-    /// multiple time stepping these hold the fast part and `slow_*` the slow (magnetic) part.
-    pub force: Vec<Vec3>,
-    pub torque: Vec<Vec3>,
-    pub slow_force: Vec<Vec3>,
-    pub slow_torque: Vec<Vec3>,
-    /// Total magnetic moment m_i (A·m²): induced plus permanent.
-    pub moment: Vec<Vec3>,
     /// Permanent moment, rotated with the particle (zero for purely induced particles).
     pub permanent_moment: Vec<Vec3>,
     /// Whether any particle carries a permanent moment (otherwise the drift need not turn them).
@@ -163,11 +155,6 @@ impl Particles {
         self.position.push(position);
         self.velocity.push(velocity);
         self.angular_velocity.push(Vec3::zeros());
-        self.force.push(Vec3::zeros());
-        self.torque.push(Vec3::zeros());
-        self.slow_force.push(Vec3::zeros());
-        self.slow_torque.push(Vec3::zeros());
-        self.moment.push(Vec3::zeros());
         let permanent = species.permanent_moment.unwrap_or_else(Vec3::zeros);
         self.has_permanent_moments |= permanent != Vec3::zeros();
         self.permanent_moment.push(permanent);
@@ -214,10 +201,37 @@ pub struct ContactDiagnostics {
     pub max_overlap_pair: (u32, Option<u32>),
 }
 
-/// Full simulation state: particles, contact history, clock.
+/// What the force evaluations compute from the particles, per particle: read by the
+/// integrators, written only through [`crate::core::forces::Forces`].
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Fields {
+    /// Force and torque at the current state (the integrators keep this invariant). With
+    /// multiple time stepping these hold the fast part and `slow_*` the slow (magnetic) part.
+    pub force: Vec<Vec3>,
+    pub torque: Vec<Vec3>,
+    pub slow_force: Vec<Vec3>,
+    pub slow_torque: Vec<Vec3>,
+    /// Total magnetic moment m_i (A·m²): induced plus permanent (the paper's induction starts
+    /// each evaluation from the previous one's).
+    pub moment: Vec<Vec3>,
+}
+
+impl Fields {
+    /// Zero fields for `n` particles, unless they already have that length.
+    pub fn fit(&mut self, n: usize) {
+        for v in [&mut self.force, &mut self.torque, &mut self.slow_force, &mut self.slow_torque, &mut self.moment] {
+            if v.len() != n {
+                v.resize(n, Vec3::zeros());
+            }
+        }
+    }
+}
+
+/// Full simulation state: particles, what the forces computed from them, contact history, clock.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct State {
     pub particles: Particles,
+    pub fields: Fields,
     pub contacts: ContactHistory,
     pub diagnostics: ContactDiagnostics,
     /// Number of steps taken since t = 0.
@@ -227,6 +241,68 @@ pub struct State {
     /// The substep an adaptive integrator proposes to try next (its controller's memory, kept
     /// here so that a checkpoint carries it and a resumed run repeats the uninterrupted one).
     pub next_substep: Option<f64>,
+}
+
+/// The per-particle vectors of a state by name (see [`State::vectors`]); one body for the shared
+/// and the mutable listing (match ergonomics give `&` or `&mut` bindings).
+macro_rules! state_vectors {
+    ($state:expr) => {{
+        let State { particles, fields, contacts: _, diagnostics: _, step: _, time: _, next_substep: _ } = $state;
+        let Particles {
+            position,
+            velocity,
+            angular_velocity,
+            permanent_moment,
+            // Stored as fixed properties, or rebuilt from them (`set_masses`, the moments' norm).
+            species: _,
+            radius: _,
+            mass: _,
+            inertia: _,
+            inverse_masses: _,
+            has_permanent_moments: _,
+        } = particles;
+        let Fields { force, torque, slow_force, slow_torque, moment } = fields;
+        [
+            ("position", position),
+            ("velocity", velocity),
+            ("angular_velocity", angular_velocity),
+            ("force", force),
+            ("torque", torque),
+            ("slow_force", slow_force),
+            ("slow_torque", slow_torque),
+            ("moment", moment),
+            ("permanent_moment", permanent_moment),
+        ]
+    }};
+}
+
+impl State {
+    /// Every per-particle vector a run needs to continue bit for bit, by name: what a checkpoint
+    /// stores besides the fixed properties (species, radius, mass, from which inertia and the
+    /// inverse masses are rebuilt), the contact history and the clock. Every field of the state
+    /// is named in the destructuring (none is skipped with `..`), so a field added to
+    /// [`Particles`], [`Fields`] or [`State`] does not compile until it is listed here or said
+    /// to be stored or rebuilt elsewhere.
+    pub fn vectors(&self) -> [(&'static str, &Vec<Vec3>); 9] {
+        state_vectors!(self)
+    }
+
+    /// [`State::vectors`], writable (a checkpoint restore).
+    pub fn vectors_mut(&mut self) -> [(&'static str, &mut Vec<Vec3>); 9] {
+        state_vectors!(self)
+    }
+
+    /// The names of [`State::vectors`], in order.
+    pub fn vector_names() -> [&'static str; 9] {
+        State::default().vectors().map(|(name, _)| name)
+    }
+
+    /// `particles` at rest at t = 0, with zero fields (forces not yet evaluated).
+    pub fn new(particles: Particles) -> Self {
+        let mut fields = Fields::default();
+        fields.fit(particles.len());
+        State { particles, fields, ..State::default() }
+    }
 }
 
 /// A non-magnetic test sphere of `radius` (ρ = 5000 kg/m³, E = 1 GPa, ν = 0.3, μ = e = 0.5).

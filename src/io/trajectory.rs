@@ -105,49 +105,6 @@ const FRAME_VECTORS: [(&str, &str); 4] = [
     ("moment", "A m^2"),
 ];
 const FORCE_VECTORS: [(&str, &str); 2] = [("force", "N"), ("torque", "N m")];
-/// Checkpoint per-particle vectors.
-const STATE_VECTORS: [&str; 9] = [
-    "position",
-    "velocity",
-    "angular_velocity",
-    "force",
-    "torque",
-    "slow_force",
-    "slow_torque",
-    "moment",
-    "permanent_moment",
-];
-
-fn state_vector<'a>(p: &'a Particles, name: &str) -> &'a [Vec3] {
-    match name {
-        "position" => &p.position,
-        "velocity" => &p.velocity,
-        "angular_velocity" => &p.angular_velocity,
-        "force" => &p.force,
-        "torque" => &p.torque,
-        "slow_force" => &p.slow_force,
-        "slow_torque" => &p.slow_torque,
-        "moment" => &p.moment,
-        "permanent_moment" => &p.permanent_moment,
-        _ => unreachable!("unknown state vector {name}"),
-    }
-}
-
-fn state_vector_mut<'a>(p: &'a mut Particles, name: &str) -> &'a mut Vec<Vec3> {
-    match name {
-        "position" => &mut p.position,
-        "velocity" => &mut p.velocity,
-        "angular_velocity" => &mut p.angular_velocity,
-        "force" => &mut p.force,
-        "torque" => &mut p.torque,
-        "slow_force" => &mut p.slow_force,
-        "slow_torque" => &mut p.slow_torque,
-        "moment" => &mut p.moment,
-        "permanent_moment" => &mut p.permanent_moment,
-        _ => unreachable!("unknown state vector {name}"),
-    }
-}
-
 /// Metadata of a run, written at the root.
 pub struct RunInfo<'a> {
     pub engine: &'a str,
@@ -219,7 +176,7 @@ impl TrajectoryWriter {
                 extendible::<f64>(&c, "overlap", &[], "m")?;
             }
             let ck = file.create_group("checkpoint")?;
-            for name in STATE_VECTORS {
+            for name in State::vector_names() {
                 ck.new_dataset::<f64>().shape((n, 3)).create(name)?;
             }
             extendible::<u32>(&ck, "pair_keys", &[2], "particle index")?;
@@ -299,7 +256,7 @@ impl TrajectoryWriter {
         step.resize(f + 1)?;
         step.write_slice(&[state.step], s![f..f + 1])?;
         let vectors = FRAME_VECTORS.iter().chain(if self.forces { &FORCE_VECTORS[..] } else { &[] });
-        let p = &state.particles;
+        let (vectors_now, p) = (state.vectors(), &state.fields);
         for (name, _) in vectors {
             let ds = g.dataset(name)?;
             ds.resize((f + 1, self.n, 3))?;
@@ -307,7 +264,7 @@ impl TrajectoryWriter {
             let data = match *name {
                 "force" => Array2::from_shape_fn((self.n, 3), |(i, k)| p.force[i][k] + p.slow_force[i][k]),
                 "torque" => Array2::from_shape_fn((self.n, 3), |(i, k)| p.torque[i][k] + p.slow_torque[i][k]),
-                _ => vec3_rows(state_vector(p, name)),
+                _ => vec3_rows(vectors_now.iter().find(|(n, _)| n == name).expect("a state vector").1),
             };
             ds.write_slice(&data, s![f, .., ..])?;
         }
@@ -345,8 +302,8 @@ impl TrajectoryWriter {
     pub fn write_checkpoint(&self, state: &State) -> Result<(), TrajectoryError> {
         (|| -> H5Result<()> {
             let ck = self.file.group("checkpoint")?;
-            for name in STATE_VECTORS {
-                ck.dataset(name)?.write(&vec3_rows(state_vector(&state.particles, name)))?;
+            for (name, vector) in state.vectors() {
+                ck.dataset(name)?.write(&vec3_rows(vector))?;
             }
             let (pairs, walls) = (&state.contacts.pairs, &state.contacts.walls);
             let keys = Array2::from_shape_fn((pairs.len(), 2), |(r, c)| if c == 0 { pairs[r].0 .0 } else { pairs[r].0 .1 });
@@ -442,9 +399,11 @@ impl Trajectory {
             ..Particles::default()
         };
         particles.set_masses(self.file.dataset("particles/mass")?.read_raw()?);
-        for name in STATE_VECTORS {
-            *state_vector_mut(&mut particles, name) = rows_vec3(&ck.dataset(name)?.read_2d()?);
+        let mut state = State { particles, ..State::default() };
+        for (name, vector) in state.vectors_mut() {
+            *vector = rows_vec3(&ck.dataset(name)?.read_2d()?);
         }
+        let particles = &mut state.particles;
         particles.has_permanent_moments = particles.permanent_moment.iter().any(|m| *m != Vec3::zeros());
         let keys: Array2<u32> = ck.dataset("pair_keys")?.read_2d()?;
         let shear: Array2<f64> = ck.dataset("pair_shear")?.read_2d()?;
@@ -463,7 +422,7 @@ impl Trajectory {
         let time: f64 = ck.attr("time")?.read_scalar()?;
         let frames: u64 = ck.attr("frames")?.read_scalar()?;
         let next_substep = ck.attr("next_substep").and_then(|a| a.read_scalar::<f64>()).ok().filter(|h| h.is_finite());
-        let state = State { particles, contacts, diagnostics: Default::default(), step, time, next_substep };
+        (state.contacts, state.step, state.time, state.next_substep) = (contacts, step, time, next_substep);
         Ok((state, frames as usize))
     }
 }

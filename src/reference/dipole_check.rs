@@ -6,7 +6,7 @@
 
 use super::{Engine, ReferenceError};
 use crate::core::domain::Domain;
-use crate::core::state::{Particles, Vec3};
+use crate::core::state::{State, Vec3};
 use crate::scene::Scene;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -32,8 +32,9 @@ pub fn lammps_cutoff(scene: &Scene, cutoff_diameters: Option<f64>) -> Result<f64
 /// dipoles under `lj/cut/dipole/cut` (ε = 0). With `run = None` the deck evaluates the forces
 /// once and dumps them; with `run = Some((steps, dt))` it evaluates them `steps` times with the
 /// particles held still (no integrating fix) and dumps nothing (a timing run).
-pub fn write_deck(p: &Particles, d: &Domain, rc: f64, dir: &Path, origin: &str, run: Option<(u64, f64)>) -> Result<(), ReferenceError> {
+pub fn write_deck(state: &State, d: &Domain, rc: f64, dir: &Path, origin: &str, run: Option<(u64, f64)>) -> Result<(), ReferenceError> {
     std::fs::create_dir_all(dir)?;
+    let p = &state.particles;
     let largest_d = p.radius.iter().fold(0.0_f64, |a, r| a.max(2.0 * r));
     let scale = (1e-7 / COULOMB).sqrt();
     let mut data = format!("magdem dipole deck (scene sha256 {origin})\n\n{} atoms\n1 atom types\n\n", p.len());
@@ -42,7 +43,7 @@ pub fn write_deck(p: &Particles, d: &Domain, rc: f64, dir: &Path, origin: &str, 
     }
     data += "\nAtoms\n\n";
     for i in 0..p.len() {
-        let (x, m) = (p.position[i], p.moment[i] * scale);
+        let (x, m) = (p.position[i], state.fields.moment[i] * scale);
         let density = p.mass[i] / (4.0 / 3.0 * std::f64::consts::PI * p.radius[i].powi(3));
         let _ = writeln!(data, "{} 1 {:.17e} {:.17e} {:.17e} {:.17e} {density:.17e} 0.0 {:.17e} {:.17e} {:.17e}", i + 1, x.x, x.y, x.z, 2.0 * p.radius[i], m.x, m.y, m.z);
     }
@@ -96,17 +97,18 @@ pub fn check(scene: &Scene, dir: &Path) -> Result<DipoleCheck, ReferenceError> {
     let unsupported = |why: &str| ReferenceError::Unsupported { engine: engine.name(), term: "the dipole check".into(), why: why.into() };
     let mut field = scene.magnetic_force_field().ok_or_else(|| unsupported("the scene has no magnetic term"))?;
     let cutoff = scene.spec.forces.dipole.as_ref().ok_or_else(|| unsupported("the scene has no dipole term"))?.cutoff_diameters;
-    field.terms.retain(|t| t.name() == "dipole");
+    field.terms.retain(|t| matches!(t.name(), "moments" | "dipole"));
     let mut state = scene.initial_state();
     field.evaluate(&mut state, scene.dt());
     let p = &state.particles;
 
     let rc = lammps_cutoff(scene, cutoff).map_err(|why| unsupported(&why))?;
-    write_deck(p, &scene.domain, rc, dir, &scene.hash, None)?;
+    write_deck(&state, &scene.domain, rc, dir, &scene.hash, None)?;
     run_deck(dir)?;
     let dump = std::fs::read_to_string(dir.join("dump.dipole"))?;
     let rows = dump.lines().skip_while(|l| !l.starts_with("ITEM: ATOMS")).skip(1);
-    let largest_force = p.force.iter().map(|f| f.norm()).fold(0.0, f64::max);
+    let force = &state.fields.force;
+    let largest_force = force.iter().map(|f| f.norm()).fold(0.0, f64::max);
     let mut worst = 0.0_f64;
     let mut seen = 0;
     for row in rows {
@@ -115,7 +117,7 @@ pub fn check(scene: &Scene, dir: &Path) -> Result<DipoleCheck, ReferenceError> {
             continue;
         }
         let i = v[0] as usize - 1;
-        worst = worst.max((Vec3::new(v[1], v[2], v[3]) - p.force[i]).norm());
+        worst = worst.max((Vec3::new(v[1], v[2], v[3]) - force[i]).norm());
         seen += 1;
     }
     if seen != p.len() {

@@ -40,7 +40,7 @@ pub fn read(engine: Engine, path: &Path, scene: &Scene) -> Result<Vec<State>, Re
             .iter()
             .map(|names| Ok([col(names[0])?, col(names[1])?, col(names[2])?]))
             .collect::<Result<_, ReferenceError>>()?;
-        let mut state = State { particles: scene.initial.clone(), step, time: step as f64 * scene.dt(), ..State::default() };
+        let mut state = State { step, time: step as f64 * scene.dt(), ..State::new(scene.initial.clone()) };
         for _ in 0..n {
             let row = lines.next().ok_or_else(|| fail(format!("frame at step {step} ends early")))?;
             let values: Vec<f64> = row.split_whitespace().map(|v| v.parse::<f64>()).collect::<Result<_, _>>().map_err(|e| fail(format!("{e} in {row:?}")))?;
@@ -50,7 +50,7 @@ pub fn read(engine: Engine, path: &Path, scene: &Scene) -> Result<Vec<State>, Re
             p.position[i] = v3(groups[0]);
             p.velocity[i] = v3(groups[1]);
             p.angular_velocity[i] = v3(groups[2]);
-            p.force[i] = v3(groups[3]);
+            state.fields.force[i] = v3(groups[3]);
         }
         let p = &state.particles;
         cells.pairs_within(&p.position, &scene.domain, Some(largest_d), &mut pairs);

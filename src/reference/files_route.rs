@@ -34,11 +34,11 @@ pub fn magnetic_forces(scene: &Scene, positions: &Path, prefix: &Path) -> Result
     let moments = prefix.with_extension("moments");
     if let Ok(text) = std::fs::read_to_string(&moments) {
         for r in parse_rows(&text, 4) {
-            state.particles.moment[r[0] as usize - 1] = Vec3::new(r[1], r[2], r[3]);
+            state.fields.moment[r[0] as usize - 1] = Vec3::new(r[1], r[2], r[3]);
         }
     }
     field.evaluate(&mut state, scene.dt());
-    let p = &state.particles;
+    let p = &state.fields;
     for (k, axis) in ["x", "y", "z"].iter().enumerate() {
         let mut out = format!("# magdem magnetic force, {axis} component (N)\n{n}\n");
         for i in 0..n {

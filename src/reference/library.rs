@@ -64,12 +64,12 @@ extern "C" fn magnetic_forces(data: *mut c_void, step: i64, nlocal: c_int, ids: 
         coupler.field.evaluate(&mut coupler.state, 0.0);
         for k in 0..n {
             let id = unsafe { *ids.add(k) } as usize;
-            let force = coupler.state.particles.force[id - 1];
+            let force = coupler.state.fields.force[id - 1];
             let out = unsafe { std::slice::from_raw_parts_mut(*f.add(k), 3) };
             out.copy_from_slice(force.as_slice());
         }
         if step % coupler.steps_per_frame == 0 {
-            coupler.frame_moments.push(coupler.state.particles.moment.clone());
+            coupler.frame_moments.push(coupler.state.fields.moment.clone());
         }
         Ok(())
     }));
@@ -245,7 +245,7 @@ pub fn run_coupled(engine: Engine, scene: &Scene, dir: &Path, output: &Path) -> 
     }
     let mut frames = dump::read(engine, &dir.join(&written.dump), scene)?;
     for (state, moments) in frames.iter_mut().zip(&coupler.frame_moments) {
-        state.particles.moment.clone_from(moments);
+        state.fields.moment.clone_from(moments);
     }
     super::store(engine, "velocity-verlet (nve/sphere), magnetic forces from magdem every step", scene, output, &frames, start.elapsed())?;
     Ok(ReferenceRun { frames: frames.len(), log, wall_time: start.elapsed() })

@@ -14,6 +14,7 @@ use crate::core::forces::gravity::GravityBuoyancy;
 use crate::core::forces::ForceTerm;
 use crate::core::integrators;
 use crate::core::magnetisation::{Induction, Magnetisation, MU0};
+use crate::core::neighbours::{PairRange, Skins};
 use crate::core::simulation::{ForceField, Simulation};
 use crate::core::stability::{Monitor, StepEstimate, StepEstimateInput};
 use crate::core::state::{Particles, Saturation, SaturationLaw, Species, State, Vec3};
@@ -159,20 +160,20 @@ impl Scene {
 
     /// The initial state (forces not yet evaluated).
     pub fn initial_state(&self) -> State {
-        State { particles: self.initial.clone(), ..State::default() }
+        State::new(self.initial.clone())
     }
 
     fn largest_diameter(&self) -> f64 {
         self.species.iter().map(|s| 2.0 * s.radius).fold(0.0, f64::max)
     }
 
-    /// The moments model and the magnetic force terms (dipole, gradient) the scene lists.
-    fn magnetic_parts(&self) -> (Option<Magnetisation>, Vec<Box<dyn ForceTerm>>) {
+    /// The magnetic terms the scene lists: the moments (first: the others read them), dipole,
+    /// gradient.
+    fn magnetic_terms(&self, skins: Skins) -> Vec<Box<dyn ForceTerm>> {
         let f = &self.spec.forces;
         let (b0, gradient) = field_of(&self.spec);
-        let mut terms: Vec<Box<dyn ForceTerm>> = vec![];
         if !(f.dipole.is_some() || f.gradient.is_some()) {
-            return (None, terms);
+            return vec![];
         }
         let induction = match &f.dipole {
             None => Induction::None,
@@ -184,13 +185,14 @@ impl Scene {
                 }
             },
         };
+        let mut terms: Vec<Box<dyn ForceTerm>> = vec![Box::new(Magnetisation::new(induction, b0, gradient, &self.species, skins))];
         if let Some(d) = &f.dipole {
-            terms.push(Box::new(DipoleForce::new(d.cutoff_diameters.map(|c| c * self.largest_diameter()), b0, gradient)));
+            terms.push(Box::new(DipoleForce::new(d.cutoff_diameters.map(|c| c * self.largest_diameter()), b0, gradient, skins)));
         }
         if f.gradient.is_some() {
             terms.push(Box::new(GradientForce { gradient }));
         }
-        (Some(Magnetisation::new(induction, b0, gradient, &self.species)), terms)
+        terms
     }
 
     /// The scene's integrator; the exponential one gets each particle's Stokes coefficients.
@@ -214,8 +216,8 @@ impl Scene {
     /// Only the magnetic forces (moments, dipole and gradient terms): what magdem supplies to a
     /// reference code in lock step. `None` when the scene has no magnetic term.
     pub fn magnetic_force_field(&self) -> Option<ForceField> {
-        let (magnetisation, terms) = self.magnetic_parts();
-        magnetisation.map(|m| ForceField::new(self.domain.clone(), Some(m), terms, self.largest_diameter()))
+        let terms = self.magnetic_terms(Skins::default());
+        (!terms.is_empty()).then(|| ForceField::new(self.domain.clone(), terms))
     }
 
     /// A simulation at t = 0 (call `initialise` before stepping), or around `state` if given.
@@ -223,10 +225,14 @@ impl Scene {
         let spec = &self.spec;
         let fluid = spec.fluid.clone().unwrap_or(FluidSpec { density: 0.0, viscosity: 0.0, velocity: [0.0; 3] });
         let f = &spec.forces;
-        let (magnetisation, mut terms) = self.magnetic_parts();
-        let mut touch_tolerance = 0.0;
+        let skins = Skins::default();
+        let mut terms = self.magnetic_terms(skins);
+        // One near-pair search for contact and shielding: the largest contact distance, times
+        // 1 + the shielding's touch tolerance.
+        let touch_tolerance = f.drag.as_ref().map_or(0.0, |d| d.touch_tolerance);
+        let range = self.largest_diameter() * (1.0 + touch_tolerance.max(1e-9));
+        let near = PairRange::Within { range, skin: skins.near * range };
         if let Some(d) = &f.drag {
-            touch_tolerance = d.touch_tolerance;
             let law = match d.law {
                 DragLawSpec::Stokes => DragLaw::Stokes,
                 DragLawSpec::SchillerNaumann => DragLaw::SchillerNaumann,
@@ -235,7 +241,7 @@ impl Scene {
                 ShieldingSpec::None => Shielding::None,
                 ShieldingSpec::Paper => Shielding::Paper,
             };
-            let mut drag = Drag::new(law, shielding, d.rotational, fluid.density, fluid.viscosity, Vec3::from(fluid.velocity), d.touch_tolerance);
+            let mut drag = Drag::new(law, shielding, d.rotational, fluid.density, fluid.viscosity, Vec3::from(fluid.velocity), d.touch_tolerance, near);
             drag.exclude_linear = spec.integration.scheme.integrates_linear_drag();
             terms.push(Box::new(drag));
         }
@@ -243,10 +249,9 @@ impl Scene {
             terms.push(Box::new(GravityBuoyancy::new(Vec3::from(g.g), fluid.density)));
         }
         if let Some(c) = &f.contact {
-            terms.push(Box::new(Contact::new(&self.species, c.walls)));
+            terms.push(Box::new(Contact::new(&self.species, c.walls, near)));
         }
-        let near_range = self.largest_diameter() * (1.0 + touch_tolerance.max(1e-9));
-        let field = ForceField::new(self.domain.clone(), magnetisation, terms, near_range);
+        let field = ForceField::new(self.domain.clone(), terms);
         Simulation {
             state: state.unwrap_or_else(|| self.initial_state()),
             field,

@@ -233,7 +233,7 @@ fn dipole_forces(positions: &[[f64; 3]], induction: &str, cutoff: Option<f64>) -
     for _ in 0..if induction == "paper" { 60 } else { 1 } {
         field.evaluate(&mut state, 1e-8);
     }
-    Ok(state.particles.force)
+    Ok(state.fields.force)
 }
 
 /// Relative errors (RMS over particles of |F − F_ref| / RMS |F_ref|, and the largest per

@@ -12,10 +12,10 @@
 //!   if |Ft| > μ|Fn|: Ft scaled to μ|Fn| and s = −Ft/kt, else Ft −= γt v_t,rel
 //! - lever arm a − δ/2 for the torque and the rolling part of v_t,rel.
 
-use super::{ForceContext, ForceTerm};
-use crate::core::neighbours::Pair;
+use super::{Context, ForceTerm, Forces};
+use crate::core::neighbours::{Pair, PairRange};
 use crate::core::parallel::{self, Pieces};
-use crate::core::state::{ContactDiagnostics, Particles, Species, State, Vec3, WallFace};
+use crate::core::state::{ContactDiagnostics, Particles, Species, Vec3, WallFace};
 
 /// Pair constants of the contact law for two species (the wall takes the particle's own species).
 #[derive(Debug, Clone, Copy)]
@@ -115,6 +115,8 @@ pub struct Contact {
     materials: Vec<PairMaterial>,
     n_species: usize,
     walls: bool,
+    /// The near-pair search: the largest contact distance (times 1 + a touch tolerance).
+    near: PairRange,
     touching: Vec<(u32, Vec3)>,
     /// Particles that may touch a wall before the near list's next rebuild (`None`: not known
     /// yet, test every particle).
@@ -141,13 +143,14 @@ fn spring<K: Ord + Copy>(history: &[(K, Vec3)], cursor: &mut usize, key: K) -> V
 }
 
 impl Contact {
-    pub fn new(species: &[Species], walls: bool) -> Self {
+    pub fn new(species: &[Species], walls: bool, near: PairRange) -> Self {
         let n = species.len();
         let materials = (0..n * n).map(|k| PairMaterial::new(&species[k / n], &species[k % n])).collect();
         Self {
             materials,
             n_species: n,
             walls,
+            near,
             touching: vec![],
             wall_candidates: None,
             wall_found: vec![],
@@ -207,12 +210,12 @@ impl Contact {
         ContactOutcome { force, torque_i: -cr * normal.cross(&ft), torque_j: Vec3::zeros(), shear, overlap_ratio: touch.overlap / (2.0 * a) }
     }
 
-    fn apply_pairs(&mut self, ctx: &ForceContext, state: &mut State, diag: &mut ContactDiagnostics) {
-        let history = std::mem::take(&mut state.contacts.pairs);
-        let p = &state.particles;
+    fn apply_pairs(&mut self, ctx: &Context, p: &Particles, out: &mut Forces, diag: &mut ContactDiagnostics) {
+        let history = std::mem::take(&mut out.contacts.pairs);
+        let near_pairs = ctx.neighbours.pairs(self.near);
         let mut cursor = 0;
         self.touching.clear();
-        for (k, pair) in ctx.near_pairs.iter().enumerate() {
+        for (k, pair) in near_pairs.iter().enumerate() {
             if pair.dist < p.radius[pair.i as usize] + p.radius[pair.j as usize] {
                 self.touching.push((k as u32, spring(&history, &mut cursor, (pair.i, pair.j))));
             }
@@ -221,40 +224,38 @@ impl Contact {
         let touching = &self.touching;
         parallel::map_ordered(touching.len(), &mut outcomes, |c| {
             let (k, s) = touching[c];
-            self.pair_contact(p, &ctx.near_pairs[k as usize], s, ctx.dt)
+            self.pair_contact(p, &near_pairs[k as usize], s, ctx.dt)
         });
         let mut next = std::mem::replace(&mut self.spare_pairs, history);
         next.clear();
-        let p = &mut state.particles;
         for (&(k, _), o) in self.touching.iter().zip(&outcomes) {
-            let pair = &ctx.near_pairs[k as usize];
+            let pair = &near_pairs[k as usize];
             let (i, j) = (pair.i as usize, pair.j as usize);
-            p.force[i] += o.force;
-            p.force[j] -= o.force;
-            p.torque[i] += o.torque_i;
-            p.torque[j] += o.torque_j;
+            out.force[i] += o.force;
+            out.force[j] -= o.force;
+            out.torque[i] += o.torque_i;
+            out.torque[j] += o.torque_j;
             next.push(((pair.i, pair.j), o.shear));
             if o.overlap_ratio > diag.max_overlap_ratio {
                 *diag = ContactDiagnostics { max_overlap_ratio: o.overlap_ratio, max_overlap_pair: (pair.i, Some(pair.j)) };
             }
         }
-        state.contacts.pairs = next;
+        out.contacts.pairs = next;
         self.outcomes = outcomes;
     }
 
-    fn apply_walls(&mut self, ctx: &ForceContext, state: &mut State, diag: &mut ContactDiagnostics) {
+    fn apply_walls(&mut self, ctx: &Context, p: &Particles, out: &mut Forces, diag: &mut ContactDiagnostics) {
         let domain = ctx.domain;
         // Walls on periodic axes are infinitely far away.
         let lo = Vec3::from_fn(|k, _| if domain.periodic[k] { f64::NEG_INFINITY } else { domain.lo[k] });
         let hi = Vec3::from_fn(|k, _| if domain.periodic[k] { f64::INFINITY } else { domain.hi[k] });
-        let p = &state.particles;
         let near = |i: usize, margin: f64| {
             let (a, x) = (p.radius[i] + margin, p.position[i]);
             (x.x - lo.x < a) | (x.y - lo.y < a) | (x.z - lo.z < a) | (hi.x - x.x < a) | (hi.y - x.y < a) | (hi.z - x.z < a)
         };
         // After a rebuild of the near list no particle moves more than skin/2 before the next
         // one: only particles within a radius plus half the skin of a wall can touch it until then.
-        if let Some(skin) = ctx.near_rebuilt {
+        if let Some(skin) = ctx.neighbours.rebuilt(self.near) {
             let mut candidates = self.wall_candidates.take().unwrap_or_default();
             parallel::collect_ordered(p.len(), &mut candidates, &mut self.wall_candidate_pieces, |i, out| {
                 if near(i, 0.5 * skin) {
@@ -263,7 +264,7 @@ impl Contact {
             });
             self.wall_candidates = Some(candidates);
         }
-        let history = std::mem::take(&mut state.contacts.walls);
+        let history = std::mem::take(&mut out.contacts.walls);
         let mut found = std::mem::take(&mut self.wall_found);
         let touches = |i: usize, out: &mut Vec<WallTouch>| {
             if !near(i, 0.0) {
@@ -292,17 +293,16 @@ impl Contact {
         parallel::map_ordered(touching.len(), &mut outcomes, |c| self.wall_contact(p, &touching[c].0, touching[c].1, ctx.dt));
         let mut next = std::mem::replace(&mut self.spare_walls, history);
         next.clear();
-        let p = &mut state.particles;
         for ((t, _), o) in self.wall_touching.iter().zip(&outcomes) {
             let i = t.i as usize;
-            p.force[i] += o.force;
-            p.torque[i] += o.torque_i;
+            out.force[i] += o.force;
+            out.torque[i] += o.torque_i;
             next.push(((t.i, t.face), o.shear));
             if o.overlap_ratio > diag.max_overlap_ratio {
                 *diag = ContactDiagnostics { max_overlap_ratio: o.overlap_ratio, max_overlap_pair: (t.i, None) };
             }
         }
-        state.contacts.walls = next;
+        out.contacts.walls = next;
         self.outcomes = outcomes;
     }
 }
@@ -311,16 +311,16 @@ impl ForceTerm for Contact {
     fn name(&self) -> &'static str {
         "contact"
     }
-    fn needs_near_pairs(&self) -> bool {
-        true
+    fn pairs(&self) -> Option<PairRange> {
+        Some(self.near)
     }
-    fn apply(&mut self, ctx: &ForceContext, state: &mut State) {
+    fn apply(&mut self, ctx: &Context, p: &Particles, out: &mut Forces) {
         let mut diag = ContactDiagnostics::default();
-        self.apply_pairs(ctx, state, &mut diag);
+        self.apply_pairs(ctx, p, out, &mut diag);
         if self.walls {
-            self.apply_walls(ctx, state, &mut diag);
+            self.apply_walls(ctx, p, out, &mut diag);
         }
-        state.diagnostics = diag;
+        *out.diagnostics = diag;
     }
 }
 
@@ -328,7 +328,9 @@ impl ForceTerm for Contact {
 mod tests {
     use super::*;
     use crate::core::domain::Domain;
-    use crate::core::neighbours::VerletList;
+    use crate::core::forces::ForceGroup;
+    use crate::core::neighbours::Neighbours;
+    use crate::core::state::State;
 
     /// Particles drifting in a walled box, in and out of the walls' reach: the wall contacts
     /// found among the candidates kept between rebuilds of the near list are, spring for spring,
@@ -349,8 +351,10 @@ mod tests {
             state.particles.push(0, &species, x, v);
         }
         let (range, skin, dt) = (2.0 * a, 0.4 * a, 1e-8);
-        let (mut near, mut pairs, mut contact) = (VerletList::default(), vec![], Contact::new(std::slice::from_ref(&species), true));
+        let near = PairRange::Within { range, skin };
+        let (mut neighbours, mut contact) = (Neighbours::new([near]), Contact::new(std::slice::from_ref(&species), true, near));
         let (mut found, mut rebuilds) = (0, 0);
+        state.fields.fit(state.particles.len());
         for step in 0..400 {
             let p = &mut state.particles;
             for (x, v) in p.position.iter_mut().zip(&mut p.velocity) {
@@ -362,15 +366,17 @@ mod tests {
                     }
                 }
             }
-            let rebuilt = near.pairs_within(&p.position, &domain, range, skin, &mut pairs);
-            rebuilds += rebuilt as usize;
-            let ctx = ForceContext { domain: &domain, near_pairs: &pairs, near_rebuilt: rebuilt.then_some(skin), dt, magnetic_pairs: None };
+            neighbours.update(&p.position, &domain, |_| true);
+            rebuilds += neighbours.rebuilt(near).is_some() as usize;
+            let ctx = Context { domain: &domain, neighbours: &neighbours, dt };
             let mut every_particle = state.clone();
-            Contact::new(std::slice::from_ref(&species), true).apply(&ctx, &mut every_particle);
-            contact.apply(&ctx, &mut state);
+            let (p, mut out) = Forces::of(&mut every_particle, ForceGroup::All);
+            Contact::new(std::slice::from_ref(&species), true, near).apply(&ctx, p, &mut out);
+            let (p, mut out) = Forces::of(&mut state, ForceGroup::All);
+            contact.apply(&ctx, p, &mut out);
             let (kept, all) = (&state.contacts.walls, &every_particle.contacts.walls);
             assert!(kept == all, "step {step}: {} wall contacts among the candidates, {} testing every particle", kept.len(), all.len());
-            assert!(state.particles.force == every_particle.particles.force, "step {step}: forces differ");
+            assert!(state.fields.force == every_particle.fields.force, "step {step}: forces differ");
             found += state.contacts.walls.len();
         }
         assert!(rebuilds > 20, "{rebuilds} rebuilds");

@@ -14,12 +14,12 @@
 //! fixed order. Walled boxes skip the minimum-image arithmetic. When the moments phase has
 //! already listed the pairs (the paper's induction), the term sums over that list instead.
 
-use super::{ForceContext, ForceTerm};
-use crate::core::magnetisation::{pair_dipole_fields, MU0};
+use super::{Context, ForceTerm, Forces};
 use crate::core::domain::Domain;
-use crate::core::neighbours::{CellList, Pair, VerletList};
+use crate::core::magnetisation::{pair_dipole_fields, MU0};
+use crate::core::neighbours::{CellList, Pair, Skins, VerletList};
 use crate::core::parallel;
-use crate::core::state::{State, Vec3};
+use crate::core::state::{Particles, Vec3};
 use nalgebra::Matrix3;
 use std::f64::consts::PI;
 use wide::f64x4;
@@ -336,6 +336,8 @@ fn add_listed_pairs(pairs: &[Pair], moment: &[Vec3], force: &mut [Vec3], buffer:
 pub struct DipoleForce {
     /// Pair cut-off distance (m); `None` = all pairs.
     pub cutoff: Option<f64>,
+    /// Verlet skin of the cut-off list: `cutoff` times this.
+    skin: f64,
     /// Applied field, for the torque on permanent moments.
     pub b0: Vec3,
     pub gradient: Matrix3<f64>,
@@ -348,8 +350,8 @@ pub struct DipoleForce {
 }
 
 impl DipoleForce {
-    pub fn new(cutoff: Option<f64>, b0: Vec3, gradient: Matrix3<f64>) -> Self {
-        Self { cutoff, b0, gradient, verlet: VerletList::default(), pairs: vec![], buffer: vec![], particle_blocks: vec![], rows: Rows::default(), bands: vec![] }
+    pub fn new(cutoff: Option<f64>, b0: Vec3, gradient: Matrix3<f64>, skins: Skins) -> Self {
+        Self { cutoff, skin: skins.magnetic, b0, gradient, verlet: VerletList::default(), pairs: vec![], buffer: vec![], particle_blocks: vec![], rows: Rows::default(), bands: vec![] }
     }
 }
 
@@ -360,32 +362,33 @@ impl ForceTerm for DipoleForce {
     fn is_slow(&self) -> bool {
         true
     }
-    fn apply(&mut self, ctx: &ForceContext, state: &mut State) {
-        let p = &mut state.particles;
+    /// Sums over the pairs the neighbour layer already lists within the cut-off (the paper's
+    /// induction lists the same neighbourhood), otherwise over rows of particle blocks.
+    fn apply(&mut self, ctx: &Context, p: &Particles, out: &mut Forces) {
         let n = p.len();
-        match (ctx.magnetic_pairs, self.cutoff) {
-            // The moments phase already found the pairs when its range is this cut-off.
-            (Some((range, pairs)), _) if range == self.cutoff => add_listed_pairs(pairs, &p.moment, &mut p.force, &mut self.buffer),
-            (_, Some(c)) => {
-                if self.verlet.update(&p.position, ctx.domain, c, c / 15.0) {
+        let listed = ctx.neighbours.listed(self.cutoff);
+        match (listed, self.cutoff) {
+            (Some(pairs), _) => add_listed_pairs(pairs, out.moment, out.force, &mut self.buffer),
+            (None, Some(c)) => {
+                if self.verlet.update(&p.position, ctx.domain, c, c * self.skin) {
                     self.rows.build(n, self.verlet.candidates());
                 }
-                fill_particle_blocks(&mut self.particle_blocks, &p.position, &p.moment);
-                add_row_sums(&self.particle_blocks, &Image::of(ctx.domain), Some(&self.rows), c * c, &mut p.force, &mut self.bands);
+                fill_particle_blocks(&mut self.particle_blocks, &p.position, out.moment);
+                add_row_sums(&self.particle_blocks, &Image::of(ctx.domain), Some(&self.rows), c * c, out.force, &mut self.bands);
             }
-            (_, None) => {
-                fill_particle_blocks(&mut self.particle_blocks, &p.position, &p.moment);
-                add_row_sums(&self.particle_blocks, &Image::of(ctx.domain), None, f64::INFINITY, &mut p.force, &mut self.bands);
+            (None, None) => {
+                fill_particle_blocks(&mut self.particle_blocks, &p.position, out.moment);
+                add_row_sums(&self.particle_blocks, &Image::of(ctx.domain), None, f64::INFINITY, out.force, &mut self.bands);
             }
         }
         if p.has_permanent_moments {
             // B_loc = B_ext + μ0 Σ_j H_dip,j over the pairs of the force sum.
-            let pairs: &[Pair] = match (ctx.magnetic_pairs, self.cutoff) {
-                (Some((range, pairs)), _) if range == self.cutoff => pairs,
-                (_, cutoff) => {
+            let pairs: &[Pair] = match (listed, self.cutoff) {
+                (Some(pairs), _) => pairs,
+                (None, cutoff) => {
                     match cutoff {
                         Some(c) => {
-                            self.verlet.pairs_within(&p.position, ctx.domain, c, c / 15.0, &mut self.pairs);
+                            self.verlet.pairs_within(&p.position, ctx.domain, c, c * self.skin, &mut self.pairs);
                         }
                         None => CellList::default().pairs_within(&p.position, ctx.domain, None, &mut self.pairs),
                     }
@@ -395,11 +398,11 @@ impl ForceTerm for DipoleForce {
             let mut b_loc: Vec<Vec3> = p.position.iter().map(|x| self.b0 + self.gradient * x).collect();
             for pair in pairs {
                 let (i, j) = (pair.i as usize, pair.j as usize);
-                let (on_i, on_j) = pair_dipole_fields(&p.moment[i], &p.moment[j], pair);
+                let (on_i, on_j) = pair_dipole_fields(&out.moment[i], &out.moment[j], pair);
                 b_loc[i] += MU0 * on_i;
                 b_loc[j] += MU0 * on_j;
             }
-            for ((torque, m), b) in p.torque.iter_mut().zip(&p.permanent_moment).zip(&b_loc) {
+            for ((torque, m), b) in out.torque.iter_mut().zip(&p.permanent_moment).zip(&b_loc) {
                 *torque += m.cross(b);
             }
         }

@@ -6,9 +6,10 @@
 //! With shielding `paper`, A = A_eff of [`super::shielding`].
 
 use super::shielding::shadow_area;
-use super::{ForceContext, ForceTerm};
+use super::{Context, ForceTerm, Forces};
+use crate::core::neighbours::PairRange;
 use crate::core::parallel;
-use crate::core::state::{Particles, State, Vec3};
+use crate::core::state::{Particles, Vec3};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
@@ -38,6 +39,8 @@ pub struct Drag {
     /// Leave out the linear Stokes parts −6π μ a (v − u_f) and −8π μ a³ ω, which an exponential
     /// integrator applies exactly; only the shielding and Schiller–Naumann corrections remain.
     pub exclude_linear: bool,
+    /// The touching-pair search of the shielding (contact range times 1 + touch tolerance).
+    pub near: PairRange,
     shadow: Vec<f64>,
     flow_direction: Vec<Vec3>,
 }
@@ -51,8 +54,9 @@ impl Drag {
         viscosity: f64,
         fluid_velocity: Vec3,
         touch_tolerance: f64,
+        near: PairRange,
     ) -> Self {
-        Self { law, shielding, rotational, fluid_density, viscosity, fluid_velocity, touch_tolerance, exclude_linear: false, shadow: vec![], flow_direction: vec![] }
+        Self { law, shielding, rotational, fluid_density, viscosity, fluid_velocity, touch_tolerance, exclude_linear: false, near, shadow: vec![], flow_direction: vec![] }
     }
 
     /// Linear drag coefficient 6π μ a (kg/s) of an unshielded sphere in Stokes flow.
@@ -62,8 +66,7 @@ impl Drag {
 
     /// Largest shadow each particle receives from a touching upstream neighbour, with each
     /// particle's flow direction computed once (not once per touching pair).
-    fn compute_shadows(&mut self, ctx: &ForceContext, state: &State) {
-        let p = &state.particles;
+    fn compute_shadows(&mut self, ctx: &Context, p: &Particles) {
         self.flow_direction.clear();
         self.flow_direction.extend(p.velocity.iter().map(|v| {
             let u = v - self.fluid_velocity;
@@ -72,7 +75,7 @@ impl Drag {
         }));
         self.shadow.clear();
         self.shadow.resize(p.len(), 0.0);
-        for pair in ctx.near_pairs {
+        for pair in ctx.neighbours.pairs(self.near) {
             let (i, j) = (pair.i as usize, pair.j as usize);
             let (a_i, a_j) = (p.radius[i], p.radius[j]);
             if pair.dist - a_i - a_j > self.touch_tolerance * a_i.min(a_j) {
@@ -101,14 +104,15 @@ impl ForceTerm for Drag {
     fn name(&self) -> &'static str {
         "drag"
     }
-    fn needs_near_pairs(&self) -> bool {
-        self.shielding == Shielding::Paper
+    fn pairs(&self) -> Option<PairRange> {
+        (self.shielding == Shielding::Paper).then_some(self.near)
     }
-    fn apply(&mut self, ctx: &ForceContext, state: &mut State) {
+    fn apply(&mut self, ctx: &Context, p: &Particles, out: &mut Forces) {
         if self.shielding == Shielding::Paper {
-            self.compute_shadows(ctx, state);
+            self.compute_shadows(ctx, p);
         }
-        let Particles { force, torque, velocity, angular_velocity, radius, .. } = &mut state.particles;
+        let Particles { velocity, angular_velocity, radius, .. } = p;
+        let (force, torque) = (&mut *out.force, &mut *out.torque);
         let drag = |(i, (f, t)): (usize, (&mut Vec3, &mut Vec3))| {
             let a = radius[i];
             let full = PI * a * a;

@@ -1,8 +1,8 @@
 //! Force of the applied field gradient on a point dipole, F = (m·∇) B_ext = G m, with
 //! G_ab = ∂B_a/∂x_b (paper eq. 4, written for the moment m = V M).
 
-use super::{ForceContext, ForceTerm};
-use crate::core::state::State;
+use super::{Context, ForceTerm, Forces};
+use crate::core::state::Particles;
 use nalgebra::Matrix3;
 
 #[derive(Debug, Clone)]
@@ -18,10 +18,9 @@ impl ForceTerm for GradientForce {
     fn is_slow(&self) -> bool {
         true
     }
-    fn apply(&mut self, _ctx: &ForceContext, state: &mut State) {
-        let p = &mut state.particles;
-        for i in 0..p.len() {
-            p.force[i] += self.gradient * p.moment[i];
+    fn apply(&mut self, _ctx: &Context, _p: &Particles, out: &mut Forces) {
+        for (f, m) in out.force.iter_mut().zip(out.moment.iter()) {
+            *f += self.gradient * m;
         }
     }
 }

@@ -1,8 +1,8 @@
 //! Weight minus buoyancy, F = V (ρ_p − ρ_f) g (paper eq. 11).
 
-use super::{ConstantForce, ForceContext, ForceTerm};
+use super::{ConstantForce, Context, ForceTerm, Forces};
 use crate::core::parallel;
-use crate::core::state::{Particles, State, Vec3};
+use crate::core::state::{Particles, Vec3};
 use rayon::prelude::*;
 
 #[derive(Debug, Clone)]
@@ -38,6 +38,9 @@ impl ForceTerm for GravityBuoyancy {
     fn name(&self) -> &'static str {
         "gravity"
     }
+    fn is_constant(&self) -> bool {
+        true
+    }
     fn constant_force(&mut self, p: &Particles) -> Option<ConstantForce<'_>> {
         self.weigh(p);
         Some(match self.uniform {
@@ -45,14 +48,13 @@ impl ForceTerm for GravityBuoyancy {
             None => ConstantForce::PerParticle(&self.weights),
         })
     }
-    fn apply(&mut self, _ctx: &ForceContext, state: &mut State) {
-        self.weigh(&state.particles);
-        let p = &mut state.particles;
+    fn apply(&mut self, _ctx: &Context, p: &Particles, out: &mut Forces) {
+        self.weigh(p);
         let add = |(f, w): (&mut Vec3, &Vec3)| *f += w;
         if parallel::worth_it(p.len()) {
-            p.force.par_iter_mut().zip(&self.weights).with_min_len(parallel::share(self.weights.len())).for_each(add);
+            out.force.par_iter_mut().zip(&self.weights).with_min_len(parallel::share(self.weights.len())).for_each(add);
         } else {
-            p.force.iter_mut().zip(&self.weights).for_each(add);
+            out.force.iter_mut().zip(&self.weights).for_each(add);
         }
     }
 }

@@ -1,5 +1,6 @@
 //! Force terms. Each term is one file behind [`ForceTerm`]; a scene includes only the terms it
-//! lists, so an absent term costs nothing.
+//! lists, so an absent term costs nothing. A term reads the particles (never writes them),
+//! declares the pairs it needs, and adds its contribution into [`Forces`].
 
 pub mod contact;
 pub mod dipole;
@@ -9,23 +10,28 @@ pub mod gravity;
 pub mod shielding;
 
 use super::domain::Domain;
-use super::neighbours::Pair;
-use super::state::{Particles, State, Vec3};
+use super::magnetisation::InductionError;
+use super::neighbours::{Neighbours, PairRange};
+use super::state::{ContactDiagnostics, ContactHistory, Particles, State, Vec3};
 
-/// What a term may read besides the state during one force evaluation.
-pub struct ForceContext<'a> {
+/// What a term may read besides the particles during one force evaluation.
+pub struct Context<'a> {
     pub domain: &'a Domain,
-    /// Pairs within contact range (touching or overlapping within the touch tolerance), in
-    /// (i, j) order.
-    pub near_pairs: &'a [Pair],
-    /// `Some(skin)` when the near-pair candidates were rebuilt in this evaluation: until the next
-    /// rebuild no particle moves more than skin/2 from where it is now.
-    pub near_rebuilt: Option<f64>,
+    /// Pair lists for the ranges the terms declared ([`ForceTerm::pairs`]), up to date.
+    pub neighbours: &'a Neighbours,
     /// Time step, for history-dependent terms (tangential spring).
     pub dt: f64,
-    /// Pairs the moments phase found this evaluation, with their range (`None` = all pairs),
-    /// for terms that sum over the same pairs.
-    pub magnetic_pairs: Option<(Option<f64>, &'a [Pair])>,
+}
+
+/// What a force evaluation writes: the force and torque of the evaluated group, the moments
+/// (written by the moments term, read by the magnetic force terms after it), and the contact
+/// history and diagnostics (written by the contact term).
+pub struct Forces<'a> {
+    pub force: &'a mut [Vec3],
+    pub torque: &'a mut [Vec3],
+    pub moment: &'a mut [Vec3],
+    pub contacts: &'a mut ContactHistory,
+    pub diagnostics: &'a mut ContactDiagnostics,
 }
 
 /// A force that does not change during a run (see [`ForceTerm::constant_force`]).
@@ -45,16 +51,59 @@ pub trait ForceTerm: Send {
     fn is_slow(&self) -> bool {
         false
     }
-    /// Whether the term needs `ForceContext::near_pairs`.
-    fn needs_near_pairs(&self) -> bool {
+    /// The pairs the term needs from the neighbour layer (`None`: none).
+    fn pairs(&self) -> Option<PairRange> {
+        None
+    }
+    /// Whether the term's force depends on nothing but fixed particle properties (mass,
+    /// radius) and it exerts no torque; then [`ForceTerm::constant_force`] gives it.
+    fn is_constant(&self) -> bool {
         false
     }
-    /// The term's force when it depends on nothing but fixed particle properties (mass, radius)
-    /// and exerts no torque: the force field then starts each evaluation from it instead of
-    /// from zero, saving a pass over the particles.
+    /// The constant force of a term with [`ForceTerm::is_constant`]: the evaluation starts from
+    /// it instead of from zero, saving a pass over the particles.
     fn constant_force(&mut self, _particles: &Particles) -> Option<ConstantForce<'_>> {
         None
     }
-    /// Adds this term's force and torque into `state.particles.force/torque`.
-    fn apply(&mut self, ctx: &ForceContext, state: &mut State);
+    /// Work that reads the whole state before any term adds forces (the moments' induction
+    /// solve); an error stops the run after the step.
+    fn prepare(&mut self, _ctx: &Context, _state: &State) -> Result<(), InductionError> {
+        Ok(())
+    }
+    /// Adds this term's contribution into `out`.
+    fn apply(&mut self, ctx: &Context, particles: &Particles, out: &mut Forces);
+}
+
+/// Which forces an evaluation computes (multiple time stepping splits them).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ForceGroup {
+    /// Everything, into `force`/`torque`.
+    All,
+    /// Every term that is not slow, into `force`/`torque`.
+    Fast,
+    /// The slow (magnetic) terms, moments included, into `slow_force`/`slow_torque`.
+    Slow,
+}
+
+impl ForceGroup {
+    /// Whether the group evaluates `term`.
+    pub fn has(self, term: &dyn ForceTerm) -> bool {
+        match self {
+            ForceGroup::All => true,
+            ForceGroup::Fast => !term.is_slow(),
+            ForceGroup::Slow => term.is_slow(),
+        }
+    }
+}
+
+impl<'a> Forces<'a> {
+    /// The arrays `group` writes, from `state`; the particles stay readable beside them.
+    pub fn of(state: &'a mut State, group: ForceGroup) -> (&'a Particles, Self) {
+        let State { particles, fields, contacts, diagnostics, .. } = state;
+        let (force, torque) = match group {
+            ForceGroup::Slow => (&mut fields.slow_force, &mut fields.slow_torque),
+            ForceGroup::All | ForceGroup::Fast => (&mut fields.force, &mut fields.torque),
+        };
+        (particles, Forces { force, torque, moment: &mut fields.moment, contacts, diagnostics })
+    }
 }

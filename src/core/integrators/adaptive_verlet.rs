@@ -16,7 +16,7 @@
 //! layer refuses the paper's lagged induction, which advances one sweep per evaluation.
 
 use super::{kick, kick_drift, Evaluate, Integrator};
-use crate::core::simulation::ForceGroup;
+use super::ForceGroup;
 use crate::core::state::State;
 
 pub struct AdaptiveVerlet {
@@ -37,10 +37,10 @@ impl AdaptiveVerlet {
 
 /// One velocity Verlet step of `h` (forces on entry belong to `state`).
 fn verlet(state: &mut State, h: f64, evaluate: &mut Evaluate) {
-    kick_drift(&mut state.particles, 0.5 * h, h);
+    kick_drift(state, 0.5 * h, h);
     state.time += h;
     evaluate(state, ForceGroup::All, h);
-    kick(&mut state.particles, 0.5 * h);
+    kick(state, 0.5 * h);
 }
 
 /// Largest per-particle (|Δx| + h|Δv|) / (3 · tolerance · radius) between two states.
@@ -54,9 +54,6 @@ fn scaled_error(a: &State, b: &State, h: f64, tolerance: f64) -> f64 {
 impl Integrator for AdaptiveVerlet {
     fn name(&self) -> &'static str {
         "adaptive-verlet"
-    }
-    fn order(&self) -> u32 {
-        2
     }
     fn step(&mut self, state: &mut State, dt: f64, evaluate: &mut Evaluate) {
         let (start_step, start_time) = (state.step, state.time);

@@ -2,7 +2,7 @@
 //! First order; unconditionally unstable for an undamped oscillator.
 
 use super::{drift, kick, tick, Evaluate, Integrator};
-use crate::core::simulation::ForceGroup;
+use super::ForceGroup;
 use crate::core::state::State;
 
 pub struct ExplicitEuler;
@@ -11,12 +11,9 @@ impl Integrator for ExplicitEuler {
     fn name(&self) -> &'static str {
         "explicit-euler"
     }
-    fn order(&self) -> u32 {
-        1
-    }
     fn step(&mut self, state: &mut State, dt: f64, evaluate: &mut Evaluate) {
-        drift(&mut state.particles, dt);
-        kick(&mut state.particles, dt);
+        drift(state, dt);
+        kick(state, dt);
         tick(state, dt);
         evaluate(state, ForceGroup::All, dt);
     }

@@ -9,8 +9,8 @@
 //! (contact still does) — what sub-micron particles need. At γ = 0 it is velocity Verlet.
 
 use super::{drift, tick, Evaluate, Integrator};
-use crate::core::simulation::ForceGroup;
-use crate::core::state::{Particles, State, Vec3};
+use super::ForceGroup;
+use crate::core::state::{State, Vec3};
 
 pub struct ExponentialVerlet {
     /// Linear drag coefficient 6π μ a per particle (kg/s).
@@ -30,13 +30,14 @@ fn phi(x: f64) -> f64 {
 }
 
 impl ExponentialVerlet {
-    fn half_kick(&self, p: &mut Particles, h: f64) {
+    fn half_kick(&self, state: &mut State, h: f64) {
+        let (p, fields) = (&mut state.particles, &state.fields);
         let u = self.fluid_velocity;
         for i in 0..p.len() {
             let x = self.gamma[i] * h / p.mass[i];
-            p.velocity[i] = u + (p.velocity[i] - u) * (-x).exp() + p.force[i] * (h / p.mass[i] * phi(x));
+            p.velocity[i] = u + (p.velocity[i] - u) * (-x).exp() + fields.force[i] * (h / p.mass[i] * phi(x));
             let xr = self.gamma_rotational[i] * h / p.inertia[i];
-            p.angular_velocity[i] = p.angular_velocity[i] * (-xr).exp() + p.torque[i] * (h / p.inertia[i] * phi(xr));
+            p.angular_velocity[i] = p.angular_velocity[i] * (-xr).exp() + fields.torque[i] * (h / p.inertia[i] * phi(xr));
         }
     }
 }
@@ -45,14 +46,11 @@ impl Integrator for ExponentialVerlet {
     fn name(&self) -> &'static str {
         "exponential-verlet"
     }
-    fn order(&self) -> u32 {
-        2
-    }
     fn step(&mut self, state: &mut State, dt: f64, evaluate: &mut Evaluate) {
-        self.half_kick(&mut state.particles, 0.5 * dt);
-        drift(&mut state.particles, dt);
+        self.half_kick(state, 0.5 * dt);
+        drift(state, dt);
         tick(state, dt);
         evaluate(state, ForceGroup::All, dt);
-        self.half_kick(&mut state.particles, 0.5 * dt);
+        self.half_kick(state, 0.5 * dt);
     }
 }

@@ -18,7 +18,7 @@ pub use semi_implicit_euler::SemiImplicitEuler;
 pub use subcycled_euler::SubcycledEuler;
 pub use velocity_verlet::VelocityVerlet;
 
-use super::simulation::ForceGroup;
+pub use super::forces::ForceGroup;
 use super::parallel;
 use super::state::{InverseMasses, Particles, State, Vec3};
 use rayon::prelude::*;
@@ -29,8 +29,6 @@ pub type Evaluate<'a> = dyn FnMut(&mut State, ForceGroup, f64) + 'a;
 
 pub trait Integrator: Send {
     fn name(&self) -> &'static str;
-    /// Global order of accuracy for smooth forces.
-    fn order(&self) -> u32;
     /// Steps of `dt` one call of `step` advances (more than one for multiple time stepping).
     fn steps_per_call(&self) -> u64 {
         1
@@ -128,43 +126,30 @@ impl std::fmt::Display for Scheme {
 }
 
 /// v += F/m h, ω += T/I h.
-fn kick(p: &mut Particles, h: f64) {
-    kick_drift_by(p, Forces::Fast, h, 0.0);
+fn kick(state: &mut State, h: f64) {
+    kick_drift_by(&mut state.particles, &state.fields.force, &state.fields.torque, h, 0.0);
 }
 
 /// v += F_slow/m h, ω += T_slow/I h.
-fn slow_kick(p: &mut Particles, h: f64) {
-    kick_drift_by(p, Forces::Slow, h, 0.0);
+fn slow_kick(state: &mut State, h: f64) {
+    kick_drift_by(&mut state.particles, &state.fields.slow_force, &state.fields.slow_torque, h, 0.0);
 }
 
 /// x += v h, and permanent moments turn with the particle by ω h (Rodrigues rotation).
-fn drift(p: &mut Particles, h: f64) {
-    kick_drift(p, 0.0, h);
+fn drift(state: &mut State, h: f64) {
+    kick_drift_by(&mut state.particles, &state.fields.force, &state.fields.torque, 0.0, h);
 }
 
 /// A kick by `kick` then a drift by `drift` in one pass over the particles (the same arithmetic
 /// as [`kick`] followed by [`drift`]).
-fn kick_drift(p: &mut Particles, kick: f64, drift: f64) {
-    kick_drift_by(p, Forces::Fast, kick, drift);
-}
-
-/// Which force arrays a kick applies.
-#[derive(Clone, Copy)]
-enum Forces {
-    /// `force`/`torque`.
-    Fast,
-    /// `slow_force`/`slow_torque`.
-    Slow,
+fn kick_drift(state: &mut State, kick: f64, drift: f64) {
+    kick_drift_by(&mut state.particles, &state.fields.force, &state.fields.torque, kick, drift);
 }
 
 /// v += F/m kick and ω += T/I kick, then x += v drift (a zero kick or drift is skipped): one
 /// parallel loop in which each thread takes its share of the particles through all of it (a
 /// parallel loop per array would hand out and join once per array).
-fn kick_drift_by(p: &mut Particles, forces: Forces, kick: f64, drift: f64) {
-    let (force, torque) = match forces {
-        Forces::Fast => (&p.force, &p.torque),
-        Forces::Slow => (&p.slow_force, &p.slow_torque),
-    };
+fn kick_drift_by(p: &mut Particles, force: &[Vec3], torque: &[Vec3], kick: f64, drift: f64) {
     let (x, v, w) = (&mut p.position, &mut p.velocity, &mut p.angular_velocity);
     let (in_parallel, share) = (parallel::worth_it(x.len()), parallel::share(x.len()));
     match &p.inverse_masses {
@@ -245,18 +230,18 @@ mod tests {
     use super::*;
 
     /// Particles with pseudo-random state and one shared (or per-particle) 1/m and 1/I.
-    fn particles(n: usize, per_particle: bool) -> Particles {
+    fn particles(n: usize, per_particle: bool) -> State {
         let value = |k: usize| ((k as f64 * 0.618_033_988_75).fract() - 0.5) * 1e-3;
         let vectors = |offset: usize| (0..n).map(|i| Vec3::from_fn(|c, _| value(3 * (i + offset * n) + c))).collect::<Vec<_>>();
-        let mut p = Particles::default();
-        (p.position, p.velocity, p.angular_velocity, p.force, p.torque) = (vectors(0), vectors(1), vectors(2), vectors(3), vectors(4));
+        let (mut p, mut f) = (Particles::default(), crate::core::state::Fields::default());
+        (p.position, p.velocity, p.angular_velocity, f.force, f.torque) = (vectors(0), vectors(1), vectors(2), vectors(3), vectors(4));
         let (inv_m, inv_i) = (3.7e11, 2.9e21);
         p.inverse_masses = if per_particle {
             InverseMasses::PerParticle { mass: vec![inv_m; n], inertia: vec![inv_i; n] }
         } else {
             InverseMasses::Uniform { mass: inv_m, inertia: inv_i }
         };
-        p
+        State { particles: p, fields: f, ..State::default() }
     }
 
     /// The componentwise loops of shared inverse masses do the per-vector arithmetic of
@@ -272,10 +257,11 @@ mod tests {
                     drift(p, 1e-8);
                 }
             });
+            let (shared, own) = (&shared.particles, &own.particles);
             assert_eq!(shared.position, own.position, "n = {n}");
             assert_eq!(shared.velocity, own.velocity, "n = {n}");
             assert_eq!(shared.angular_velocity, own.angular_velocity, "n = {n}");
-            assert_ne!(shared.position, particles(n, false).position, "the particles moved");
+            assert_ne!(shared.position, particles(n, false).particles.position, "the particles moved");
         }
     }
 }

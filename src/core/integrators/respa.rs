@@ -6,7 +6,7 @@
 //! approaches half the period of a fast oscillation, which the stability studies measure.
 
 use super::{kick, kick_drift, slow_kick, tick, Evaluate, Integrator};
-use crate::core::simulation::ForceGroup;
+use super::ForceGroup;
 use crate::core::state::State;
 
 pub struct Respa {
@@ -18,9 +18,6 @@ impl Integrator for Respa {
     fn name(&self) -> &'static str {
         "respa"
     }
-    fn order(&self) -> u32 {
-        2
-    }
     fn steps_per_call(&self) -> u64 {
         self.slow_every
     }
@@ -29,14 +26,14 @@ impl Integrator for Respa {
     }
     fn step(&mut self, state: &mut State, dt: f64, evaluate: &mut Evaluate) {
         let outer = self.slow_every as f64 * dt;
-        slow_kick(&mut state.particles, 0.5 * outer);
+        slow_kick(state, 0.5 * outer);
         for _ in 0..self.slow_every {
-            kick_drift(&mut state.particles, 0.5 * dt, dt);
+            kick_drift(state, 0.5 * dt, dt);
             tick(state, dt);
             evaluate(state, ForceGroup::Fast, dt);
-            kick(&mut state.particles, 0.5 * dt);
+            kick(state, 0.5 * dt);
         }
         evaluate(state, ForceGroup::Slow, dt);
-        slow_kick(&mut state.particles, 0.5 * outer);
+        slow_kick(state, 0.5 * outer);
     }
 }

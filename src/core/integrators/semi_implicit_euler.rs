@@ -2,7 +2,7 @@
 //! stable for an oscillator while ω dt < 2.
 
 use super::{kick_drift, tick, Evaluate, Integrator};
-use crate::core::simulation::ForceGroup;
+use super::ForceGroup;
 use crate::core::state::State;
 
 pub struct SemiImplicitEuler;
@@ -11,11 +11,8 @@ impl Integrator for SemiImplicitEuler {
     fn name(&self) -> &'static str {
         "semi-implicit-euler"
     }
-    fn order(&self) -> u32 {
-        1
-    }
     fn step(&mut self, state: &mut State, dt: f64, evaluate: &mut Evaluate) {
-        kick_drift(&mut state.particles, dt, dt);
+        kick_drift(state, dt, dt);
         tick(state, dt);
         evaluate(state, ForceGroup::All, dt);
     }

@@ -7,7 +7,7 @@
 //! OpenFOAM's colliding clouds do.
 
 use super::{kick, kick_drift, slow_kick, tick, Evaluate, Integrator};
-use crate::core::simulation::ForceGroup;
+use super::ForceGroup;
 use crate::core::state::State;
 
 pub struct SubcycledEuler {
@@ -19,9 +19,6 @@ impl Integrator for SubcycledEuler {
     fn name(&self) -> &'static str {
         "subcycled-euler"
     }
-    fn order(&self) -> u32 {
-        1
-    }
     fn steps_per_call(&self) -> u64 {
         self.slow_every
     }
@@ -30,12 +27,12 @@ impl Integrator for SubcycledEuler {
     }
     fn step(&mut self, state: &mut State, dt: f64, evaluate: &mut Evaluate) {
         for _ in 0..self.slow_every {
-            slow_kick(&mut state.particles, 0.5 * dt);
-            kick_drift(&mut state.particles, 0.5 * dt, dt);
+            slow_kick(state, 0.5 * dt);
+            kick_drift(state, 0.5 * dt, dt);
             tick(state, dt);
             evaluate(state, ForceGroup::Fast, dt);
-            kick(&mut state.particles, 0.5 * dt);
-            slow_kick(&mut state.particles, 0.5 * dt);
+            kick(state, 0.5 * dt);
+            slow_kick(state, 0.5 * dt);
         }
         evaluate(state, ForceGroup::Slow, dt);
     }

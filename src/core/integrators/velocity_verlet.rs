@@ -3,7 +3,7 @@
 //! forces; stable for an oscillator while ω dt < 2.
 
 use super::{kick, kick_drift, tick, Evaluate, Integrator};
-use crate::core::simulation::ForceGroup;
+use super::ForceGroup;
 use crate::core::state::State;
 
 pub struct VelocityVerlet;
@@ -12,13 +12,10 @@ impl Integrator for VelocityVerlet {
     fn name(&self) -> &'static str {
         "velocity-verlet"
     }
-    fn order(&self) -> u32 {
-        2
-    }
     fn step(&mut self, state: &mut State, dt: f64, evaluate: &mut Evaluate) {
-        kick_drift(&mut state.particles, 0.5 * dt, dt);
+        kick_drift(state, 0.5 * dt, dt);
         tick(state, dt);
         evaluate(state, ForceGroup::All, dt);
-        kick(&mut state.particles, 0.5 * dt);
+        kick(state, 0.5 * dt);
     }
 }
