@@ -371,3 +371,76 @@ fn chain_moving_along_its_axis_has_drag_only_on_its_leading_sphere() {
         }
     }
 }
+
+/// Head-on impact of two equal spheres on a Hooke spring with restitution damping: a linear
+/// spring-dashpot with γ = −2β√(k m*) rebounds with exactly the restitution coefficient e after
+/// half a damped period π/(ω√(1 − β²)), ω = √(k/m*). Velocity Verlet at ω dt = 5e-4: the error
+/// of the velocity-dependent damping is first order, ~ζω dt ≈ 1e-4, inside the 1e-3 asserted.
+#[test]
+fn hooke_impact_rebounds_with_the_restitution_coefficient_after_half_a_damped_period() {
+    let (a, v_each, k, e) = (5.5e-6_f64, 0.05, 1.0e3, 0.5_f64);
+    let s = scene(&format!(
+        "{}[[particles]]\nspecies = \"p\"\npositions = [[-{x:e}, 0, 0], [{x:e}, 0, 0]]\nvelocities = [[{v_each}, 0, 0], [-{v_each}, 0, 0]]\n\
+         [forces.contact]\nnormal = \"hooke\"\nstiffness = {k:e}\n[integration]\ndt = 1.0e-11\nend_time = 1.0\n",
+        species(&format!("restitution = {e}")),
+        x = a + 1e-9
+    ));
+    let mut sim = s.simulation(None);
+    sim.initialise().unwrap();
+    let (mut t_start, mut t_end, mut prev_overlap) = (None, None, 0.0);
+    while t_end.is_none() {
+        sim.step().unwrap();
+        let p = &sim.state.particles;
+        let overlap = 2.0 * a - (p.position[1] - p.position[0]).norm();
+        let crossing = sim.state.time - sim.dt * overlap / (overlap - prev_overlap);
+        if overlap > 0.0 && prev_overlap <= 0.0 {
+            t_start = Some(crossing);
+        }
+        if overlap <= 0.0 && prev_overlap > 0.0 {
+            t_end = Some(crossing);
+        }
+        prev_overlap = overlap;
+    }
+    let m_eff = s.species[0].mass() / 2.0;
+    let beta = e.ln() / (e.ln().powi(2) + PI * PI).sqrt();
+    let t_c = PI / ((k / m_eff).sqrt() * (1.0 - beta * beta).sqrt());
+    let duration = t_end.unwrap() - t_start.unwrap();
+    let rebound = (sim.state.particles.velocity[1] - sim.state.particles.velocity[0]).x / (2.0 * v_each);
+    println!("duration {duration:.6e} s (closed form {t_c:.6e}); restitution {rebound:.6} (scene {e})");
+    assert!((duration / t_c - 1.0).abs() < 1e-3, "duration {duration:e} vs {t_c:e}");
+    assert!((rebound / e - 1.0).abs() < 1e-3, "restitution {rebound} vs {e}");
+}
+
+/// An oblique elastic impact (30° off the line of centres) with `tangential = "none"`:
+/// frictionless spheres exert no torque beyond round-off and keep their kinetic energy; the same
+/// impact with Mindlin's spring spins them (the control).
+#[test]
+fn frictionless_oblique_impact_spins_nothing_and_keeps_its_energy() {
+    let a = 5.5e-6_f64;
+    let run = |tangential: &str| {
+        let s = scene(&format!(
+            "{}[[particles]]\nspecies = \"p\"\npositions = [[-{x:e}, -{y:e}, 0], [{x:e}, {y:e}, 0]]\nvelocities = [[0.05, 0, 0], [-0.05, 0, 0]]\n\
+             [forces.contact]\ntangential = \"{tangential}\"\n[integration]\ndt = 1.0e-11\nend_time = 1.0e-6\n",
+            species("restitution = 1.0"),
+            // Centres just apart along 30° from the velocities: the impact is oblique.
+            x = (a + 1e-9) * (PI / 6.0).cos(),
+            y = (a + 1e-9) * (PI / 6.0).sin()
+        ));
+        let mut sim = s.simulation(None);
+        sim.initialise().unwrap();
+        let energy = sim.state.particles.kinetic_energy();
+        let mut spin = 0.0_f64;
+        while sim.state.time < 1.0e-6 {
+            sim.step().unwrap();
+            spin = sim.state.particles.angular_velocity.iter().fold(spin, |s, w| s.max(w.norm()));
+        }
+        (spin, sim.state.particles.kinetic_energy() / energy)
+    };
+    let (spin, energy_ratio) = run("none");
+    let (mindlin_spin, _) = run("mindlin");
+    println!("largest spin: none {spin:e} rad/s, mindlin {mindlin_spin:e} rad/s; energy after/before {energy_ratio:.6}");
+    // Only round-off: the tangential part of a normal force, |F| ε, times the lever arm.
+    assert!(spin < 1e-9 * mindlin_spin, "frictionless spheres do not spin ({spin:e} rad/s)");
+    assert!(mindlin_spin > 1e3, "Mindlin's spring spins the spheres ({mindlin_spin:e} rad/s)");
+    assert!((energy_ratio - 1.0).abs() < 1e-4, "kinetic energy after/before {energy_ratio}");
+}

@@ -15,6 +15,7 @@
 //!   (I − D T) m = m_perm + D H_ext for N ≤ `dense_max` without saturation, otherwise fixed-point
 //!   sweeps warm-started from the previous moments until max|Δm| ≤ tolerance · max|m|.
 
+pub use super::forces::InductionError;
 use super::forces::{Context, ForceTerm, Forces};
 use super::neighbours::{Pair, PairRange, Skins};
 use super::parallel;
@@ -30,18 +31,6 @@ pub enum Induction {
     None,
     Paper { radius: f64 },
     Exact { tolerance: f64, max_iterations: usize, dense_max: usize },
-}
-
-/// Mutual induction failed to converge.
-#[derive(Debug, Clone, thiserror::Error)]
-#[error(
-    "mutual induction did not converge: relative change {residual:.3e} after {iterations} sweeps \
-     (tolerance {tolerance:.1e}); the dipole coupling is near or beyond its limit"
-)]
-pub struct InductionError {
-    pub residual: f64,
-    pub iterations: usize,
-    pub tolerance: f64,
 }
 
 /// Fields of a pair's dipoles on each other, with r = x_i − x_j: on i from m_j and on j from m_i,

@@ -18,6 +18,7 @@
 //! capped by the drag-limited closing speed 2F/(6π μ a) under the contact attraction
 //! F = 3μ0 m²/(2π d⁴), or the fastest initial speed if larger; Hertz theory gives the overlap.
 
+use super::forces::contact::law::{ContactLaw, Normal};
 use super::forces::drag::Drag;
 use super::integrators::Scheme;
 use super::state::{Particles, Species, State, Vec3};
@@ -30,7 +31,8 @@ use std::f64::consts::PI;
 pub struct StepEstimateInput<'a> {
     pub species: &'a [Species],
     pub scheme: Scheme,
-    pub contact: bool,
+    /// The contact law, if contacts are included.
+    pub contact: Option<ContactLaw>,
     /// Viscosity if drag is included.
     pub drag_viscosity: Option<f64>,
     /// Largest isolated moment magnitude per species (A·m²), if magnetic terms are included.
@@ -68,7 +70,7 @@ impl StepEstimate {
         let mut impact_speed = input.max_initial_speed;
         let mut contact_duration: Option<f64> = None;
         let mut contact_bound: Option<f64> = None;
-        if input.contact {
+        if let Some(law) = input.contact {
             for (k, s) in input.species.iter().enumerate() {
                 let m_eff = 0.5 * s.mass();
                 let r_eff = 0.5 * s.radius;
@@ -84,11 +86,21 @@ impl StepEstimate {
                 }
                 let v = v.max(input.max_initial_speed).max(1e-6);
                 impact_speed = impact_speed.max(v);
-                let overlap = (15.0 * m_eff * v * v / (16.0 * e_star * r_eff.sqrt())).powf(0.4);
-                let duration = 2.87 * (m_eff * m_eff / (r_eff * e_star * e_star * v)).powf(0.2);
-                let omega = (2.0 * e_star * (r_eff * overlap).sqrt() / m_eff).sqrt();
                 let ln_e = s.restitution.ln();
-                let zeta = -(5.0_f64 / 6.0).sqrt() * ln_e / (ln_e * ln_e + PI * PI).sqrt();
+                let (duration, omega, zeta) = match law.normal {
+                    Normal::Hertz => {
+                        let overlap = (15.0 * m_eff * v * v / (16.0 * e_star * r_eff.sqrt())).powf(0.4);
+                        let duration = 2.87 * (m_eff * m_eff / (r_eff * e_star * e_star * v)).powf(0.2);
+                        let omega = (2.0 * e_star * (r_eff * overlap).sqrt() / m_eff).sqrt();
+                        (duration, omega, -(5.0_f64 / 6.0).sqrt() * ln_e / (ln_e * ln_e + PI * PI).sqrt())
+                    }
+                    // A linear spring-dashpot: ω = √(k/m*), ζ = −β, half a damped period.
+                    Normal::Hooke { stiffness } => {
+                        let beta = ln_e / (ln_e * ln_e + PI * PI).sqrt();
+                        let omega = (stiffness / m_eff).sqrt();
+                        (PI / (omega * (1.0 - beta * beta).sqrt()), omega, -beta)
+                    }
+                };
                 let bound = if input.scheme.forward_euler_in_contact() {
                     2.0 * zeta / omega
                 } else {

@@ -6,6 +6,7 @@ pub mod placement;
 pub mod spec;
 
 use crate::core::domain::Domain;
+use crate::core::forces::contact::law::{ContactLaw, Normal, Tangential};
 use crate::core::forces::contact::Contact;
 use crate::core::forces::dipole::DipoleForce;
 use crate::core::forces::drag::{Drag, DragLaw, Shielding};
@@ -110,7 +111,7 @@ impl Scene {
         let estimate = StepEstimate::new(&StepEstimateInput {
             species: &species,
             scheme: spec.integration.scheme,
-            contact: spec.forces.contact.is_some(),
+            contact: spec.forces.contact.as_ref().map(contact_law),
             drag_viscosity: spec.forces.drag.as_ref().and(spec.fluid.as_ref()).map(|f| f.viscosity),
             moments,
             max_initial_speed: initial.velocity.iter().map(|v| v.norm()).fold(0.0, f64::max),
@@ -249,7 +250,7 @@ impl Scene {
             terms.push(Box::new(GravityBuoyancy::new(Vec3::from(g.g), fluid.density)));
         }
         if let Some(c) = &f.contact {
-            terms.push(Box::new(Contact::new(&self.species, c.walls, near)));
+            terms.push(Box::new(Contact::new(&self.species, contact_law(c), c.walls, near)));
         }
         let field = ForceField::new(self.domain.clone(), terms);
         Simulation {
@@ -400,6 +401,16 @@ fn check_forces(spec: &SceneSpec, domain: &Domain, species: &[Species], warnings
     if let Some(d) = &f.drag {
         non_negative("forces.drag.touch_tolerance", d.touch_tolerance)?;
     }
+    if let Some(c) = &f.contact {
+        match (c.normal, c.stiffness) {
+            (NormalSpec::Hooke, Some(k)) => positive("forces.contact.stiffness", k)?,
+            (NormalSpec::Hooke, None) => return Err(invalid("forces.contact.normal", "hooke", "needs forces.contact.stiffness (N/m)")),
+            (NormalSpec::Hertz, Some(k)) => {
+                return Err(invalid("forces.contact.stiffness", k, "applies to normal = \"hooke\" only (Hertz's stiffness follows from the species)"))
+            }
+            (NormalSpec::Hertz, None) => {}
+        }
+    }
     if let Some(field) = &spec.field {
         let g = field.gradient;
         let div = g[0][0] + g[1][1] + g[2][2];
@@ -412,6 +423,19 @@ fn check_forces(spec: &SceneSpec, domain: &Domain, species: &[Species], warnings
         }
     }
     Ok(())
+}
+
+/// The contact law a contact table chooses (validated: Hooke has its stiffness).
+fn contact_law(c: &ContactSpec) -> ContactLaw {
+    let normal = match c.normal {
+        NormalSpec::Hertz => Normal::Hertz,
+        NormalSpec::Hooke => Normal::Hooke { stiffness: c.stiffness.unwrap_or(f64::NAN) },
+    };
+    let tangential = match c.tangential {
+        TangentialSpec::Mindlin => Tangential::Mindlin,
+        TangentialSpec::None => Tangential::None,
+    };
+    ContactLaw { normal, tangential }
 }
 
 fn check_integration(spec: &SceneSpec) -> Result<(), SceneError> {

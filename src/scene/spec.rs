@@ -183,13 +183,39 @@ pub struct ForcesSpec {
     pub gravity: Option<GravitySpec>,
 }
 
-/// Hertz–Mindlin with history and restitution damping (LIGGGHTS' `hertz tangential history`).
+/// The contact law: by default Hertz–Mindlin with history and restitution damping (LIGGGHTS'
+/// `hertz tangential history`).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ContactSpec {
     /// Particle–wall contacts on the wall faces (default true).
     #[serde(default = "default_true")]
     pub walls: bool,
+    /// Normal force: `hertz` (default) or `hooke` (a linear spring of `stiffness`).
+    #[serde(default)]
+    pub normal: NormalSpec,
+    /// Hooke's spring stiffness (N/m); only with `normal = "hooke"`.
+    pub stiffness: Option<f64>,
+    /// Tangential force: `mindlin` (default: spring with history, Coulomb limit) or `none`
+    /// (frictionless spheres).
+    #[serde(default)]
+    pub tangential: TangentialSpec,
+}
+
+#[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum NormalSpec {
+    #[default]
+    Hertz,
+    Hooke,
+}
+
+#[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum TangentialSpec {
+    #[default]
+    Mindlin,
+    None,
 }
 
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]

@@ -298,7 +298,9 @@ pub fn study(dir: &Path) -> Result<String, Error> {
          stability is not monotonic there). *estimate* is what `magdem validate` prints (the contact \
          oscillator bound at the expected impact: 2ζ/ω for explicit Euler, 2/ω(√(1+ζ²) − ζ) for the others; 2τ of drag \
          for all but exponential Verlet). `respa` evaluates the moments and dipole forces every 10 steps (the paper \
-         scenes' setting). `adaptive-verlet` is not mapped: its dt is only a cap that its error control splits into \
+         scenes' setting); its estimate adds the bound 2/(K ω_m) of the magnetic attraction between touching \
+         spheres, a spring of stiffness 12 μ0 m²/(2π d⁵) held over K steps (ω_m with the reduced mass), which sets \
+         the plateau at strong fields. `adaptive-verlet` is not mapped: its dt is only a cap that its error control splits into \
          substeps as contacts need (tests/integrators.rs checks that it resolves a stiff impact at a cap far above the \
          fixed-step bound)."
     );

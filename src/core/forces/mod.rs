@@ -10,7 +10,6 @@ pub mod gravity;
 pub mod shielding;
 
 use super::domain::Domain;
-use super::magnetisation::InductionError;
 use super::neighbours::{Neighbours, PairRange};
 use super::state::{ContactDiagnostics, ContactHistory, Particles, State, Vec3};
 
@@ -32,6 +31,18 @@ pub struct Forces<'a> {
     pub moment: &'a mut [Vec3],
     pub contacts: &'a mut ContactHistory,
     pub diagnostics: &'a mut ContactDiagnostics,
+}
+
+/// Mutual induction failed to converge.
+#[derive(Debug, Clone, thiserror::Error)]
+#[error(
+    "mutual induction did not converge: relative change {residual:.3e} after {iterations} sweeps \
+     (tolerance {tolerance:.1e}); the dipole coupling is near or beyond its limit"
+)]
+pub struct InductionError {
+    pub residual: f64,
+    pub iterations: usize,
+    pub tolerance: f64,
 }
 
 /// A force that does not change during a run (see [`ForceTerm::constant_force`]).

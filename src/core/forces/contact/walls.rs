@@ -1,0 +1,82 @@
+//! Wall geometry: which particles touch which faces of the box, apart from the contact law.
+//! Walls stand on the faces of non-periodic axes; a particle touches a face when its centre is
+//! closer to it than its radius (overlap a − gap, normal pointing into the box).
+
+use crate::core::domain::Domain;
+use crate::core::parallel::{self, Pieces};
+use crate::core::state::{Particles, Vec3, WallFace};
+
+/// A particle touching a wall face: (particle, face, axis, upper face?, overlap).
+#[derive(Clone, Copy, Default)]
+pub struct WallTouch {
+    pub i: u32,
+    pub face: WallFace,
+    pub axis: usize,
+    pub upper: bool,
+    pub overlap: f64,
+}
+
+impl WallTouch {
+    /// Unit normal of the face, into the box.
+    pub fn normal(&self) -> Vec3 {
+        let mut normal = Vec3::zeros();
+        normal[self.axis] = if self.upper { -1.0 } else { 1.0 };
+        normal
+    }
+}
+
+/// The wall search, with the particles that may touch a wall before the near list's next
+/// rebuild kept between calls.
+#[derive(Default)]
+pub struct WallScan {
+    /// Candidates (`None`: not known yet, test every particle).
+    candidates: Option<Vec<u32>>,
+    /// Buffers of the parallel scans.
+    candidate_pieces: Pieces<u32>,
+    found_pieces: Pieces<WallTouch>,
+}
+
+impl WallScan {
+    /// Every wall contact into `found`, in particle then face order. `rebuilt`: the near
+    /// list's skin when it was rebuilt in this evaluation — until the next rebuild no particle
+    /// moves more than skin/2, so only particles within a radius plus half the skin of a wall
+    /// can touch it, and only those are tested.
+    pub fn find(&mut self, p: &Particles, domain: &Domain, rebuilt: Option<f64>, found: &mut Vec<WallTouch>) {
+        // Walls on periodic axes are infinitely far away.
+        let lo = Vec3::from_fn(|k, _| if domain.periodic[k] { f64::NEG_INFINITY } else { domain.lo[k] });
+        let hi = Vec3::from_fn(|k, _| if domain.periodic[k] { f64::INFINITY } else { domain.hi[k] });
+        let near = |i: usize, margin: f64| {
+            let (a, x) = (p.radius[i] + margin, p.position[i]);
+            (x.x - lo.x < a) | (x.y - lo.y < a) | (x.z - lo.z < a) | (hi.x - x.x < a) | (hi.y - x.y < a) | (hi.z - x.z < a)
+        };
+        if let Some(skin) = rebuilt {
+            let mut candidates = self.candidates.take().unwrap_or_default();
+            parallel::collect_ordered(p.len(), &mut candidates, &mut self.candidate_pieces, |i, out| {
+                if near(i, 0.5 * skin) {
+                    out.push(i as u32);
+                }
+            });
+            self.candidates = Some(candidates);
+        }
+        let touches = |i: usize, out: &mut Vec<WallTouch>| {
+            if !near(i, 0.0) {
+                return;
+            }
+            let (a, x) = (p.radius[i], p.position[i]);
+            for axis in 0..3 {
+                for (upper, gap) in [(false, x[axis] - lo[axis]), (true, hi[axis] - x[axis])] {
+                    if gap < a {
+                        let face = (2 * axis + upper as usize) as WallFace;
+                        out.push(WallTouch { i: i as u32, face, axis, upper, overlap: a - gap });
+                    }
+                }
+            }
+        };
+        match &self.candidates {
+            Some(candidates) => {
+                parallel::collect_ordered(candidates.len(), found, &mut self.found_pieces, |k, out| touches(candidates[k] as usize, out))
+            }
+            None => parallel::collect_ordered(p.len(), found, &mut self.found_pieces, touches),
+        }
+    }
+}
