@@ -112,22 +112,11 @@ impl Magnetisation {
         let mut field = std::mem::take(&mut self.field);
         field.clear();
         field.extend(p.position.iter().map(|x| self.external_field(x)));
-        let pair_fields = |pair: &Pair| pair_dipole_fields(&moment[pair.i as usize], &moment[pair.j as usize], pair);
-        if parallel::worth_it(pairs.len()) {
-            let mut buffer = std::mem::take(&mut self.pair_fields);
-            parallel::map_ordered(pairs.len(), &mut buffer, |k| pair_fields(&pairs[k]));
-            for (pair, (on_i, on_j)) in pairs.iter().zip(&buffer) {
-                field[pair.i as usize] += on_i;
-                field[pair.j as usize] += on_j;
-            }
-            self.pair_fields = buffer;
-        } else {
-            for pair in pairs {
-                let (on_i, on_j) = pair_fields(pair);
-                field[pair.i as usize] += on_i;
-                field[pair.j as usize] += on_j;
-            }
-        }
+        let pair_fields = |k: usize| pair_dipole_fields(&moment[pairs[k].i as usize], &moment[pairs[k].j as usize], &pairs[k]);
+        parallel::add_in_order(pairs.len(), &mut self.pair_fields, pair_fields, |k, (on_i, on_j)| {
+            field[pairs[k].i as usize] += on_i;
+            field[pairs[k].j as usize] += on_j;
+        });
         self.field = field;
     }
 

@@ -98,6 +98,110 @@ pub fn map_ordered<T: Send>(n: usize, out: &mut Vec<T>, f: impl Fn(usize) -> T +
     }
 }
 
+/// Per-particle slices, or tuples of them, that split at an index: the arguments of a loop run
+/// in contiguous shares by [`for_each_share`].
+pub trait Split: Sized + Send {
+    fn len(&self) -> usize;
+    fn split_at(self, k: usize) -> (Self, Self);
+}
+
+impl<T: Sync> Split for &[T] {
+    fn len(&self) -> usize {
+        <[T]>::len(self)
+    }
+    fn split_at(self, k: usize) -> (Self, Self) {
+        <[T]>::split_at(self, k)
+    }
+}
+
+impl<T: Send> Split for &mut [T] {
+    fn len(&self) -> usize {
+        <[T]>::len(self)
+    }
+    fn split_at(self, k: usize) -> (Self, Self) {
+        <[T]>::split_at_mut(self, k)
+    }
+}
+
+macro_rules! split_tuple {
+    ($($name:ident),+) => {
+        impl<$($name: Split),+> Split for ($($name,)+) {
+            fn len(&self) -> usize {
+                #[allow(non_snake_case)]
+                let ($($name,)+) = self;
+                let lengths = [$($name.len()),+];
+                debug_assert!(lengths.iter().all(|&l| l == lengths[0]), "parts of one loop have one length");
+                lengths[0]
+            }
+            fn split_at(self, k: usize) -> (Self, Self) {
+                #[allow(non_snake_case)]
+                let ($($name,)+) = self;
+                #[allow(non_snake_case)]
+                let ($($name,)+) = ($($name.split_at(k),)+);
+                (($($name.0,)+), ($($name.1,)+))
+            }
+        }
+    };
+}
+split_tuple!(A, B);
+split_tuple!(A, B, C);
+split_tuple!(A, B, C, D);
+split_tuple!(A, B, C, D, E);
+split_tuple!(A, B, C, D, E, F);
+split_tuple!(A, B, C, D, E, F, G);
+
+/// `parts` cut into the shares of [`share`], each with the index of its first item (one piece,
+/// the whole, when the loop is not [`worth_it`]).
+fn shares<S: Split>(parts: S) -> Vec<(usize, S)> {
+    let len = parts.len();
+    if !worth_it(len) {
+        return vec![(0, parts)];
+    }
+    let share = share(len);
+    let (mut pieces, mut rest, mut first) = (Vec::with_capacity(len.div_ceil(share)), parts, 0);
+    while rest.len() > share {
+        let (piece, tail) = rest.split_at(share);
+        pieces.push((first, piece));
+        (rest, first) = (tail, first + share);
+    }
+    pieces.push((first, rest));
+    pieces
+}
+
+/// The one parallel-or-serial branch of per-particle loops: `f(first, parts)` on each share of
+/// `parts` (one per thread inside a warm step of a large system, see [`share`]), or once on the
+/// whole. Elementwise work gives the same bits either way.
+pub fn for_each_share<S: Split>(parts: S, f: impl Fn(usize, S) + Sync + Send) {
+    use rayon::prelude::*;
+    let mut pieces = shares(parts);
+    if pieces.len() == 1 {
+        let (first, whole) = pieces.pop().expect("one piece");
+        return f(first, whole);
+    }
+    pieces.into_par_iter().for_each(|(first, piece)| f(first, piece));
+}
+
+/// Whether `test` holds on any share of `parts` (an exact reduction: the same answer serially).
+pub fn any_share<S: Split>(parts: S, test: impl Fn(S) -> bool + Sync + Send) -> bool {
+    use rayon::prelude::*;
+    let mut pieces = shares(parts);
+    if pieces.len() == 1 {
+        return test(pieces.pop().expect("one piece").1);
+    }
+    pieces.into_par_iter().map(|(_, piece)| test(piece)).reduce(|| false, |a, b| a | b)
+}
+
+/// `add(k, value(k))` for k in 0..n in k order, the values computed in parallel chunks (into
+/// `buffer`) when worth it: a pair sum whose accumulation order, and bits, stay serial.
+pub fn add_in_order<T: Send>(n: usize, buffer: &mut Vec<T>, value: impl Fn(usize) -> T + Sync + Send, mut add: impl FnMut(usize, T)) {
+    if worth_it(n) {
+        map_ordered(n, buffer, value);
+        buffer.drain(..).enumerate().for_each(|(k, v)| add(k, v));
+    } else {
+        (0..n).for_each(|k| add(k, value(k)));
+    }
+}
+
 /// Runs `f` (one step of a system of `len` particles) while the pool's other threads spin and
 /// steal its parallel work, instead of falling asleep in the serial stretches between parallel
 /// loops: waking a sleeping thread costs about 25 µs on the 2-core machines this runs on, more

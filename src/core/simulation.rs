@@ -12,7 +12,6 @@ use super::parallel;
 use super::stability::{Instability, Monitor, StepEstimate};
 use super::state::{State, Vec3};
 use super::timers::PhaseTimers;
-use rayon::prelude::*;
 use std::time::Duration;
 
 /// Everything that turns a state into forces and torques.
@@ -99,12 +98,7 @@ fn start_forces(force: &mut [Vec3], torque: &mut [Vec3], constant: Option<Consta
         }
         fill(torque, Vec3::zeros());
     };
-    if parallel::worth_it(force.len()) {
-        let share = parallel::share(force.len());
-        force.par_chunks_mut(share).zip(torque.par_chunks_mut(share)).enumerate().for_each(|(k, (f, t))| start(f, t, k * share));
-    } else {
-        start(force, torque, 0);
-    }
+    parallel::for_each_share((force, torque), |first, (f, t)| start(f, t, first));
 }
 
 /// `out[i] = value` for every i, stored four vectors at a time (a 96-byte copy the compiler

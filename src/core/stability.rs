@@ -23,7 +23,6 @@ use super::forces::drag::Drag;
 use super::integrators::Scheme;
 use super::state::{Particles, Species, State, Vec3};
 use super::magnetisation::MU0;
-use rayon::prelude::*;
 use std::f64::consts::PI;
 
 /// What the estimate needs to know about the scene.
@@ -249,12 +248,8 @@ impl Monitor {
         let suspect = |((x, v), a): ((&Vec3, &Vec3), &f64)| bounds.fails(x, v, *a);
         let particles = || p.position.iter().zip(&p.velocity).zip(&p.radius);
         // Branch-free test of all particles first; the first failing one is looked for only then.
-        let any = if super::parallel::worth_it(p.len()) {
-            let particles = p.position.par_iter().zip(&p.velocity).zip(&p.radius);
-            particles.with_min_len(super::parallel::share(p.len())).map(suspect).reduce(|| false, |a, b| a | b)
-        } else {
-            particles().fold(false, |out, item| out | suspect(item))
-        };
+        let parts = (&p.position[..], &p.velocity[..], &p.radius[..]);
+        let any = super::parallel::any_share(parts, |(x, v, a)| x.iter().zip(v).zip(a).fold(false, |out, item| out | suspect(item)));
         let first = if any { particles().position(suspect) } else { None };
         match first {
             Some(i) => Err(self.diagnose(state, i, domain, dt)),

@@ -57,19 +57,14 @@ fn fill_particle_blocks(blocks: &mut Vec<ParticleBlock>, position: &[Vec3], mome
     let padding = ParticleBlock { x: [f64x4::splat(f64::NAN); 3], m: [f64x4::ZERO; 3] };
     let n = position.len();
     blocks.resize(n.div_ceil(BLOCK), padding);
-    let fill = |(q, block): (usize, &mut ParticleBlock)| {
+    let fill = |q: usize, block: &mut ParticleBlock| {
         *block = padding;
         for (lane, i) in (q * BLOCK..n.min((q + 1) * BLOCK)).enumerate() {
             set_lane(&mut block.x, lane, &position[i]);
             set_lane(&mut block.m, lane, &moment[i]);
         }
     };
-    if parallel::worth_it(n) {
-        use rayon::prelude::*;
-        blocks.par_iter_mut().with_min_len(parallel::CHUNK).enumerate().for_each(fill);
-    } else {
-        blocks.iter_mut().enumerate().for_each(fill);
-    }
+    parallel::for_each_share(&mut blocks[..], |first, blocks| blocks.iter_mut().enumerate().for_each(|(k, b)| fill(first + k, b)));
 }
 
 /// `blocks` = `vectors` in blocks of four, the last one padded with zeros.
@@ -304,12 +299,7 @@ fn add_row_sums_in<const PERIODIC: bool>(particles: &[ParticleBlock], image: &Im
             }
         }
     };
-    if in_parallel {
-        let share = parallel::share(blocks);
-        first.forces.par_chunks_mut(share).enumerate().for_each(|(c, out)| add_others(c * share, out));
-    } else {
-        add_others(0, &mut first.forces);
-    }
+    parallel::for_each_share(&mut first.forces[..], add_others);
     for (i, f) in force.iter_mut().enumerate() {
         *f = lane(&first.forces[i / BLOCK], i % BLOCK);
     }
@@ -317,20 +307,11 @@ fn add_row_sums_in<const PERIODIC: bool>(particles: &[ParticleBlock], image: &Im
 
 /// Adds F_ij to i and −F_ij to j for each listed pair, in list order.
 fn add_listed_pairs(pairs: &[Pair], moment: &[Vec3], force: &mut [Vec3], buffer: &mut Vec<Vec3>) {
-    let pair_force = |pair: &Pair| dipole_pair_force(&moment[pair.i as usize], &moment[pair.j as usize], &pair.r, pair.dist);
-    if parallel::worth_it(pairs.len()) {
-        parallel::map_ordered(pairs.len(), buffer, |k| pair_force(&pairs[k]));
-        for (pair, f) in pairs.iter().zip(buffer.iter()) {
-            force[pair.i as usize] += f;
-            force[pair.j as usize] -= f;
-        }
-    } else {
-        for pair in pairs {
-            let f = pair_force(pair);
-            force[pair.i as usize] += f;
-            force[pair.j as usize] -= f;
-        }
-    }
+    let pair_force = |k: usize| dipole_pair_force(&moment[pairs[k].i as usize], &moment[pairs[k].j as usize], &pairs[k].r, pairs[k].dist);
+    parallel::add_in_order(pairs.len(), buffer, pair_force, |k, f| {
+        force[pairs[k].i as usize] += f;
+        force[pairs[k].j as usize] -= f;
+    });
 }
 
 pub struct DipoleForce {

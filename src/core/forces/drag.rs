@@ -10,7 +10,6 @@ use super::{Context, ForceTerm, Forces};
 use crate::core::neighbours::PairRange;
 use crate::core::parallel;
 use crate::core::state::{Particles, Vec3};
-use rayon::prelude::*;
 use std::f64::consts::PI;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -113,7 +112,7 @@ impl ForceTerm for Drag {
         }
         let Particles { velocity, angular_velocity, radius, .. } = p;
         let (force, torque) = (&mut *out.force, &mut *out.torque);
-        let drag = |(i, (f, t)): (usize, (&mut Vec3, &mut Vec3))| {
+        let drag = |i: usize, f: &mut Vec3, t: &mut Vec3| {
             let a = radius[i];
             let full = PI * a * a;
             let area = match self.shielding {
@@ -133,12 +132,9 @@ impl ForceTerm for Drag {
                 *t -= 8.0 * PI * self.viscosity * a.powi(3) * angular_velocity[i];
             }
         };
-        if parallel::worth_it(force.len()) {
-            let share = parallel::share(force.len());
-            force.par_iter_mut().zip(torque.par_iter_mut()).enumerate().with_min_len(share).for_each(drag);
-        } else {
-            force.iter_mut().zip(torque.iter_mut()).enumerate().for_each(drag);
-        }
+        parallel::for_each_share((force, torque), |first, (f, t)| {
+            f.iter_mut().zip(t).enumerate().for_each(|(k, (f, t))| drag(first + k, f, t));
+        });
     }
 }
 

@@ -3,7 +3,6 @@
 use super::{ConstantForce, Context, ForceTerm, Forces};
 use crate::core::parallel;
 use crate::core::state::{Particles, Vec3};
-use rayon::prelude::*;
 
 #[derive(Debug, Clone)]
 pub struct GravityBuoyancy {
@@ -50,11 +49,6 @@ impl ForceTerm for GravityBuoyancy {
     }
     fn apply(&mut self, _ctx: &Context, p: &Particles, out: &mut Forces) {
         self.weigh(p);
-        let add = |(f, w): (&mut Vec3, &Vec3)| *f += w;
-        if parallel::worth_it(p.len()) {
-            out.force.par_iter_mut().zip(&self.weights).with_min_len(parallel::share(self.weights.len())).for_each(add);
-        } else {
-            out.force.iter_mut().zip(&self.weights).for_each(add);
-        }
+        parallel::for_each_share((&mut *out.force, &self.weights[..]), |_, (f, w)| f.iter_mut().zip(w).for_each(|(f, w)| *f += w));
     }
 }

@@ -8,7 +8,7 @@
 //! for the terminal velocity at any dt, so the drag relaxation time m/γ no longer limits dt
 //! (contact still does) — what sub-micron particles need. At γ = 0 it is velocity Verlet.
 
-use super::{drift, tick, Evaluate, Integrator};
+use super::{advance, drift, tick, Evaluate, Integrator, Kick};
 use super::ForceGroup;
 use crate::core::state::{State, Vec3};
 
@@ -20,25 +20,10 @@ pub struct ExponentialVerlet {
     pub fluid_velocity: Vec3,
 }
 
-/// (1 − e^{−x})/x, accurate at small x.
-fn phi(x: f64) -> f64 {
-    if x < 1e-8 {
-        1.0 - 0.5 * x
-    } else {
-        -(-x).exp_m1() / x
-    }
-}
-
 impl ExponentialVerlet {
     fn half_kick(&self, state: &mut State, h: f64) {
-        let (p, fields) = (&mut state.particles, &state.fields);
-        let u = self.fluid_velocity;
-        for i in 0..p.len() {
-            let x = self.gamma[i] * h / p.mass[i];
-            p.velocity[i] = u + (p.velocity[i] - u) * (-x).exp() + fields.force[i] * (h / p.mass[i] * phi(x));
-            let xr = self.gamma_rotational[i] * h / p.inertia[i];
-            p.angular_velocity[i] = p.angular_velocity[i] * (-xr).exp() + fields.torque[i] * (h / p.inertia[i] * phi(xr));
-        }
+        let kick = Kick::Exponential { h, gamma: &self.gamma, gamma_rotational: &self.gamma_rotational, fluid_velocity: self.fluid_velocity };
+        advance(&mut state.particles, &state.fields.force, &state.fields.torque, kick, 0.0);
     }
 }
 

@@ -21,7 +21,6 @@ pub use velocity_verlet::VelocityVerlet;
 pub use super::forces::ForceGroup;
 use super::parallel;
 use super::state::{InverseMasses, Particles, State, Vec3};
-use rayon::prelude::*;
 
 /// Re-evaluates one group of forces and torques for the state as it stands, at the end of a
 /// step of the given length (the contact model integrates its tangential history over it).
@@ -127,36 +126,54 @@ impl std::fmt::Display for Scheme {
 
 /// v += F/m h, ω += T/I h.
 fn kick(state: &mut State, h: f64) {
-    kick_drift_by(&mut state.particles, &state.fields.force, &state.fields.torque, h, 0.0);
+    advance(&mut state.particles, &state.fields.force, &state.fields.torque, Kick::Plain(h), 0.0);
 }
 
 /// v += F_slow/m h, ω += T_slow/I h.
 fn slow_kick(state: &mut State, h: f64) {
-    kick_drift_by(&mut state.particles, &state.fields.slow_force, &state.fields.slow_torque, h, 0.0);
+    advance(&mut state.particles, &state.fields.slow_force, &state.fields.slow_torque, Kick::Plain(h), 0.0);
 }
 
 /// x += v h, and permanent moments turn with the particle by ω h (Rodrigues rotation).
 fn drift(state: &mut State, h: f64) {
-    kick_drift_by(&mut state.particles, &state.fields.force, &state.fields.torque, 0.0, h);
+    advance(&mut state.particles, &state.fields.force, &state.fields.torque, Kick::Plain(0.0), h);
 }
 
 /// A kick by `kick` then a drift by `drift` in one pass over the particles (the same arithmetic
 /// as [`kick`] followed by [`drift`]).
 fn kick_drift(state: &mut State, kick: f64, drift: f64) {
-    kick_drift_by(&mut state.particles, &state.fields.force, &state.fields.torque, kick, drift);
+    advance(&mut state.particles, &state.fields.force, &state.fields.torque, Kick::Plain(kick), drift);
 }
 
-/// v += F/m kick and ω += T/I kick, then x += v drift (a zero kick or drift is skipped): one
-/// parallel loop in which each thread takes its share of the particles through all of it (a
-/// parallel loop per array would hand out and join once per array).
-fn kick_drift_by(p: &mut Particles, force: &[Vec3], torque: &[Vec3], kick: f64, drift: f64) {
-    let (x, v, w) = (&mut p.position, &mut p.velocity, &mut p.angular_velocity);
-    let (in_parallel, share) = (parallel::worth_it(x.len()), parallel::share(x.len()));
-    match &p.inverse_masses {
-        InverseMasses::Uniform { mass, inertia } => {
+/// How a kick changes the velocities.
+#[derive(Clone, Copy)]
+enum Kick<'a> {
+    /// v += F/m h, ω += T/I h (skipped at h = 0).
+    Plain(f64),
+    /// The exact solution of m dv/dt = F − γ (v − u_f) over h with F held (see
+    /// [`ExponentialVerlet`]), and likewise for ω with γ_r.
+    Exponential { h: f64, gamma: &'a [f64], gamma_rotational: &'a [f64], fluid_velocity: Vec3 },
+}
+
+/// (1 − e^{−x})/x, accurate at small x.
+fn phi(x: f64) -> f64 {
+    if x < 1e-8 {
+        1.0 - 0.5 * x
+    } else {
+        -(-x).exp_m1() / x
+    }
+}
+
+/// The one kick/drift kernel of every integrator: a kick, then x += v drift (a zero drift is
+/// skipped), in one parallel loop in which each thread takes its share of the particles through
+/// all of it (a parallel loop per array would hand out and join once per array).
+fn advance(p: &mut Particles, force: &[Vec3], torque: &[Vec3], kick: Kick, drift: f64) {
+    let (x, v, w) = (&mut p.position[..], &mut p.velocity[..], &mut p.angular_velocity[..]);
+    match (kick, &p.inverse_masses) {
+        (Kick::Plain(kick), InverseMasses::Uniform { mass, inertia }) => {
             let (c, ci) = (kick * mass, kick * inertia);
             // Component by component (SIMD across particles).
-            let advance = |x: &mut [Vec3], v: &mut [Vec3], w: &mut [Vec3], f: &[Vec3], t: &[Vec3]| {
+            parallel::for_each_share((x, v, w, force, torque), |_, (x, v, w, f, t)| {
                 let (x, v, w, f, t) = (components_mut(x), components_mut(v), components_mut(w), components(f), components(t));
                 match (kick != 0.0, drift != 0.0) {
                     (true, true) => x.iter_mut().zip(v).zip(f).for_each(|((x, v), f)| {
@@ -170,16 +187,10 @@ fn kick_drift_by(p: &mut Particles, force: &[Vec3], torque: &[Vec3], kick: f64, 
                 if kick != 0.0 {
                     w.iter_mut().zip(t).for_each(|(w, t)| *w += t * ci);
                 }
-            };
-            if in_parallel {
-                let shares = x.par_chunks_mut(share).zip(v.par_chunks_mut(share)).zip(w.par_chunks_mut(share));
-                shares.zip(force.par_chunks(share).zip(torque.par_chunks(share))).for_each(|(((x, v), w), (f, t))| advance(x, v, w, f, t));
-            } else {
-                advance(x, v, w, force, torque);
-            }
+            });
         }
-        InverseMasses::PerParticle { mass, inertia } => {
-            let advance = |x: &mut [Vec3], v: &mut [Vec3], w: &mut [Vec3], f: &[Vec3], t: &[Vec3], m: &[f64], i: &[f64]| {
+        (Kick::Plain(kick), InverseMasses::PerParticle { mass, inertia }) => {
+            parallel::for_each_share((x, v, w, force, torque, &mass[..], &inertia[..]), |_, (x, v, w, f, t, m, i)| {
                 for ((((x, v), w), (f, t)), (m, i)) in x.iter_mut().zip(v).zip(w).zip(f.iter().zip(t)).zip(m.iter().zip(i)) {
                     if kick != 0.0 {
                         *v += f * (kick * m);
@@ -189,14 +200,21 @@ fn kick_drift_by(p: &mut Particles, force: &[Vec3], torque: &[Vec3], kick: f64, 
                         *x += *v * drift;
                     }
                 }
-            };
-            if in_parallel {
-                let shares = x.par_chunks_mut(share).zip(v.par_chunks_mut(share)).zip(w.par_chunks_mut(share));
-                let inputs = force.par_chunks(share).zip(torque.par_chunks(share)).zip(mass.par_chunks(share).zip(inertia.par_chunks(share)));
-                shares.zip(inputs).for_each(|(((x, v), w), ((f, t), (m, i)))| advance(x, v, w, f, t, m, i));
-            } else {
-                advance(x, v, w, force, torque, mass, inertia);
-            }
+            });
+        }
+        (Kick::Exponential { h, gamma, gamma_rotational, fluid_velocity: u }, _) => {
+            let (mass, inertia) = (&p.mass[..], &p.inertia[..]);
+            parallel::for_each_share((x, v, w, force, torque, (mass, inertia), (gamma, gamma_rotational)), |_, (x, v, w, f, t, (m, i), (g, gr))| {
+                for k in 0..x.len() {
+                    let e = g[k] * h / m[k];
+                    v[k] = u + (v[k] - u) * (-e).exp() + f[k] * (h / m[k] * phi(e));
+                    let er = gr[k] * h / i[k];
+                    w[k] = w[k] * (-er).exp() + t[k] * (h / i[k] * phi(er));
+                    if drift != 0.0 {
+                        x[k] += v[k] * drift;
+                    }
+                }
+            });
         }
     }
     if p.has_permanent_moments && drift != 0.0 {
