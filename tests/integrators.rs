@@ -7,6 +7,7 @@ use magdem::scene::Scene;
 /// Two dipoles 6 diameters apart closing under Stokes drag with exact induction, stopped before
 /// they touch (contact at ~0.1 ms).
 fn pair(scheme: &str, dt: f64, slow_every: u64) -> Scene {
+    let scheme = magdem::core::integrators::Scheme::from_name(scheme).expect("a scheme");
     Scene::parse(&magdem::verify::magnetic::pair_before_contact(scheme, dt, slow_every), "pair").unwrap()
 }
 

@@ -15,11 +15,6 @@ impl Domain {
         self.hi - self.lo
     }
 
-    pub fn volume(&self) -> f64 {
-        let l = self.length();
-        l.x * l.y * l.z
-    }
-
     /// Minimum-image displacement a − b.
     #[inline]
     pub fn displacement(&self, a: &Vec3, b: &Vec3) -> Vec3 {

@@ -19,7 +19,7 @@ pub use super::forces::InductionError;
 use super::forces::{Context, ForceTerm, Forces};
 use super::neighbours::{Pair, PairRange, Skins};
 use super::parallel;
-use super::state::{Particles, Saturation, Species, State, Vec3};
+use super::state::{sphere_volume, Particles, Saturation, Species, State, Vec3};
 use nalgebra::Matrix3;
 use std::f64::consts::PI;
 
@@ -88,7 +88,7 @@ impl Magnetisation {
     /// Induced plus permanent moment of particle i in local field `h`.
     fn moment_in(&self, p: &Particles, i: usize, h: &Vec3) -> Vec3 {
         let s = p.species[i] as usize;
-        let volume = 4.0 / 3.0 * PI * p.radius[i].powi(3);
+        let volume = sphere_volume(p.radius[i]);
         let mut m = self.susceptibility[s] * volume * h;
         if let Some(sat) = self.saturation[s] {
             let norm = m.norm();

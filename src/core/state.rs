@@ -64,9 +64,19 @@ pub struct Species {
     pub permanent_moment: Option<Vec3>,
 }
 
+/// V = 4/3 π a³.
+pub fn sphere_volume(radius: f64) -> f64 {
+    4.0 / 3.0 * std::f64::consts::PI * radius.powi(3)
+}
+
+/// The largest diameter of `species` (0 for none): the scale of every range given in diameters.
+pub fn largest_diameter(species: &[Species]) -> f64 {
+    species.iter().map(|s| 2.0 * s.radius).fold(0.0, f64::max)
+}
+
 impl Species {
     pub fn volume(&self) -> f64 {
-        4.0 / 3.0 * std::f64::consts::PI * self.radius.powi(3)
+        sphere_volume(self.radius)
     }
     pub fn mass(&self) -> f64 {
         self.density * self.volume()

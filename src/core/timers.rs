@@ -43,10 +43,6 @@ impl PhaseTimers {
         }
     }
 
-    pub fn get(&self, name: &str) -> Duration {
-        self.phases.iter().find(|(n, _)| *n == name).map(|(_, d)| *d).unwrap_or_default()
-    }
-
     pub fn phases(&self) -> &[(&'static str, Duration)] {
         &self.phases
     }

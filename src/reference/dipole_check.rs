@@ -6,7 +6,7 @@
 
 use super::{Engine, ReferenceError};
 use crate::core::domain::Domain;
-use crate::core::state::{State, Vec3};
+use crate::core::state::{largest_diameter, sphere_volume, State, Vec3};
 use crate::scene::Scene;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -20,7 +20,7 @@ const COULOMB: f64 = 8.9876e9;
 /// which LAMMPS matches only with a cut-off below half the box).
 pub fn lammps_cutoff(scene: &Scene, cutoff_diameters: Option<f64>) -> Result<f64, String> {
     let d = &scene.domain;
-    let largest_d = scene.species.iter().map(|s| 2.0 * s.radius).fold(0.0, f64::max);
+    let largest_d = largest_diameter(&scene.species);
     match cutoff_diameters {
         Some(c) => Ok(c * largest_d),
         None if d.periodic.iter().any(|&p| p) => Err("all-pairs dipole sums in a periodic box have no LAMMPS equivalent".into()),
@@ -44,7 +44,7 @@ pub fn write_deck(state: &State, d: &Domain, rc: f64, dir: &Path, origin: &str, 
     data += "\nAtoms\n\n";
     for i in 0..p.len() {
         let (x, m) = (p.position[i], state.fields.moment[i] * scale);
-        let density = p.mass[i] / (4.0 / 3.0 * std::f64::consts::PI * p.radius[i].powi(3));
+        let density = p.mass[i] / sphere_volume(p.radius[i]);
         let _ = writeln!(data, "{} 1 {:.17e} {:.17e} {:.17e} {:.17e} {density:.17e} 0.0 {:.17e} {:.17e} {:.17e}", i + 1, x.x, x.y, x.z, 2.0 * p.radius[i], m.x, m.y, m.z);
     }
     std::fs::write(dir.join("data.dipole"), data)?;

@@ -17,7 +17,7 @@ pub fn read(engine: Engine, path: &Path, scene: &Scene) -> Result<Vec<State>, Re
     let n = scene.initial.len();
     let mut cells = CellList::default();
     let mut pairs = vec![];
-    let largest_d = scene.species.iter().map(|s| 2.0 * s.radius).fold(0.0, f64::max);
+    let largest_d = crate::core::state::largest_diameter(&scene.species);
     while let Some(line) = lines.next() {
         if !line.starts_with("ITEM: TIMESTEP") {
             continue;

@@ -165,7 +165,7 @@ impl Scene {
     }
 
     fn largest_diameter(&self) -> f64 {
-        self.species.iter().map(|s| 2.0 * s.radius).fold(0.0, f64::max)
+        crate::core::state::largest_diameter(&self.species)
     }
 
     /// The magnetic terms the scene lists: the moments (first: the others read them), dipole,
@@ -362,7 +362,7 @@ fn check_forces(spec: &SceneSpec, domain: &Domain, species: &[Species], warnings
     if f.drag.is_some() && spec.fluid.is_none() {
         return Err(invalid("forces.drag", "{}", "drag needs a [fluid] table"));
     }
-    let largest_diameter = species.iter().map(|s| 2.0 * s.radius).fold(0.0, f64::max);
+    let largest_diameter = crate::core::state::largest_diameter(species);
     if let Some(d) = &f.dipole {
         let tol = d.tolerance;
         if !(1e-15..1.0).contains(&tol) {

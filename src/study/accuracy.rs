@@ -13,20 +13,22 @@
 
 use crate::plot::{line_chart_with_legend, Series};
 use plotters::prelude::SeriesLabelPosition;
+use crate::core::integrators::Scheme;
 use crate::scene::Scene;
 use plotters::style::RGBColor;
 use std::fmt::Write as _;
 use std::path::Path;
 
-pub const SCHEMES: [&str; 5] = ["explicit-euler", "semi-implicit-euler", "velocity-verlet", "exponential-verlet", "respa"];
+pub const SCHEMES: [Scheme; 5] = [Scheme::ExplicitEuler, Scheme::SemiImplicitEuler, Scheme::VelocityVerlet, Scheme::ExponentialVerlet, Scheme::Respa];
 
-fn colour(scheme: &str) -> RGBColor {
+fn colour(scheme: Scheme) -> RGBColor {
     match scheme {
-        "explicit-euler" => RGBColor(200, 30, 30),
-        "semi-implicit-euler" => RGBColor(230, 140, 20),
-        "velocity-verlet" => RGBColor(20, 90, 200),
-        "exponential-verlet" => RGBColor(30, 150, 60),
-        _ => RGBColor(130, 60, 170),
+        Scheme::ExplicitEuler => RGBColor(200, 30, 30),
+        Scheme::SemiImplicitEuler => RGBColor(230, 140, 20),
+        Scheme::VelocityVerlet => RGBColor(20, 90, 200),
+        Scheme::ExponentialVerlet => RGBColor(30, 150, 60),
+        Scheme::AdaptiveVerlet => crate::plot::palette(6),
+        Scheme::Respa | Scheme::SubcycledEuler => RGBColor(130, 60, 170),
     }
 }
 
@@ -42,15 +44,15 @@ pub struct Problem {
     pub name: &'static str,
     pub description: &'static str,
     pub dts: Vec<f64>,
-    scene: fn(&str, f64) -> String,
+    scene: fn(Scheme, f64) -> String,
 }
 
-fn integration(scheme: &str, dt: f64, end: f64) -> String {
-    let k = if scheme == "respa" { "slow_every = 4\n" } else { "" };
+fn integration(scheme: Scheme, dt: f64, end: f64) -> String {
+    let k = if scheme == Scheme::Respa { "slow_every = 4\n" } else { "" };
     format!("[integration]\nscheme = \"{scheme}\"\ndt = {dt:e}\nend_time = {end:e}\n{k}[output]\ninterval = {end:e}\n[stability]\nmax_step_fraction = 1.0\nmax_overlap = 0.5\n")
 }
 
-fn terminal_scene(scheme: &str, dt: f64) -> String {
+fn terminal_scene(scheme: Scheme, dt: f64) -> String {
     let material = material("saturation_magnetisation = 1.0e4\n");
     format!(
         "version = 1\n[domain]\nlo = [-1e-3, -1e-3, -1e-3]\nhi = [1e-3, 1e-3, 1e-3]\n[fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n\
@@ -66,7 +68,7 @@ fn terminal_error(sim: &crate::core::simulation::Simulation) -> f64 {
     (sim.state.particles.velocity[0].x - exact).abs() / vt
 }
 
-fn hertz_scene(scheme: &str, dt: f64) -> String {
+fn hertz_scene(scheme: Scheme, dt: f64) -> String {
     format!(
         "version = 1\n[domain]\nlo = [-1e-4, -1e-4, -1e-4]\nhi = [1e-4, 1e-4, 1e-4]\n{}\
          [[particles]]\nspecies = \"p\"\npositions = [[-5.5005e-6, 0.0, 0.0], [5.5005e-6, 0.0, 0.0]]\nvelocities = [[0.05, 0.0, 0.0], [-0.05, 0.0, 0.0]]\n\
@@ -76,8 +78,8 @@ fn hertz_scene(scheme: &str, dt: f64) -> String {
     )
 }
 
-fn dipoles_scene(scheme: &str, dt: f64) -> String {
-    let slow_every = if scheme == "respa" { 4 } else { 1 };
+fn dipoles_scene(scheme: Scheme, dt: f64) -> String {
+    let slow_every = if scheme == Scheme::Respa { 4 } else { 1 };
     crate::verify::magnetic::pair_before_contact(scheme, dt, slow_every) + "[stability]\nmax_step_fraction = 1.0\n"
 }
 
@@ -111,7 +113,7 @@ pub fn problems() -> Vec<Problem> {
 
 /// Runs a problem's scene to its end; returns the error (the Hertz problem tracks the overlap
 /// during the run; `Err` if the run went unstable).
-fn run_problem(problem: &Problem, scheme: &str, dt: f64, reference: Option<f64>) -> Result<f64, String> {
+fn run_problem(problem: &Problem, scheme: Scheme, dt: f64, reference: Option<f64>) -> Result<f64, String> {
     let scene = Scene::parse(&(problem.scene)(scheme, dt), problem.name).map_err(|e| e.to_string())?;
     let mut sim = scene.simulation(None);
     sim.initialise().map_err(|e| e.to_string())?;
@@ -175,8 +177,8 @@ fn work_precision(dir: &Path, problem: &Problem, reference: f64) -> Result<Strin
          of 6.4e-8 s.\n\n| scheme | setting | error | run time, median (min–max) |\n|---|---|---|---|\n",
     );
     let mut series = vec![];
-    let adaptive = "adaptive-verlet";
-    for scheme in SCHEMES.iter().copied().chain([adaptive]) {
+    let adaptive = Scheme::AdaptiveVerlet;
+    for scheme in SCHEMES.into_iter().chain([adaptive]) {
         let settings: Vec<(String, f64)> = if scheme == adaptive {
             [1e-4, 1e-5, 1e-6, 1e-7, 1e-8].iter().map(|&tol| (format!("tolerance {tol:.0e}"), tol)).collect()
         } else {
@@ -187,7 +189,7 @@ fn work_precision(dir: &Path, problem: &Problem, reference: f64) -> Result<Strin
             let (result, median, lo, hi) = timed(5, || {
                 if scheme == adaptive {
                     let text = dipoles_scene(adaptive, 6.4e-8).replace("dt = ", &format!("tolerance = {value:e}\ndt = "));
-                    run_text(&text, adaptive).map(|sim| dipoles_error(&sim, reference))
+                    run_text(&text, adaptive.name()).map(|sim| dipoles_error(&sim, reference))
                 } else {
                     run_problem(problem, scheme, value, Some(reference))
                 }
@@ -199,8 +201,8 @@ fn work_precision(dir: &Path, problem: &Problem, reference: f64) -> Result<Strin
                 }
             }
         }
-        let color = if scheme == adaptive { crate::plot::palette(6) } else { colour(scheme) };
-        series.push(Series::markers(scheme, line.clone(), color, 4));
+        let color = colour(scheme);
+        series.push(Series::markers(scheme.name(), line.clone(), color, 4));
         series.push(Series::line("", line, color));
     }
     line_chart_with_legend(&dir.join("work-precision-dipoles.png"), "Work–precision: two-dipole approach", "log10 run time (s, median of 5)", "log10 error", &series, SeriesLabelPosition::UpperRight)?;
@@ -350,13 +352,13 @@ pub fn study(dir: &Path) -> Result<String, Box<dyn std::error::Error>> {
     );
     let mut work = None;
     for problem in problems() {
-        let reference = if problem.name == "dipoles" { Some(separation(&run_text(&dipoles_scene("exponential-verlet", 1e-10), "reference")?)) } else { None };
+        let reference = if problem.name == "dipoles" { Some(separation(&run_text(&dipoles_scene(Scheme::ExponentialVerlet, 1e-10), "reference")?)) } else { None };
         let _ = writeln!(md, "## {}: {}\n\n| scheme | observed order | errors (dt: error) |\n|---|---|---|", problem.name, problem.description);
         let mut series = vec![];
         for scheme in SCHEMES {
             // Without a magnetic force respa is velocity Verlet (and would sample the overlap only
             // every K steps).
-            if scheme == "respa" && problem.name == "hertz" {
+            if scheme == Scheme::Respa && problem.name == "hertz" {
                 continue;
             }
             let points: Vec<(f64, f64)> = problem.dts.iter().filter_map(|&dt| run_problem(&problem, scheme, dt, reference).ok().map(|e| (dt, e))).collect();
@@ -368,7 +370,7 @@ pub fn study(dir: &Path) -> Result<String, Box<dyn std::error::Error>> {
                 label: format!("{scheme} ({order})"),
                 points: points.iter().filter(|p| p.1 > 0.0).map(|(dt, e)| (dt.log10(), e.log10())).collect(),
                 color: colour(scheme),
-                markers: if scheme == "exponential-verlet" || scheme == "respa" { Some(4) } else { None },
+                markers: if matches!(scheme, Scheme::ExponentialVerlet | Scheme::Respa) { Some(4) } else { None },
                 errors: vec![],
             });
         }

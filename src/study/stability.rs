@@ -12,13 +12,14 @@
 //! from 1/32 of the estimate; the largest stable dt is the last one before the first failure.
 
 use crate::plot::{line_chart_with_legend, palette, RGBColor, Series, SeriesLabelPosition};
+use crate::core::integrators::Scheme;
 use crate::scene::Scene;
 use std::fmt::Write as _;
 use std::path::Path;
 
 /// The fixed-step integrators. `adaptive-verlet` is not mapped: its dt is only a cap that its
 /// error control splits into substeps, so a largest stable dt is not a property of it.
-pub const SCHEMES: [&str; 5] = ["explicit-euler", "semi-implicit-euler", "velocity-verlet", "exponential-verlet", "respa"];
+pub const SCHEMES: [Scheme; 5] = [Scheme::ExplicitEuler, Scheme::SemiImplicitEuler, Scheme::VelocityVerlet, Scheme::ExponentialVerlet, Scheme::Respa];
 /// `respa` in the map evaluates the moments and dipole forces every `RESPA_K` steps (the
 /// paper-scene setting).
 const RESPA_K: u64 = 10;
@@ -35,10 +36,10 @@ fn species(youngs_modulus: f64, extra: &str) -> String {
 const WATER: &str = "[fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n";
 
 /// The collision scene; `speed` is the closing speed (m/s), `end` the run time (s).
-fn collision(scheme: &str, youngs_modulus: f64, b0: f64, dt: f64, speed: f64, end: f64) -> String {
+fn collision(scheme: Scheme, youngs_modulus: f64, b0: f64, dt: f64, speed: f64, end: f64) -> String {
     // respa runs whole slow steps: the run is rounded up to a multiple of K dt.
     let (slow_every, end) = match scheme {
-        "respa" => (RESPA_K, (end / (RESPA_K as f64 * dt)).ceil() * RESPA_K as f64 * dt),
+        Scheme::Respa => (RESPA_K, (end / (RESPA_K as f64 * dt)).ceil() * RESPA_K as f64 * dt),
         _ => (1, end),
     };
     format!(
@@ -55,7 +56,7 @@ fn collision(scheme: &str, youngs_modulus: f64, b0: f64, dt: f64, speed: f64, en
 /// One point of the map: the estimate and the measured largest stable dt (`at_grid_top`: the
 /// scan's largest dt was still stable, so the bound is at least that).
 pub struct MapPoint {
-    pub scheme: &'static str,
+    pub scheme: Scheme,
     pub youngs_modulus: f64,
     pub b0: f64,
     pub impact_speed: f64,
@@ -75,7 +76,7 @@ fn hertz_overlap(e: f64, v: f64) -> f64 {
     (15.0 * m_eff * v * v / (16.0 * e_eff * (a / 2.0).sqrt())).powf(0.4)
 }
 
-fn stable(scheme: &str, e: f64, b0: f64, dt: f64, speed: f64, end: f64) -> bool {
+fn stable(scheme: Scheme, e: f64, b0: f64, dt: f64, speed: f64, end: f64) -> bool {
     let Ok(scene) = Scene::parse(&collision(scheme, e, b0, dt, speed, end), "stability map") else { return false };
     let mut sim = scene.simulation(None);
     if sim.initialise().is_err() {
@@ -99,7 +100,7 @@ fn stable(scheme: &str, e: f64, b0: f64, dt: f64, speed: f64, end: f64) -> bool 
 }
 
 /// Measures one point of the map.
-pub fn map_point(scheme: &'static str, e: f64, b0: f64) -> Result<MapPoint, String> {
+pub fn map_point(scheme: Scheme, e: f64, b0: f64) -> Result<MapPoint, String> {
     // The estimate at rest gives the impact speed the field produces; the scan then starts the
     // particles at that speed.
     let probe = Scene::parse(&collision(scheme, e, b0, 1e-9, 0.0, 1e-6), "stability map").map_err(|e| e.to_string())?;
@@ -281,7 +282,7 @@ pub fn cutoff_errors() -> Result<Vec<(String, &'static str, f64, f64)>, Error> {
 pub fn study(dir: &Path) -> Result<String, Error> {
     use rayon::prelude::*;
     std::fs::create_dir_all(dir)?;
-    let jobs: Vec<(&'static str, f64, f64)> = SCHEMES.iter().flat_map(|&s| MODULI.iter().flat_map(move |&e| FIELDS.iter().map(move |&b| (s, e, b)))).collect();
+    let jobs: Vec<(Scheme, f64, f64)> = SCHEMES.iter().flat_map(|&s| MODULI.iter().flat_map(move |&e| FIELDS.iter().map(move |&b| (s, e, b)))).collect();
     let points: Vec<MapPoint> = jobs.par_iter().map(|&(s, e, b)| map_point(s, e, b)).collect::<Result<_, String>>().map_err(|e| e.to_string())?;
     let mut md = format!(
         "# Stability: the largest stable time step, stiff and extreme cases\n\n\
@@ -336,7 +337,7 @@ pub fn study(dir: &Path) -> Result<String, Error> {
         }
         let rayleigh: Vec<(f64, f64)> = points.iter().filter(|p| p.scheme == scheme && p.b0 == FIELDS[0]).map(|p| (p.youngs_modulus.log10(), p.rayleigh.log10())).collect();
         series.push(Series::line("Rayleigh time", rayleigh, palette(6)));
-        if scheme == "explicit-euler" {
+        if scheme == Scheme::ExplicitEuler {
             series.push(Series::markers("the paper: E = 1e9 Pa, dt = 1e-6 s", vec![(9.0, -6.0)], RGBColor(0, 0, 0), 8));
         }
         let figure = format!("stability-{scheme}.png");

@@ -114,7 +114,7 @@ pub fn compare(text: &str, name: &str, work: &Path, engines: &[Engine]) -> Resul
 
 /// The pair approach without contact, stopped at 96 µs (before the spheres would touch), with
 /// the given scheme, dt and multiple-time-stepping ratio: the integrator convergence problem.
-pub fn pair_before_contact(scheme: &str, dt: f64, slow_every: u64) -> String {
+pub fn pair_before_contact(scheme: crate::core::integrators::Scheme, dt: f64, slow_every: u64) -> String {
     PAIR.replace("[forces.contact]\n", "")
         .replace("dt = 1.0e-9", &format!("scheme = \"{scheme}\"\ndt = {dt:e}\nslow_every = {slow_every}"))
         .replace("end_time = 2.0e-4", "end_time = 9.6e-5")

@@ -2,7 +2,7 @@
 
 use super::{ConstantForce, Context, ForceTerm, Forces};
 use crate::core::parallel;
-use crate::core::state::{Particles, Vec3};
+use crate::core::state::{sphere_volume, Particles, Vec3};
 
 #[derive(Debug, Clone)]
 pub struct GravityBuoyancy {
@@ -24,7 +24,7 @@ impl GravityBuoyancy {
         if self.weights.len() != p.len() {
             self.weights = (0..p.len())
                 .map(|i| {
-                    let volume = 4.0 / 3.0 * std::f64::consts::PI * p.radius[i].powi(3);
+                    let volume = sphere_volume(p.radius[i]);
                     (p.mass[i] - volume * self.fluid_density) * self.gravity
                 })
                 .collect();
