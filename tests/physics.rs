@@ -1,4 +1,4 @@
-//! Physics verification against closed forms and independent solutions (DESIGN.md §5).
+//! Physics verification against closed forms and independent solutions (docs/model.md §11).
 
 use magdem::core::forces::drag::{Drag, DragLaw, Shielding};
 use magdem::core::forces::shielding::lens_area;

@@ -65,7 +65,7 @@ impl Packing {
 const SPECIES: &str = "[[species]]\nname = \"fe3o4\"\ndiameter = 11.0e-6\ndensity = 1087.0\nyoungs_modulus = 1.0e9\npoisson_ratio = 0.5\n\
                        friction = 0.5\nrestitution = 0.5\nrelative_permeability = 12.3\n";
 
-/// The contact-only scene of REFERENCE-CODES.md (11 µm Hertz spheres, walls, gravity,
+/// The contact-only scene of docs/model.md §10.6 (11 µm Hertz spheres, walls, gravity,
 /// dt = 1e-8 s) with `n` particles for `steps` steps.
 pub fn contact_scene(packing: Packing, n: usize, steps: u64) -> String {
     let edge = packing.edge_for_300() * (n as f64 / 300.0).cbrt();

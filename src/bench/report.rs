@@ -717,7 +717,7 @@ fn markdown(bench: &Bench, agreement: &[(String, f64)]) -> String {
     }
 
     s += &both_cores(bench);
-    s += "\n## Dipole forces at case-1 parameters\n\n307 particles in the paper's 4.5 mg/ml box (396 × 396 × 330 µm), moments induced by 0.4 T without mutual induction (fixed dipoles, as LAMMPS holds them), dipole force only, 2 000 force evaluations with the particles held still (without contact forces the nearest pairs would collide within microseconds). LAMMPS runs its own `lj/cut/dipole/cut` (ε = 0) on the same positions and moments (REFERENCE-CODES.md: p = m √(1e-7/k_e)) as a `run` without an integrating fix; the force agreement is the largest |F_LAMMPS − F_magdem| over particles relative to the largest force, at the initial configuration (`reference::dipole_check`).\n\n";
+    s += "\n## Dipole forces at case-1 parameters\n\n307 particles in the paper's 4.5 mg/ml box (396 × 396 × 330 µm), moments induced by 0.4 T without mutual induction (fixed dipoles, as LAMMPS holds them), dipole force only, 2 000 force evaluations with the particles held still (without contact forces the nearest pairs would collide within microseconds). LAMMPS runs its own `lj/cut/dipole/cut` (ε = 0) on the same positions and moments (docs/model.md §10.4: p = m √(1e-7/k_e)) as a `run` without an integrating fix; the force agreement is the largest |F_LAMMPS − F_magdem| over particles relative to the largest force, at the initial configuration (`reference::dipole_check`).\n\n";
     s += "| case | magdem 1 thread (s) | LAMMPS (s) | magdem ÷ LAMMPS speed | force agreement |\n|---|---|---|---|---|\n";
     for case in ["dipole all pairs 307", "dipole cut-off 15 d 307"] {
         let (one, lmp) = (bench.find(case, "magdem", 1), bench.find(case, "lammps", 1));

@@ -6,7 +6,7 @@
 //!
 //! sat() saturates |M| at the species' Ms (a cap, or the Fröhlich–Kennelly law). The moments are
 //! a force term of their own ("moments", slow): it adds no force, it writes the moments that the
-//! dipole and gradient terms after it read. Levels (docs/model.md):
+//! dipole and gradient terms after it read. Levels (docs/model.md §4.3):
 //! - `None`: H_loc = H_ext.
 //! - `Paper`: the paper's neighbourhood scheme as magdem reads it: dipoles within 15 diameters
 //!   contribute, using the moments stored at the previous step (one sweep per step; the
