@@ -144,6 +144,10 @@ pub fn write_with(engine: Engine, scene: &Scene, dir: &Path, coupling: &Coupling
 /// The scene as the files route's `magdem magnetic-forces` reads it, beside the deck.
 pub const SCENE_COPY: &str = "scene.toml";
 
+/// Id of the fix that receives magdem's magnetic forces (`fix external` in process, `fix
+/// addforce` by the files route); the in-process route finds the fix by it to set the callback.
+pub const FIX_ID: &str = "magnetic";
+
 /// The initial particles, in the `atom_style granular` / `sphere` data format (id type diameter
 /// density x y z), and their velocities and angular velocities.
 fn data_file(scene: &Scene) -> String {
@@ -344,7 +348,7 @@ fn drag_section(scene: &Scene) -> Option<String> {
 }
 
 fn magnetic_section(engine: Engine, coupling: &Coupling) -> String {
-    let id = super::library::FIX_ID;
+    let id = FIX_ID;
     match coupling {
         Coupling::Callback => format!(
             "# Magnetic forces (moments with mutual induction, dipole and gradient forces) come from\n\
