@@ -8,8 +8,17 @@ FEATURES = $$(test -f /usr/include/liggghts/fix_external.h && echo --features li
 setup:
 	@bash scripts/setup.sh
 
+# One build serves both targets. `cargo build` resolves dependency features without the
+# dev-dependencies, `cargo test` with them (criterion and tempfile turn on bitflags/std,
+# either/use_std and zerocopy/derive: compare `cargo tree -e features -e normal,build` with
+# `-e normal,build,dev`), so the 35 crates above those (polars, faer, hdf5, rayon among them)
+# got different hashes and the second command rebuilt them. `cargo test --no-run` builds target/release/magdem too (cargo builds the
+# binaries for the integration tests, which run it) with the test resolution, so `make test`
+# after `make build` (or the other way round) compiles nothing new. The price: `make build`
+# also compiles the test binaries. The extra features add trait impls and derives, no code
+# the solver runs, so the binary computes the same results either way.
 build: setup
-	$(CARGO) build --release $(FEATURES)
+	$(CARGO) test --release --no-run $(FEATURES)
 
 reproduce: build
 	@bash scripts/reproduce.sh

@@ -9,6 +9,7 @@ use crate::run::{run, RunFailure, RunOptions, INTERRUPTED};
 use crate::scene::experiment::{Experiment, Point};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::fmt::Write as _;
+use std::io::{stderr, stdout, IsTerminal};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -126,9 +127,11 @@ pub fn run_experiments(experiments: &[Experiment], options: &ExperimentOptions) 
         queue.extend((0..experiment.points.len()).map(|p| (e, p)));
     }
     queue.sort_by(|a, b| cost(&experiments[b.0].points[b.1]).total_cmp(&cost(&experiments[a.0].points[a.1])));
-    // On a terminal a progress bar; otherwise (a log file, CI) one line per finished run.
-    let terminal = std::io::IsTerminal::is_terminal(&std::io::stderr());
-    let bar = if options.progress && terminal { ProgressBar::new(queue.len() as u64) } else { ProgressBar::hidden() };
+    // A progress bar on stderr when it is a terminal; one line per finished run on stdout when
+    // stdout is not a terminal (a log file, a pipe, CI) or the bar cannot be shown.
+    let bar_shown = options.progress && stderr().is_terminal();
+    let lines = options.progress && !(stdout().is_terminal() && stderr().is_terminal());
+    let bar = if bar_shown { ProgressBar::new(queue.len() as u64) } else { ProgressBar::hidden() };
     let finished = AtomicUsize::new(0);
     bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} runs | {elapsed} | ETA {eta} | {msg}")?);
     let next = AtomicUsize::new(0);
@@ -152,7 +155,7 @@ pub fn run_experiments(experiments: &[Experiment], options: &ExperimentOptions) 
                     bar.set_message(format!("{}: {}", point.id, outcome.label()));
                     let wall_time = start.elapsed().as_secs_f64();
                     let count = finished.fetch_add(1, Ordering::Relaxed) + 1;
-                    if options.progress && !terminal {
+                    if lines {
                         println!("{}: {} ({wall_time:.0} s; {} of {} runs left)", point.id, outcome.label(), queue.len() - count, queue.len());
                     }
                     let result = PointResult { id: point.id.clone(), file, outcome, wall_time };

@@ -1,11 +1,13 @@
 //! `magdem` command line: run, validate and inspect scenes and trajectories.
 
+mod cli;
+
 use clap::{Parser, Subcommand};
-use magdem::io::trajectory::Trajectory;
-use magdem::reference::{self, Engine as ReferenceEngine};
-use magdem::run::{run, RunFailure, RunOptions, INTERRUPTED};
-use magdem::scene::Scene;
-use std::path::{Path, PathBuf};
+use cli::run::EngineChoice;
+use cli::trajectory::ExportFormat;
+use magdem::reference::Engine as ReferenceEngine;
+use magdem::run::RunOptions;
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 /// The system allocator, counting heap bytes only for `magdem bench`'s memory per particle.
@@ -18,13 +20,6 @@ static GLOBAL: magdem::bench::SwitchableCounter = magdem::bench::SwitchableCount
 struct Cli {
     #[command(subcommand)]
     command: Command,
-}
-
-#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-enum EngineChoice {
-    Magdem,
-    Liggghts,
-    Lammps,
 }
 
 #[derive(Subcommand)]
@@ -225,427 +220,31 @@ enum Command {
     },
 }
 
-/// `magdem export --format`.
-#[derive(Debug, Clone, Copy, clap::ValueEnum)]
-enum ExportFormat {
-    /// An XDMF sidecar (FILE.xdmf) for ParaView.
-    Xdmf,
-    /// A LAMMPS text dump for OVITO: id type x y z vx vy vz radius mux muy muz.
-    LammpsDump,
-}
-
-fn load(scene: &Path) -> Result<Scene, ExitCode> {
-    Scene::from_file(scene).map_err(|e| {
-        eprintln!("error: {e}");
-        ExitCode::from(2)
-    })
-}
-
-fn describe(scene: &Scene) {
-    let s = &scene.spec;
-    println!("scene {} ({})", s.name.as_deref().unwrap_or("unnamed"), &scene.hash[..12]);
-    println!("  particles: {}  box: {:?} .. {:?}", scene.initial.len(), s.domain.lo, s.domain.hi);
-    let f = &s.forces;
-    let terms: Vec<&str> = [
-        ("contact", f.contact.is_some()),
-        ("dipole", f.dipole.is_some()),
-        ("gradient", f.gradient.is_some()),
-        ("drag", f.drag.is_some()),
-        ("gravity", f.gravity.is_some()),
-    ]
-    .iter()
-    .filter(|t| t.1)
-    .map(|t| t.0)
-    .collect();
-    println!("  terms: {}", terms.join(", "));
-    println!(
-        "  integrator {}: {} steps, a frame every {} steps",
-        s.integration.scheme,
-        scene.total_steps(),
-        scene.steps_per_frame()
-    );
-    println!("  {}", scene.estimate.summary(scene.dt()));
-    for w in &scene.warnings {
-        println!("  warning: {w}");
-    }
-}
-
 fn main() -> ExitCode {
-    let cli = Cli::parse();
-    match cli.command {
-        Command::Validate { scene } => {
-            let scene = match load(&scene) {
-                Ok(s) => s,
-                Err(code) => return code,
-            };
-            describe(&scene);
-            ExitCode::SUCCESS
-        }
-        Command::Deck { scene, engine, output } => {
-            let scene = match load(&scene) {
-                Ok(s) => s,
-                Err(code) => return code,
-            };
-            match reference::deck::write(engine, &scene, &output) {
-                Ok(deck) => {
-                    println!("wrote {}, its fix.* include files and {} in {}", deck.input.display(), deck.data.display(), output.display());
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    ExitCode::from(2)
-                }
-            }
-        }
+    match Cli::parse().command {
         Command::Run { scene, output, engine, exchange_every, mpi, resume, overwrite, timings, quiet, abort_after_frame } => {
-            let scene = match load(&scene) {
-                Ok(s) => s,
-                Err(code) => return code,
-            };
-            let reference_engine = match engine {
-                EngineChoice::Magdem => None,
-                EngineChoice::Liggghts => Some(ReferenceEngine::Liggghts),
-                EngineChoice::Lammps => Some(ReferenceEngine::Lammps),
-            };
-            if let Some(engine) = reference_engine {
-                let dir = output.with_extension(format!("{}.deck", engine.name()));
-                let result = match exchange_every {
-                    Some(every) => {
-                        let magdem = std::env::current_exe().unwrap_or_else(|_| PathBuf::from("magdem"));
-                        reference::run_binary(engine, &scene, &dir, &output, &reference::deck::Coupling::Files { magdem, every }, mpi)
-                    }
-                    None if mpi > 1 && scene.magnetic_force_field().is_some() => {
-                        eprintln!("error: --mpi {mpi}: magnetic forces reach MPI processes only by the files route; add --exchange-every K");
-                        return ExitCode::from(2);
-                    }
-                    None if mpi > 1 => reference::run_binary(engine, &scene, &dir, &output, &reference::deck::Coupling::Callback, mpi),
-                    None => reference::run(engine, &scene, &dir, &output),
-                };
-                return match result {
-                    Ok(r) => {
-                        println!("{}: {} frames from {} in {:.2} s (deck and dump in {}, log {})", output.display(), r.frames, engine.name(), r.wall_time.as_secs_f64(), dir.display(), r.log.display());
-                        ExitCode::SUCCESS
-                    }
-                    Err(e) => {
-                        eprintln!("error: {e}");
-                        match e {
-                            reference::ReferenceError::Unsupported { .. } | reference::ReferenceError::NotInstalled { .. } => ExitCode::from(2),
-                            _ => ExitCode::from(1),
-                        }
-                    }
-                };
-            }
-            for w in &scene.warnings {
-                eprintln!("warning: {w}");
-            }
-            if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
-                if let Err(e) = std::fs::create_dir_all(dir) {
-                    eprintln!("error: cannot create {}: {e}", dir.display());
-                    return ExitCode::from(2);
-                }
-            }
-            let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed));
             let options = RunOptions { resume, overwrite, progress: !quiet, timings, abort_after_frame };
-            match run(&scene, &output, &options) {
-                Ok(summary) => {
-                    if summary.already_complete {
-                        println!("{} is already complete ({} frames); nothing to do", output.display(), summary.frames);
-                    } else {
-                        let secs = summary.wall_time.as_secs_f64();
-                        println!(
-                            "{}: {} steps, {} frames in {:.2} s ({:.0} steps/s)",
-                            output.display(),
-                            summary.steps,
-                            summary.frames,
-                            secs,
-                            summary.steps as f64 / secs.max(1e-9)
-                        );
-                    }
-                    if timings {
-                        let total: f64 = summary.simulation.timers().phases().iter().map(|p| p.1.as_secs_f64()).sum();
-                        println!("phase timings:");
-                        for (name, d) in summary.simulation.timers().phases() {
-                            println!("  {name:<12} {:>9.3} s  {:>5.1}%", d.as_secs_f64(), 100.0 * d.as_secs_f64() / total.max(1e-12));
-                        }
-                    }
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    match e {
-                        RunFailure::Interrupted { .. } => ExitCode::from(130),
-                        RunFailure::Unstable(_) => ExitCode::from(3),
-                        RunFailure::Trajectory(_) => ExitCode::from(1),
-                        RunFailure::Refused(_) => ExitCode::from(2),
-                        RunFailure::DiskFull { .. } => ExitCode::from(1),
-                    }
-                }
-            }
+            cli::run::run(&scene, &output, engine, exchange_every, mpi, &options)
         }
-        Command::Verify { study: Study::Contacts { report, work } } => {
-            let engines: Vec<ReferenceEngine> = [ReferenceEngine::Liggghts, ReferenceEngine::Lammps].into_iter().filter(|e| e.available()).collect();
-            if engines.len() < 2 {
-                eprintln!("note: reference engines missing ({}); their columns stay empty. `make setup` installs them.", [ReferenceEngine::Liggghts, ReferenceEngine::Lammps].iter().filter(|e| !e.available()).map(|e| e.name()).collect::<Vec<_>>().join(", "));
-            }
-            match magdem::verify::contacts::verify(&report, &work, &engines) {
-                Ok(r) => {
-                    println!(
-                        "wrote {} and {} figures; largest difference to LIGGGHTS: {:.4}% normal, {:.4}% tangential",
-                        report.join("contact-verification.md").display(),
-                        r.figures.len(),
-                        100.0 * r.worst_normal,
-                        100.0 * r.worst_tangential
-                    );
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    ExitCode::from(1)
-                }
-            }
-        }
-        Command::Verify { study: Study::Magnetic { report, work, case1_time } } => {
-            let engines: Vec<ReferenceEngine> = [ReferenceEngine::Liggghts, ReferenceEngine::Lammps]
-                .into_iter()
-                .filter(|e| match reference::library::available(*e) {
-                    Ok(()) => true,
-                    Err(why) => {
-                        eprintln!("note: {} skipped: {why}", e.name());
-                        false
-                    }
-                })
-                .collect();
-            let magdem = std::env::current_exe().unwrap_or_else(|_| PathBuf::from("magdem"));
-            match magdem::verify::magnetic::verify(&report, &work, &engines, case1_time, &magdem) {
-                Ok(_) => {
-                    println!("wrote {}", report.join("magnetic-verification.md").display());
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    ExitCode::from(1)
-                }
-            }
-        }
-        Command::MagneticForces { scene, positions, prefix } => {
-            let scene = match load(&scene) {
-                Ok(s) => s,
-                Err(code) => return code,
-            };
-            match reference::files_route::magnetic_forces(&scene, &positions, &prefix) {
-                Ok(()) => ExitCode::SUCCESS,
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    ExitCode::from(1)
-                }
-            }
-        }
+        Command::Deck { scene, engine, output } => cli::scene::deck(&scene, engine, &output),
+        Command::Study { study: SolverStudy::Accuracy { report } } => cli::verify::accuracy(&report),
+        Command::Study { study: SolverStudy::Stability { report } } => cli::verify::stability(&report),
+        Command::Verify { study: Study::Contacts { report, work } } => cli::verify::contacts(&report, &work),
+        Command::Verify { study: Study::Magnetic { report, work, case1_time } } => cli::verify::magnetic(&report, &work, case1_time),
+        Command::MagneticForces { scene, positions, prefix } => cli::scene::magnetic_forces(&scene, &positions, &prefix),
+        Command::Validate { scene } => cli::scene::validate(&scene),
+        Command::Analyse { file, frame, gap, csv, header } => cli::trajectory::analyse(&file, frame, gap, csv, header),
         Command::Experiment { files, jobs, overwrite_changed, dry_run, quiet } => {
-            let mut experiments = vec![];
-            for file in &files {
-                match magdem::scene::experiment::Experiment::from_file(file) {
-                    Ok(e) => experiments.push(e),
-                    Err(e) => {
-                        eprintln!("error: {}: {e}", file.display());
-                        return ExitCode::from(2);
-                    }
-                }
-            }
-            if dry_run {
-                for e in &experiments {
-                    for p in &e.points {
-                        println!("{}/{}.h5  {} particles  {} steps  {}", e.output.display(), p.id, p.scene.initial.len(), p.scene.total_steps(), p.engine);
-                        for w in &p.scene.warnings {
-                            println!("  warning: {w}");
-                        }
-                    }
-                }
-                return ExitCode::SUCCESS;
-            }
-            let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed));
             let options = magdem::experiment::ExperimentOptions { jobs, overwrite_changed, progress: !quiet };
-            match magdem::experiment::run_experiments(&experiments, &options) {
-                Ok(all) => {
-                    use magdem::experiment::Outcome;
-                    let mut failed = false;
-                    for (experiment, results) in experiments.iter().zip(&all) {
-                        for r in results {
-                            match &r.outcome {
-                                Outcome::Failed(_) | Outcome::KeptChanged { .. } | Outcome::Interrupted => {
-                                    failed = true;
-                                    eprintln!("{}: {}", r.id, r.outcome.label());
-                                }
-                                Outcome::Unstable(_) => eprintln!("{}: {}", r.id, r.outcome.label()),
-                                _ => {}
-                            }
-                        }
-                        println!("{}: {} runs in {} (manifest.csv)", experiment.spec.name, results.len(), experiment.output.display());
-                    }
-                    if failed { ExitCode::from(1) } else { ExitCode::SUCCESS }
-                }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    ExitCode::from(1)
-                }
-            }
-        }
-        Command::Analyse { file, frame, gap, csv, header } => match analyse(&file, frame, gap, csv, header) {
-            Ok(()) => ExitCode::SUCCESS,
-            Err(e) => {
-                eprintln!("error: {}: {e}", file.display());
-                ExitCode::from(2)
-            }
-        },
-        Command::Study { study } => {
-            let (result, written) = match study {
-                SolverStudy::Accuracy { report } => (magdem::study::accuracy::study(&report), report.join("README.md")),
-                SolverStudy::Stability { report } => (magdem::study::stability::study(&report), report.join("stability.md")),
-            };
-            match result {
-                Ok(_) => {
-                    println!("wrote {}", written.display());
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    ExitCode::from(1)
-                }
-            }
+            cli::experiment::experiment(&files, &options, dry_run)
         }
         Command::Report(Report::Paper { experiments, reference, out, gap, wall_time }) => {
-            let options = magdem::report::paper::PaperReportOptions { experiments, reference, out, gap, wall_time };
-            report_written(magdem::report::paper::write_report(&options))
+            cli::report::paper(&magdem::report::paper::PaperReportOptions { experiments, reference, out, gap, wall_time })
         }
+        Command::Info { file } => cli::trajectory::info(&file),
+        Command::Export { files, format, output } => cli::trajectory::export(&files, format, output.as_deref()),
         Command::Bench { out, work, repeats, max_particles, no_mpi } => {
-            let options = magdem::bench::Options { out, work, repeats: repeats.max(1), max_particles, mpi: !no_mpi };
-            report_written(magdem::bench::report::write(&options))
-        }
-        Command::Export { files, format, output } => {
-            if output.is_some() && files.len() > 1 {
-                eprintln!("error: --output names one file; {} trajectories given", files.len());
-                return ExitCode::from(2);
-            }
-            for file in &files {
-                let written = match format {
-                    ExportFormat::Xdmf => magdem::io::export::write_xdmf(file),
-                    ExportFormat::LammpsDump => {
-                        let out = output.clone().unwrap_or_else(|| magdem::io::export::beside(file, "dump"));
-                        magdem::io::export::write_lammps_dump(file, &out).map(|_| out)
-                    }
-                };
-                match written {
-                    Ok(out) => println!("{}: wrote {}", file.display(), out.display()),
-                    Err(e) => {
-                        eprintln!("error: {}: {}", file.display(), e.to_string().split_whitespace().collect::<Vec<_>>().join(" "));
-                        return ExitCode::from(2);
-                    }
-                }
-            }
-            ExitCode::SUCCESS
-        }
-        Command::Info { file } => match info(&file) {
-            Ok(()) => ExitCode::SUCCESS,
-            Err(e) => {
-                eprintln!("error: {}: {e}", file.display());
-                ExitCode::from(2)
-            }
-        },
-    }
-}
-
-/// Exit status of a command that writes a report: its path on success, the error otherwise.
-fn report_written<E: std::fmt::Display>(result: Result<PathBuf, E>) -> ExitCode {
-    match result {
-        Ok(path) => {
-            println!("wrote {}", path.display());
-            ExitCode::SUCCESS
-        }
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::from(1)
+            cli::report::bench(magdem::bench::Options { out, work, repeats, max_particles, mpi: !no_mpi })
         }
     }
-}
-
-fn analyse(path: &Path, frame: isize, gap: f64, csv: bool, header: bool) -> Result<(), Box<dyn std::error::Error>> {
-    use magdem::analysis::{aggregates::finite_lengths, stats::summary, trajectory::FrameReader};
-    let t = Trajectory::open(path)?;
-    let reader = FrameReader::new(&t)?;
-    let (time, aggs) = reader.aggregates(frame, gap)?;
-    let lengths: Vec<f64> = finite_lengths(&aggs).iter().map(|l| l * 1e6).collect();
-    let s = summary(&lengths);
-    let box_extent = reader.box_extent();
-    let capped = aggs.iter().filter(|a| a.box_limited(box_extent)).count();
-    let percolating = aggs.iter().filter(|a| a.percolating).count();
-    if csv {
-        let sizes = summary(&aggs.iter().map(|a| a.size() as f64).collect::<Vec<_>>());
-        let vx = summary(&aggs.iter().map(|a| a.com_velocity.x * 1e6).collect::<Vec<_>>());
-        if header {
-            println!(
-                "file,time_s,aggregates,particles,mean_length_um,pop_std_length_um,sample_std_length_um,mean_size,pop_std_size,\
-                 mean_vx_um_s,pop_std_vx_um_s,box_limited_fraction,percolating"
-            );
-        }
-        println!(
-            "{},{time:e},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.4},{percolating}",
-            path.display(),
-            aggs.len(),
-            aggs.iter().map(|a| a.size()).sum::<usize>(),
-            s.mean,
-            s.population_std,
-            s.sample_std,
-            sizes.mean,
-            sizes.population_std,
-            vx.mean,
-            vx.population_std,
-            capped as f64 / aggs.len() as f64
-        );
-        return Ok(());
-    }
-    println!("t = {time:e} s: {} aggregates of {} particles (gap tolerance {gap:e} of the smaller radius)", aggs.len(), aggs.iter().map(|a| a.size()).sum::<usize>());
-    println!("length (µm): mean {:.2}, population std {:.2}, sample std {:.2}", s.mean, s.population_std, s.sample_std);
-    println!(
-        "box-limited: {capped} of {} aggregates ({:.1} %) reach {:.0} % of the box's {:.1} µm along the field or percolate; \
-         {percolating} percolate through a periodic face (no finite length, left out of the mean)",
-        aggs.len(),
-        100.0 * capped as f64 / aggs.len() as f64,
-        100.0 * magdem::analysis::aggregates::BOX_LIMITED_FRACTION,
-        box_extent * 1e6
-    );
-    let chains: Vec<f64> = aggs.iter().filter(|a| a.size() > 1).map(|a| a.orientation_deg).collect();
-    if !chains.is_empty() {
-        println!("orientation to the field (aggregates of 2+): mean {:.1}°", summary(&chains).mean);
-    }
-    let mut histogram = std::collections::BTreeMap::new();
-    for a in &aggs {
-        *histogram.entry(a.size()).or_insert(0) += 1;
-    }
-    println!("size: count  {}", histogram.iter().map(|(k, v)| format!("{k}:{v}")).collect::<Vec<_>>().join("  "));
-    print!("gap tolerance sensitivity (mean length µm):");
-    for g in [1e-4, 1e-3, 1e-2, 5e-2] {
-        let (_, a) = reader.aggregates(frame, g)?;
-        print!("  {g:e}: {:.2}", summary(&finite_lengths(&a)).mean * 1e6);
-    }
-    println!();
-    Ok(())
-}
-
-fn info(path: &Path) -> Result<(), Box<dyn std::error::Error>> {
-    let t = Trajectory::open(path)?;
-    for key in ["format", "magdem_version", "git_commit", "engine", "integrator", "scene_name", "scene_sha256", "status", "status_message", "units"] {
-        println!("{key:<16} {}", t.attr_string(key)?);
-    }
-    println!("{:<16} {}", "particles", t.attr::<u64>("n_particles")?);
-    println!("{:<16} {:e} s", "dt", t.attr::<f64>("dt")?);
-    let times = t.times()?;
-    println!(
-        "{:<16} {} ({} to {} s)",
-        "frames",
-        times.len(),
-        times.first().map_or("-".into(), |v| format!("{v:e}")),
-        times.last().map_or("-".into(), |v| format!("{v:e}"))
-    );
-    let (state, frames) = t.checkpoint()?;
-    println!("{:<16} step {} (t = {:e} s) after frame {}, {} contacts", "checkpoint", state.step, state.time, frames, state.contacts.pairs.len());
-    Ok(())
 }

@@ -4,7 +4,8 @@
 
 use magdem::reference::{self, Engine};
 use magdem::scene::Scene;
-use magdem::verify::contacts::{cases, relative, run_case};
+use magdem::verify::contact_cases::{cases, relative};
+use magdem::verify::contacts::run_case;
 use tempfile::TempDir;
 
 fn engines() -> Option<Vec<Engine>> {

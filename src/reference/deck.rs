@@ -11,7 +11,10 @@
 
 use super::{Engine, ReferenceError};
 use crate::core::forces::contact::PairMaterial;
-use crate::scene::{Boundary, DragLawSpec, Scene, ShieldingSpec};
+use crate::scene::{
+    Boundary, BoundarySpec, ContactSpec, DipoleSpec, DomainSpec, DragLawSpec, DragSpec, FieldSpec, FluidSpec, ForcesSpec, GradientSpec, GravitySpec, IntegrationSpec,
+    OutputSpec, ParticleGroupSpec, Scene, SceneSpec, ShieldingSpec, SpeciesSpec, StabilitySpec,
+};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -57,48 +60,132 @@ fn unsupported(engine: Engine, term: &str, why: &str) -> ReferenceError {
 }
 
 /// Refuses what the engine cannot express, naming the term.
+///
+/// Every field of the scene spec is named here, without `..`, with what the deck does with it: a
+/// field or term added to the spec fails to compile here until the deck writes it or refuses it.
+/// The refusals come in a fixed order (drag, gravity, species, contact); the first one is reported.
 pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
-    let f = &scene.spec.forces;
-    if let Some(d) = &f.drag {
-        if d.law != DragLawSpec::Stokes {
-            return Err(unsupported(engine, "forces.drag.law = \"schiller-naumann\"", "fix viscous applies linear (Stokes) drag only"));
-        }
-        if d.shielding != ShieldingSpec::None {
-            return Err(unsupported(engine, "forces.drag.shielding = \"paper\"", "fix viscous has no per-particle shielded area"));
-        }
-        if d.rotational {
-            return Err(unsupported(engine, "forces.drag.rotational = true", "neither build can apply a torque from a fix (no addtorque)"));
-        }
-        if scene.spec.fluid.as_ref().is_some_and(|fl| fl.velocity != [0.0; 3]) {
-            return Err(unsupported(engine, "fluid.velocity", "fix viscous drags towards rest only"));
+    let SceneSpec {
+        // Metadata; the name heads the deck.
+        version: _,
+        name: _,
+        description: _,
+        // Placement: the data file holds the placed particles (`scene.initial`): positions,
+        // velocities, angular velocities, and each species' type, diameter and density.
+        seed: _,
+        particles,
+        // The box: the data file's bounds, the `boundary` line, granular walls on wall faces.
+        domain: DomainSpec { lo: _, hi: _, boundary: BoundarySpec { x, y, z } },
+        fluid,
+        field,
+        species,
+        forces: ForcesSpec { contact, dipole, gradient, drag, gravity },
+        integration,
+        output,
+        stability,
+    } = &scene.spec;
+    for group in particles {
+        let ParticleGroupSpec { species: _, positions: _, velocities: _, angular_velocities: _, count: _, concentration: _, region: _, order: _ } = group;
+    }
+    for boundary in [x, y, z] {
+        match boundary {
+            Boundary::Wall | Boundary::Periodic => {} // `f` or `p` in the `boundary` line
         }
     }
-    if f.gravity.is_some() {
-        let densities: Vec<f64> = scene.species.iter().map(|s| s.density).collect();
-        if densities.iter().any(|&d| d != densities[0]) {
+    // Density: the buoyancy in fix gravity; viscosity: fix viscous; velocity: refused with drag
+    // (without drag it acts on nothing).
+    let fluid_velocity = fluid.as_ref().map(|FluidSpec { density: _, viscosity: _, velocity }| velocity);
+    // Magnetic terms: magdem computes the moments (from the applied field, with the induction,
+    // cut-off and iteration settings) and the dipole and gradient forces, and hands them to
+    // fix.magnetic (`fix external` in process, `fix addforce` by the files route).
+    if let Some(FieldSpec { b0: _, gradient: _ }) = field {}
+    if let Some(DipoleSpec { induction: _, cutoff_diameters: _, paper_radius_diameters: _, tolerance: _, max_iterations: _, dense_max: _ }) = dipole {}
+    if let Some(GradientSpec {}) = gradient {}
+    // The engines integrate with nve/sphere (velocity Verlet) at dt up to end_time whatever the
+    // scheme; their trajectories' `integrator` attribute says so.
+    let IntegrationSpec { scheme: _, slow_every: _, tolerance: _, dt: _, end_time: _ } = integration;
+    // A full-precision dump (with forces) every output interval; the engines record no contact lists.
+    let OutputSpec { interval: _, forces: _, contacts: _ } = output;
+    // on_unstable_dt applied when the scene was built; the engines have no stability monitor.
+    let StabilitySpec { on_unstable_dt: _, max_overlap: _, max_step_fraction: _ } = stability;
+
+    if let Some(drag) = drag {
+        check_drag(engine, drag, fluid_velocity)?;
+    }
+    if let Some(GravitySpec { g: _ }) = gravity {
+        // fix gravity: |g| (1 − ρ_f/ρ_p) along g, one ρ_p for all.
+        if species.iter().any(|s| s.density != species[0].density) {
             return Err(unsupported(engine, "forces.gravity with species of different densities", "fix gravity applies one buoyancy-reduced g to all"));
         }
     }
-    if scene.species.iter().any(|s| s.permanent_moment.is_some()) {
-        return Err(unsupported(engine, "species.permanent_moment", "no dipole atom style is used"));
+    let walls = scene.domain.walls().next().is_some();
+    check_species(engine, species, contact.is_some() && walls)?;
+    if let Some(ContactSpec { walls: false }) = contact {
+        if walls {
+            return Err(unsupported(engine, "forces.contact.walls = false", "the decks always put granular walls on wall faces"));
+        }
     }
-    let material = |s: &crate::core::state::Species| (s.youngs_modulus, s.poisson_ratio, s.restitution, s.friction);
-    let mixed = scene.species.iter().any(|s| material(s) != material(&scene.species[0]));
-    if mixed && scene.spec.forces.contact.is_some() && scene.domain.walls().next().is_some() {
+    Ok(())
+}
+
+/// fix viscous: linear drag towards rest, 6π μ a per type.
+fn check_drag(engine: Engine, drag: &DragSpec, fluid_velocity: Option<&[f64; 3]>) -> Result<(), ReferenceError> {
+    // The touch tolerance only serves the shielding.
+    let DragSpec { law, shielding, rotational, touch_tolerance: _ } = drag;
+    match law {
+        DragLawSpec::Stokes => {}
+        DragLawSpec::SchillerNaumann => {
+            return Err(unsupported(engine, "forces.drag.law = \"schiller-naumann\"", "fix viscous applies linear (Stokes) drag only"))
+        }
+    }
+    match shielding {
+        ShieldingSpec::None => {}
+        ShieldingSpec::Paper => return Err(unsupported(engine, "forces.drag.shielding = \"paper\"", "fix viscous has no per-particle shielded area")),
+    }
+    if *rotational {
+        return Err(unsupported(engine, "forces.drag.rotational = true", "neither build can apply a torque from a fix (no addtorque)"));
+    }
+    if fluid_velocity.is_some_and(|v| *v != [0.0; 3]) {
+        return Err(unsupported(engine, "fluid.velocity", "fix viscous drags towards rest only"));
+    }
+    Ok(())
+}
+
+/// The species' materials go into the contact section; their magnetic properties act through
+/// magdem's magnetic forces; a permanent moment is refused.
+fn check_species(engine: Engine, species: &[SpeciesSpec], wall_contacts: bool) -> Result<(), ReferenceError> {
+    for s in species {
+        let SpeciesSpec {
+            name: _,
+            diameter: _,
+            density: _,
+            youngs_modulus: _,
+            poisson_ratio: _,
+            friction: _,
+            restitution: _,
+            relative_permeability: _,
+            susceptibility: _,
+            saturation_magnetisation: _,
+            saturation_law: _,
+            permanent_moment,
+        } = s;
+        if permanent_moment.is_some() {
+            return Err(unsupported(engine, "species.permanent_moment", "no dipole atom style is used"));
+        }
+    }
+    let material = |s: &SpeciesSpec| (s.youngs_modulus, s.poisson_ratio, s.restitution, s.friction);
+    if wall_contacts && species.iter().any(|s| material(s) != material(&species[0])) {
         return Err(unsupported(
             engine,
             "walls with species of different materials",
             "magdem gives each particle a wall of its own material; the decks' walls have one material",
         ));
     }
-    if engine == Engine::Liggghts && scene.species.iter().any(|s| s.restitution <= 0.05) {
+    if engine == Engine::Liggghts && species.iter().any(|s| s.restitution <= 0.05) {
         return Err(unsupported(engine, "species.restitution ≤ 0.05", "LIGGGHTS requires 0.05 < e ≤ 1"));
     }
-    if engine == Engine::Lammps && scene.species.iter().any(|s| s.restitution < 1.0 && lammps_tsuji_input(s.restitution).is_none()) {
+    if engine == Engine::Lammps && species.iter().any(|s| s.restitution < 1.0 && lammps_tsuji_input(s.restitution).is_none()) {
         return Err(unsupported(engine, "species.restitution below 0.11", "LAMMPS' tsuji damping cannot reach LIGGGHTS' damping there"));
-    }
-    if scene.spec.forces.contact.as_ref().is_some_and(|c| !c.walls) && scene.domain.walls().next().is_some() {
-        return Err(unsupported(engine, "forces.contact.walls = false", "the decks always put granular walls on wall faces"));
     }
     Ok(())
 }
@@ -143,6 +230,10 @@ pub fn write_with(engine: Engine, scene: &Scene, dir: &Path, coupling: &Coupling
 
 /// The scene as the files route's `magdem magnetic-forces` reads it, beside the deck.
 pub const SCENE_COPY: &str = "scene.toml";
+
+/// Id of the fix that receives magdem's magnetic forces (`fix external` in process, `fix
+/// addforce` by the files route); the in-process route finds the fix by it to set the callback.
+pub const FIX_ID: &str = "magnetic";
 
 /// The initial particles, in the `atom_style granular` / `sphere` data format (id type diameter
 /// density x y z), and their velocities and angular velocities.
@@ -344,7 +435,7 @@ fn drag_section(scene: &Scene) -> Option<String> {
 }
 
 fn magnetic_section(engine: Engine, coupling: &Coupling) -> String {
-    let id = super::library::FIX_ID;
+    let id = FIX_ID;
     match coupling {
         Coupling::Callback => format!(
             "# Magnetic forces (moments with mutual induction, dipole and gradient forces) come from\n\
@@ -435,5 +526,154 @@ mod tests {
         }
         // REFERENCE-CODES.md measured input 0.365 for e = 0.5.
         assert!((lammps_tsuji_input(0.5).unwrap() - 0.365).abs() < 0.003);
+    }
+
+    /// `table` with each dotted key set to its value, or removed for `None`. A number in the key
+    /// indexes an array, a final `+` appends to one; missing tables are created.
+    fn edited(table: &toml::Table, edits: &[(&str, Option<toml::Value>)]) -> toml::Table {
+        let mut root = toml::Value::Table(table.clone());
+        for (key, value) in edits {
+            let parts: Vec<&str> = key.split('.').collect();
+            let (last, path) = parts.split_last().expect("a key");
+            let mut node = &mut root;
+            for part in path {
+                node = match node {
+                    toml::Value::Table(t) => t.entry(part.to_string()).or_insert_with(|| toml::Value::Table(toml::Table::new())),
+                    toml::Value::Array(a) => &mut a[part.parse::<usize>().expect("an index")],
+                    other => panic!("{key}: {other} is neither a table nor an array"),
+                };
+            }
+            match (node, value) {
+                (toml::Value::Array(a), Some(v)) if *last == "+" => a.push(v.clone()),
+                (toml::Value::Table(t), Some(v)) => drop(t.insert(last.to_string(), v.clone())),
+                (toml::Value::Table(t), None) => drop(t.remove(*last)),
+                (other, _) => panic!("{key}: cannot edit {other}"),
+            }
+        }
+        match root {
+            toml::Value::Table(t) => t,
+            _ => unreachable!(),
+        }
+    }
+
+    /// The deck's text: in.scene and every file it includes.
+    fn deck_text(dir: &Path, deck: &WrittenDeck) -> String {
+        let main = std::fs::read_to_string(dir.join(&deck.input)).unwrap();
+        let includes = main.lines().filter_map(|l| l.strip_prefix("include ")).map(|name| std::fs::read_to_string(dir.join(name)).unwrap());
+        std::iter::once(main.clone()).chain(includes).collect::<Vec<_>>().join("\n")
+    }
+
+    /// Each term of the scene's `[forces]` has its fix or pair style in the deck, and none that is absent.
+    fn assert_every_term_written(engine: Engine, scene: &Scene, coupling: &Coupling, text: &str, label: &str) {
+        let ForcesSpec { contact, dipole, gradient, drag, gravity } = &scene.spec.forces;
+        let pair_style = match engine {
+            Engine::Liggghts => "pair_style gran model hertz tangential history",
+            Engine::Lammps => "pair_style granular",
+        };
+        let magnetic_fix = match coupling {
+            Coupling::Callback => "fix magnetic all external pf/callback 1 1",
+            Coupling::Files { .. } => "fix magnetic all addforce v_fx v_fy v_fz",
+        };
+        let walls = scene.domain.walls().next().is_some();
+        let lines = [
+            ("forces.contact", contact.is_some(), pair_style),
+            ("no forces.contact", contact.is_none(), "pair_style none"),
+            ("forces.contact on wall faces", contact.is_some() && walls, "all wall/gran"),
+            ("forces.dipole or forces.gradient", dipole.is_some() || gradient.is_some(), magnetic_fix),
+            ("forces.drag", drag.is_some(), "fix drag all viscous"),
+            ("forces.gravity", gravity.is_some(), "fix gravity all gravity"),
+            ("integration", true, "fix integrate all nve/sphere"),
+        ];
+        for (term, present, line) in lines {
+            assert_eq!(text.contains(line), present, "{label}, {}: {term} {} `{line}`", engine.name(), if present { "lacks" } else { "has" });
+        }
+    }
+
+    /// What changes, the edits, and the term each engine (LIGGGHTS, LAMMPS) refuses, or `None`
+    /// when it writes the deck.
+    type Variant = (&'static str, Vec<(&'static str, Option<toml::Value>)>, [Option<&'static str>; 2]);
+
+    /// Per shipped scene, made expressible (Stokes drag without shielding or rotational drag, as
+    /// experiments/paper/reference.toml runs it) and then with one term or option changed at a
+    /// time: in both engines every term is either written into the deck (its fix or pair style)
+    /// or refused with a message naming it.
+    #[test]
+    fn every_term_is_written_or_refused_by_name() {
+        use toml::Value;
+        let s = |v: &str| Some(Value::String(v.into()));
+        let f = |v: f64| Some(Value::Float(v));
+        let b = |v: bool| Some(Value::Boolean(v));
+        let v3 = |v: [f64; 3]| Some(Value::Array(v.iter().map(|&x| Value::Float(x)).collect()));
+        let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/scenes");
+        let mut files: Vec<PathBuf> = std::fs::read_dir(&scenes).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|x| x == "toml")).collect();
+        files.sort();
+        assert!(!files.is_empty(), "no scenes in {}", scenes.display());
+        for file in files {
+            let shipped: toml::Table = toml::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
+            let base = edited(&shipped, &[("forces.drag.law", s("stokes")), ("forces.drag.shielding", s("none")), ("forces.drag.rotational", b(false))]);
+            let walls = Scene::parse(&toml::to_string(&base).unwrap(), "base").unwrap().domain.walls().next().is_some();
+            let species = |edits: &[(&str, Option<Value>)]| {
+                let mut other = edited(base["species"].as_array().unwrap()[0].as_table().unwrap(), edits);
+                other.insert("name".into(), Value::String("other".into()));
+                Some(Value::Table(other))
+            };
+            let on_walls = |term| if walls { Some(term) } else { None };
+            // (Periodic variants drop the dipole term, whose ranges must stay below half the box.)
+            let periodic = Some(Value::Table(["x", "y", "z"].iter().map(|k| (k.to_string(), Value::String("periodic".into()))).collect()));
+            let variants: Vec<Variant> = vec![
+                ("expressible", vec![], [None, None]),
+                ("Schiller-Naumann drag", vec![("forces.drag.law", s("schiller-naumann"))], [Some("forces.drag.law"); 2]),
+                ("shielded drag", vec![("forces.drag.shielding", s("paper"))], [Some("forces.drag.shielding"); 2]),
+                ("rotational drag", vec![("forces.drag.rotational", b(true))], [Some("forces.drag.rotational"); 2]),
+                ("drag touch tolerance", vec![("forces.drag.touch_tolerance", f(1e-2))], [None, None]),
+                ("no drag", vec![("forces.drag", None)], [None, None]),
+                ("moving fluid", vec![("fluid.velocity", v3([1e-4, 0.0, 0.0]))], [Some("fluid.velocity"); 2]),
+                ("moving fluid, no drag", vec![("forces.drag", None), ("fluid.velocity", v3([1e-4, 0.0, 0.0]))], [None, None]),
+                ("gravity along y", vec![("forces.gravity.g", v3([0.0, -9.81, 0.0]))], [None, None]),
+                ("no gravity", vec![("forces.gravity", None)], [None, None]),
+                ("gravity, two densities", vec![("forces.gravity.g", v3([0.0, 0.0, -9.81])), ("species.+", species(&[("density", f(2000.0))]))], [Some("forces.gravity"); 2]),
+                ("two materials", vec![("species.+", species(&[("youngs_modulus", f(2e9))]))], [on_walls("walls with species of different materials"); 2]),
+                ("two materials, periodic", vec![("species.+", species(&[("youngs_modulus", f(2e9))])), ("domain.boundary", periodic.clone()), ("forces.dipole", None)], [None, None]),
+                ("permanent moment", vec![("species.0.permanent_moment", v3([1e-15, 0.0, 0.0]))], [Some("species.permanent_moment"); 2]),
+                ("restitution 0.04", vec![("species.0.restitution", f(0.04))], [Some("species.restitution"); 2]),
+                ("restitution 0.08", vec![("species.0.restitution", f(0.08))], [None, Some("species.restitution")]),
+                ("elastic", vec![("species.0.restitution", f(1.0))], [None, None]),
+                ("saturation", vec![("species.0.saturation_magnetisation", f(4.8e5)), ("species.0.saturation_law", s("frohlich-kennelly"))], [None, None]),
+                ("no wall contacts", vec![("forces.contact.walls", b(false))], [on_walls("forces.contact.walls"); 2]),
+                ("no wall contacts, periodic", vec![("forces.contact.walls", b(false)), ("domain.boundary", periodic.clone()), ("forces.dipole", None)], [None, None]),
+                ("no contact", vec![("forces.contact", None)], [None, None]),
+                ("induction none", vec![("forces.dipole.induction", s("none"))], [None, None]),
+                ("induction exact", vec![("forces.dipole.induction", s("exact"))], [None, None]),
+                ("gradient only", vec![("forces.dipole", None), ("forces.gradient", Some(Value::Table(toml::Table::new())))], [None, None]),
+                ("no magnetic term", vec![("forces.dipole", None), ("forces.gradient", None)], [None, None]),
+                ("semi-implicit Euler", vec![("integration.scheme", s("semi-implicit-euler"))], [None, None]),
+                ("no forces or contacts stored", vec![("output.forces", b(false)), ("output.contacts", b(false))], [None, None]),
+            ];
+            for (what, edits, refused) in &variants {
+                let label = format!("{} ({what})", file.display());
+                let scene = Scene::parse(&toml::to_string(&edited(&base, edits)).unwrap(), &label).unwrap_or_else(|e| panic!("{label}: {e}"));
+                let magnetic = scene.spec.forces.dipole.is_some() || scene.spec.forces.gradient.is_some();
+                let every = scene.steps_per_frame();
+                let files_route = Coupling::Files { magdem: PathBuf::from("magdem"), every };
+                for (engine, refused) in [Engine::Liggghts, Engine::Lammps].into_iter().zip(refused) {
+                    for coupling in if magnetic { vec![Coupling::Callback, files_route.clone()] } else { vec![Coupling::Callback] } {
+                        let dir = tempfile::tempdir().unwrap();
+                        match (write_with(engine, &scene, dir.path(), &coupling), refused) {
+                            (Ok(deck), None) => assert_every_term_written(engine, &scene, &coupling, &deck_text(dir.path(), &deck), &label),
+                            (Err(ReferenceError::Unsupported { term, .. }), Some(name)) => assert!(term.contains(name), "{label}, {}: refused {term:?}, not {name:?}", engine.name()),
+                            (Ok(_), Some(name)) => panic!("{label}, {}: written, though {name} should be refused", engine.name()),
+                            (Err(e), _) => panic!("{label}, {}: {e}", engine.name()),
+                        }
+                    }
+                }
+            }
+            // The files route's exchange interval must divide the run.
+            let scene = Scene::parse(&toml::to_string(&base).unwrap(), "base").unwrap();
+            if scene.magnetic_force_field().is_some() && scene.total_steps() > 2 {
+                let coupling = Coupling::Files { magdem: PathBuf::from("magdem"), every: scene.total_steps() - 1 };
+                let err = write_with(Engine::Lammps, &scene, tempfile::tempdir().unwrap().path(), &coupling).unwrap_err();
+                assert!(matches!(&err, ReferenceError::Unsupported { term, .. } if term == "the files route"), "{err}");
+            }
+        }
     }
 }

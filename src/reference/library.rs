@@ -4,7 +4,8 @@
 //! core. LAMMPS sets the callback through its C API; LIGGGHTS through a small C++ shim (feature
 //! `liggghts-shim`). Both libraries are loaded at run time, so magdem builds without them.
 
-use super::{deck, dump, Engine, ReferenceError, ReferenceRun};
+use super::deck::{self, FIX_ID};
+use super::{dump, Engine, ReferenceError, ReferenceRun};
 use crate::core::simulation::ForceField;
 use crate::core::state::{State, Vec3};
 use crate::scene::Scene;
@@ -12,9 +13,6 @@ use libloading::Library;
 use std::ffi::{c_char, c_int, c_void, CString};
 use std::path::Path;
 use std::sync::Mutex;
-
-/// Id of the fix that receives magdem's forces (written by the deck).
-pub const FIX_ID: &str = "magnetic";
 
 /// `void (*)(void *data, bigint step, int nlocal, tagint *ids, double **x, double **f)` with
 /// bigint = int64 and tagint = int, as both Debian builds use (LAMMPS_SMALLBIG).

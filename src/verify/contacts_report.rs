@@ -1,11 +1,19 @@
 //! Writes `contact-verification.md` and its figures from the outcomes of `verify contacts`.
 
-use super::contacts::{relative, Case, Geometry, Outcome, Report, DT, FRAME_STEPS};
+use super::contact_cases::{relative, Case, Geometry, Metrics, Outcome, DIAMETER, DT, FRAME_STEPS};
 use crate::plot::{engine_colour, line_chart, Series};
 use crate::reference::Engine;
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
+/// The written report and the numbers `magdem verify contacts` prints.
+pub struct Report {
+    pub markdown: String,
+    pub figures: Vec<PathBuf>,
+    /// Largest |magdem/LIGGGHTS − 1| over normal and tangential quantities.
+    pub worst_normal: f64,
+    pub worst_tangential: f64,
+}
 
 /// magdem draws lines; LIGGGHTS large circles, LAMMPS small ones, so coinciding points stay visible.
 fn marker_size(engine: &str) -> Option<u32> {
@@ -21,7 +29,7 @@ fn marker_size(engine: &str) -> Option<u32> {
 struct Quantity {
     name: &'static str,
     normal: bool,
-    get: fn(&super::contacts::Metrics) -> f64,
+    get: fn(&Metrics) -> f64,
     closed: Option<f64>,
     scale: f64,
 }
@@ -30,7 +38,7 @@ fn quantities(case: &Case) -> Vec<Quantity> {
     let (delta, t_c) = case.hertz();
     let elastic = case.restitution == 1.0;
     let speed = case.normal_speed.hypot(case.tangential_speed);
-    let a = 0.5 * super::contacts::DIAMETER;
+    let a = 0.5 * DIAMETER;
     let mut q = vec![
         Quantity { name: "restitution", normal: true, get: |m| m.restitution, closed: Some(case.restitution), scale: 1.0 },
     ];

@@ -1,0 +1,16 @@
+//! `magdem report paper` and `magdem bench`: commands that write a report and name it.
+
+use super::report_written;
+use magdem::report::paper::PaperReportOptions;
+use std::process::ExitCode;
+
+/// `magdem report paper`.
+pub fn paper(options: &PaperReportOptions) -> ExitCode {
+    report_written(magdem::report::paper::write_report(options))
+}
+
+/// `magdem bench` (at least one repeat per measurement).
+pub fn bench(options: magdem::bench::Options) -> ExitCode {
+    let options = magdem::bench::Options { repeats: options.repeats.max(1), ..options };
+    report_written(magdem::bench::report::write(&options))
+}
