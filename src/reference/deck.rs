@@ -13,7 +13,7 @@ use super::{Engine, ReferenceError};
 use crate::core::forces::contact::PairMaterial;
 use crate::scene::{
     Boundary, BoundarySpec, ContactSpec, DipoleSpec, DomainSpec, DragLawSpec, DragSpec, FieldSpec, FluidSpec, ForcesSpec, GradientSpec, GravitySpec, IntegrationSpec,
-    OutputSpec, ParticleGroupSpec, Scene, SceneSpec, ShieldingSpec, SpeciesSpec, StabilitySpec,
+    NormalSpec, OutputSpec, ParticleGroupSpec, Scene, SceneSpec, ShieldingSpec, SpeciesSpec, StabilitySpec, TangentialSpec,
 };
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -120,8 +120,21 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
     }
     let walls = scene.domain.walls().next().is_some();
     check_species(engine, species, contact.is_some() && walls)?;
-    if let Some(ContactSpec { walls: false }) = contact {
-        if walls {
+    if let Some(ContactSpec { walls: with_walls, normal, stiffness: _, tangential }) = contact {
+        // The decks write Hertz–Mindlin with history (§10.2 of docs/model.md) only.
+        match normal {
+            NormalSpec::Hertz => {}
+            NormalSpec::Hooke => {
+                return Err(unsupported(engine, "forces.contact.normal = \"hooke\"", "the decks write the Hertz law calibrated against magdem's"))
+            }
+        }
+        match tangential {
+            TangentialSpec::Mindlin => {}
+            TangentialSpec::None => {
+                return Err(unsupported(engine, "forces.contact.tangential = \"none\"", "the decks write Mindlin's spring with history"))
+            }
+        }
+        if !with_walls && walls {
             return Err(unsupported(engine, "forces.contact.walls = false", "the decks always put granular walls on wall faces"));
         }
     }
@@ -642,6 +655,8 @@ mod tests {
                 ("no wall contacts", vec![("forces.contact.walls", b(false))], [on_walls("forces.contact.walls"); 2]),
                 ("no wall contacts, periodic", vec![("forces.contact.walls", b(false)), ("domain.boundary", periodic.clone()), ("forces.dipole", None)], [None, None]),
                 ("no contact", vec![("forces.contact", None)], [None, None]),
+                ("Hooke contact", vec![("forces.contact.normal", s("hooke")), ("forces.contact.stiffness", f(1e3))], [Some("forces.contact.normal"); 2]),
+                ("frictionless contact", vec![("forces.contact.tangential", s("none"))], [Some("forces.contact.tangential"); 2]),
                 ("induction none", vec![("forces.dipole.induction", s("none"))], [None, None]),
                 ("induction exact", vec![("forces.dipole.induction", s("exact"))], [None, None]),
                 ("gradient only", vec![("forces.dipole", None), ("forces.gradient", Some(Value::Table(toml::Table::new())))], [None, None]),
