@@ -57,7 +57,9 @@ fn steps(c: &mut Criterion) {
         for (name, scene) in scenes {
             let mut sim = scene.simulation(None);
             sim.initialise().unwrap();
-            group.bench_with_input(BenchmarkId::new(name, n), &n, |b, _| single_thread(|| b.iter(|| sim.step().unwrap())));
+            group.bench_with_input(BenchmarkId::new(name, n), &n, |b, _| {
+                single_thread(|| b.iter(|| sim.step().unwrap()))
+            });
         }
     }
     group.finish();
@@ -71,7 +73,9 @@ fn dipole_all_pairs(c: &mut Criterion) {
         let mut sim = scene.simulation(None);
         sim.initialise().unwrap();
         group.throughput(Throughput::Elements((n * (n - 1) / 2) as u64));
-        group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| single_thread(|| b.iter(|| sim.field.evaluate(&mut sim.state, 1e-8))));
+        group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            single_thread(|| b.iter(|| sim.field.evaluate(&mut sim.state, 1e-8)))
+        });
     }
     group.finish();
 }

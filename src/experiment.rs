@@ -32,7 +32,9 @@ pub enum Outcome {
     /// Already complete with the same scene.
     Skipped,
     /// Finished earlier with a different scene; kept.
-    KeptChanged { old_hash: String },
+    KeptChanged {
+        old_hash: String,
+    },
     /// The solver stopped the run (instability monitor); the message says why.
     Unstable(String),
     /// A reference engine the point asks for is not installed (not a failure: the report shows
@@ -48,7 +50,9 @@ impl Outcome {
             Outcome::Completed => "completed".into(),
             Outcome::Resumed => "resumed".into(),
             Outcome::Skipped => "skipped (complete)".into(),
-            Outcome::KeptChanged { old_hash } => format!("kept: finished with another scene ({})", &old_hash[..12.min(old_hash.len())]),
+            Outcome::KeptChanged { old_hash } => {
+                format!("kept: finished with another scene ({})", &old_hash[..12.min(old_hash.len())])
+            }
             Outcome::Unstable(why) => format!("unstable: {why}"),
             Outcome::EngineMissing(engine) => format!("not run: {engine} is not installed"),
             Outcome::Failed(why) => format!("failed: {why}"),
@@ -67,7 +71,11 @@ pub struct PointResult {
 /// Status, scene hash and status message of an existing run file.
 fn existing(file: &Path) -> Option<(String, String, String)> {
     let t = Trajectory::open(file).ok()?;
-    Some((t.attr_string("status").ok()?, t.attr_string("scene_sha256").ok()?, t.attr_string("status_message").unwrap_or_default()))
+    Some((
+        t.attr_string("status").ok()?,
+        t.attr_string("scene_sha256").ok()?,
+        t.attr_string("status_message").unwrap_or_default(),
+    ))
 }
 
 fn run_point(point: &Point, file: &Path, options: &ExperimentOptions) -> Outcome {
@@ -101,7 +109,9 @@ fn run_point(point: &Point, file: &Path, options: &ExperimentOptions) -> Outcome
             if !engine.available() {
                 return Outcome::EngineMissing(engine.name());
             }
-            reference::run(engine, &point.scene, &file.with_extension(format!("{name}.deck")), file).map(|_| ()).map_err(|e| Some(e.to_string()))
+            reference::run(engine, &point.scene, &file.with_extension(format!("{name}.deck")), file)
+                .map(|_| ())
+                .map_err(|e| Some(e.to_string()))
         }
     };
     match result {
@@ -120,7 +130,10 @@ fn cost(point: &Point) -> f64 {
 
 /// Runs every point of `experiments` on `jobs` workers, the most expensive first, and writes each
 /// experiment's `manifest.csv`. Results come back per experiment, in point order.
-pub fn run_experiments(experiments: &[Experiment], options: &ExperimentOptions) -> Result<Vec<Vec<PointResult>>, Box<dyn std::error::Error>> {
+pub fn run_experiments(
+    experiments: &[Experiment],
+    options: &ExperimentOptions,
+) -> Result<Vec<Vec<PointResult>>, Box<dyn std::error::Error>> {
     let mut queue: Vec<(usize, usize)> = vec![];
     for (e, experiment) in experiments.iter().enumerate() {
         std::fs::create_dir_all(&experiment.output)?;
@@ -135,7 +148,8 @@ pub fn run_experiments(experiments: &[Experiment], options: &ExperimentOptions) 
     let finished = AtomicUsize::new(0);
     bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} runs | {elapsed} | ETA {eta} | {msg}")?);
     let next = AtomicUsize::new(0);
-    let done: Mutex<Vec<Vec<Option<PointResult>>>> = Mutex::new(experiments.iter().map(|e| e.points.iter().map(|_| None).collect()).collect());
+    let done: Mutex<Vec<Vec<Option<PointResult>>>> =
+        Mutex::new(experiments.iter().map(|e| e.points.iter().map(|_| None).collect()).collect());
     let cores = rayon::current_num_threads();
     let workers = options.jobs.unwrap_or(cores).max(1).min(queue.len().max(1));
     // Each worker's runs get their own share of the cores (one thread each when the runs fill
@@ -146,28 +160,38 @@ pub fn run_experiments(experiments: &[Experiment], options: &ExperimentOptions) 
             scope.spawn(|| {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(threads_per_run).build().expect("a thread pool");
                 pool.install(|| {
-                while let Some(&(e, p)) = queue.get(next.fetch_add(1, Ordering::Relaxed)) {
-                    let point = &experiments[e].points[p];
-                    let file = experiments[e].output.join(format!("{}.h5", point.id));
-                    let start = Instant::now();
-                    let outcome = run_point(point, &file, options);
-                    bar.inc(1);
-                    bar.set_message(format!("{}: {}", point.id, outcome.label()));
-                    let wall_time = start.elapsed().as_secs_f64();
-                    let count = finished.fetch_add(1, Ordering::Relaxed) + 1;
-                    if lines {
-                        println!("{}: {} ({wall_time:.0} s; {} of {} runs left)", point.id, outcome.label(), queue.len() - count, queue.len());
+                    while let Some(&(e, p)) = queue.get(next.fetch_add(1, Ordering::Relaxed)) {
+                        let point = &experiments[e].points[p];
+                        let file = experiments[e].output.join(format!("{}.h5", point.id));
+                        let start = Instant::now();
+                        let outcome = run_point(point, &file, options);
+                        bar.inc(1);
+                        bar.set_message(format!("{}: {}", point.id, outcome.label()));
+                        let wall_time = start.elapsed().as_secs_f64();
+                        let count = finished.fetch_add(1, Ordering::Relaxed) + 1;
+                        if lines {
+                            println!(
+                                "{}: {} ({wall_time:.0} s; {} of {} runs left)",
+                                point.id,
+                                outcome.label(),
+                                queue.len() - count,
+                                queue.len()
+                            );
+                        }
+                        let result = PointResult { id: point.id.clone(), file, outcome, wall_time };
+                        done.lock().expect("no worker panicked")[e][p] = Some(result);
                     }
-                    let result = PointResult { id: point.id.clone(), file, outcome, wall_time };
-                    done.lock().expect("no worker panicked")[e][p] = Some(result);
-                }
                 });
             });
         }
     });
     bar.finish_and_clear();
-    let results: Vec<Vec<PointResult>> =
-        done.into_inner().expect("no worker panicked").into_iter().map(|r| r.into_iter().map(|x| x.expect("every point ran")).collect()).collect();
+    let results: Vec<Vec<PointResult>> = done
+        .into_inner()
+        .expect("no worker panicked")
+        .into_iter()
+        .map(|r| r.into_iter().map(|x| x.expect("every point ran")).collect())
+        .collect();
     for (experiment, results) in experiments.iter().zip(&results) {
         write_manifest(experiment, results)?;
     }
@@ -175,7 +199,10 @@ pub fn run_experiments(experiments: &[Experiment], options: &ExperimentOptions) 
 }
 
 /// [`run_experiments`] for one experiment.
-pub fn run_experiment(experiment: &Experiment, options: &ExperimentOptions) -> Result<Vec<PointResult>, Box<dyn std::error::Error>> {
+pub fn run_experiment(
+    experiment: &Experiment,
+    options: &ExperimentOptions,
+) -> Result<Vec<PointResult>, Box<dyn std::error::Error>> {
     Ok(run_experiments(std::slice::from_ref(experiment), options)?.pop().unwrap_or_default())
 }
 

@@ -143,9 +143,7 @@ enum Command {
     #[command(hide = true)]
     MagneticForces { scene: PathBuf, positions: PathBuf, prefix: PathBuf },
     /// Check a scene without running it: prints its particles, terms and step estimates.
-    Validate {
-        scene: PathBuf,
-    },
+    Validate { scene: PathBuf },
     /// Aggregates of a trajectory frame: sizes, lengths (mean, population and sample std),
     /// orientation, and how the result depends on the contact gap tolerance.
     Analyse {
@@ -183,9 +181,7 @@ enum Command {
     #[command(subcommand)]
     Report(Report),
     /// Describe a trajectory file.
-    Info {
-        file: PathBuf,
-    },
+    Info { file: PathBuf },
     /// Export trajectories for ParaView (an XDMF sidecar beside each file, referencing its HDF5
     /// datasets in place) or OVITO and LAMMPS' tools (a LAMMPS text dump of every frame).
     Export {
@@ -222,7 +218,18 @@ enum Command {
 
 fn main() -> ExitCode {
     match Cli::parse().command {
-        Command::Run { scene, output, engine, exchange_every, mpi, resume, overwrite, timings, quiet, abort_after_frame } => {
+        Command::Run {
+            scene,
+            output,
+            engine,
+            exchange_every,
+            mpi,
+            resume,
+            overwrite,
+            timings,
+            quiet,
+            abort_after_frame,
+        } => {
             let options = RunOptions { resume, overwrite, progress: !quiet, timings, abort_after_frame };
             cli::run::run(&scene, &output, engine, exchange_every, mpi, &options)
         }
@@ -230,8 +237,12 @@ fn main() -> ExitCode {
         Command::Study { study: SolverStudy::Accuracy { report } } => cli::verify::accuracy(&report),
         Command::Study { study: SolverStudy::Stability { report } } => cli::verify::stability(&report),
         Command::Verify { study: Study::Contacts { report, work } } => cli::verify::contacts(&report, &work),
-        Command::Verify { study: Study::Magnetic { report, work, case1_time } } => cli::verify::magnetic(&report, &work, case1_time),
-        Command::MagneticForces { scene, positions, prefix } => cli::scene::magnetic_forces(&scene, &positions, &prefix),
+        Command::Verify { study: Study::Magnetic { report, work, case1_time } } => {
+            cli::verify::magnetic(&report, &work, case1_time)
+        }
+        Command::MagneticForces { scene, positions, prefix } => {
+            cli::scene::magnetic_forces(&scene, &positions, &prefix)
+        }
         Command::Validate { scene } => cli::scene::validate(&scene),
         Command::Analyse { file, frame, gap, csv, header } => cli::trajectory::analyse(&file, frame, gap, csv, header),
         Command::Experiment { files, jobs, overwrite_changed, dry_run, quiet } => {
@@ -239,7 +250,13 @@ fn main() -> ExitCode {
             cli::experiment::experiment(&files, &options, dry_run)
         }
         Command::Report(Report::Paper { experiments, reference, out, gap, wall_time }) => {
-            cli::report::paper(&magdem::report::paper::PaperReportOptions { experiments, reference, out, gap, wall_time })
+            cli::report::paper(&magdem::report::paper::PaperReportOptions {
+                experiments,
+                reference,
+                out,
+                gap,
+                wall_time,
+            })
         }
         Command::Info { file } => cli::trajectory::info(&file),
         Command::Export { files, format, output } => cli::trajectory::export(&files, format, output.as_deref()),

@@ -14,7 +14,8 @@ fn register_font() -> Result<(), String> {
     DONE.get_or_init(|| {
         let bytes = std::fs::read(FONT).map_err(|e| format!("cannot read {FONT} ({e}); install fonts-dejavu-core"))?;
         let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
-        plotters::style::register_font("sans-serif", FontStyle::Normal, bytes).map_err(|_| format!("{FONT} is not a usable font"))
+        plotters::style::register_font("sans-serif", FontStyle::Normal, bytes)
+            .map_err(|_| format!("{FONT} is not a usable font"))
     })
     .clone()
 }
@@ -83,7 +84,13 @@ fn tick(v: &f64) -> String {
 }
 
 /// A labelled x–y chart written to `path` (PNG), legend in the upper left.
-pub fn line_chart(path: &Path, title: &str, x_label: &str, y_label: &str, series: &[Series]) -> Result<(), Box<dyn std::error::Error>> {
+pub fn line_chart(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+) -> Result<(), Box<dyn std::error::Error>> {
     line_chart_with_legend(path, title, x_label, y_label, series, SeriesLabelPosition::UpperLeft)
 }
 
@@ -130,7 +137,11 @@ impl plotters::coord::ranged1d::Ranged for Axis {
         self.inner.map(value, limit)
     }
     fn key_points<H: plotters::coord::ranged1d::KeyPointHint>(&self, hint: H) -> Vec<f64> {
-        if hint.weight().allow_light_points() { self.light.clone() } else { self.bold.clone() }
+        if hint.weight().allow_light_points() {
+            self.light.clone()
+        } else {
+            self.bold.clone()
+        }
     }
 }
 
@@ -163,8 +174,13 @@ impl Scale {
             Scale::Linear => {
                 let raw = (hi - lo) / 8.0;
                 let decade = 10f64.powf(raw.log10().floor());
-                let step = [1.0, 2.0, 5.0, 10.0].iter().map(|m| m * decade).find(|&s| s >= raw).unwrap_or(10.0 * decade);
-                let on = |step: f64| ((lo / step).ceil() as i64..=(hi / step).floor() as i64).map(|k| k as f64 * step).collect::<Vec<_>>();
+                let step =
+                    [1.0, 2.0, 5.0, 10.0].iter().map(|m| m * decade).find(|&s| s >= raw).unwrap_or(10.0 * decade);
+                let on = |step: f64| {
+                    ((lo / step).ceil() as i64..=(hi / step).floor() as i64)
+                        .map(|k| k as f64 * step)
+                        .collect::<Vec<_>>()
+                };
                 (on(step), on(step / 5.0))
             }
             Scale::Log => {
@@ -194,7 +210,11 @@ impl Scale {
                 // Ticks sit at integer multiples of 10^k: one significant digit names them.
                 let x = 10f64.powf(*v);
                 let digits = (-x.log10().floor()).max(0.0) as usize;
-                if x >= 1e5 || x < 1e-3 { format!("{x:.0e}") } else { format!("{x:.digits$}") }
+                if x >= 1e5 || x < 1e-3 {
+                    format!("{x:.0e}")
+                } else {
+                    format!("{x:.digits$}")
+                }
             }
         }
     }
@@ -228,7 +248,13 @@ pub fn chart(
         .iter()
         .map(|s| {
             let pts: Vec<(f64, f64)> = s.points.iter().map(|&(x, y)| (sx.to_axis(x), sy.to_axis(y))).collect();
-            let bars = s.points.iter().zip(&s.errors).filter(|(_, e)| e.is_finite()).map(|(&(_, y), &e)| (sy.to_axis(y - e), sy.to_axis(y + e))).collect();
+            let bars = s
+                .points
+                .iter()
+                .zip(&s.errors)
+                .filter(|(_, e)| e.is_finite())
+                .map(|(&(_, y), &e)| (sy.to_axis(y - e), sy.to_axis(y + e)))
+                .collect();
             (pts, bars)
         })
         .collect();
@@ -282,13 +308,17 @@ pub fn chart(
             Some(r) => {
                 let drawn = chart.draw_series(pts.iter().map(move |&p| Circle::new(p, r, color.stroke_width(2))))?;
                 if !s.label.is_empty() {
-                    drawn.label(s.label.as_str()).legend(move |(x, y)| Circle::new((x + 10, y), r, color.stroke_width(2)));
+                    drawn
+                        .label(s.label.as_str())
+                        .legend(move |(x, y)| Circle::new((x + 10, y), r, color.stroke_width(2)));
                 }
             }
             None => {
                 let drawn = chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2)))?;
                 if !s.label.is_empty() {
-                    drawn.label(s.label.as_str()).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+                    drawn
+                        .label(s.label.as_str())
+                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
                 }
             }
         }
@@ -322,10 +352,17 @@ pub struct BarPanel {
 
 /// Bar panels on a grid of `columns`, written to `path` (PNG). Category labels are thinned to
 /// at most 20 per axis.
-pub fn bar_panels(path: &Path, title: &str, panels: &[BarPanel], columns: usize, panel_size: (u32, u32)) -> Result<(), Box<dyn std::error::Error>> {
+pub fn bar_panels(
+    path: &Path,
+    title: &str,
+    panels: &[BarPanel],
+    columns: usize,
+    panel_size: (u32, u32),
+) -> Result<(), Box<dyn std::error::Error>> {
     register_font()?;
     let rows = panels.len().div_ceil(columns.max(1));
-    let root = BitMapBackend::new(path, (panel_size.0 * columns as u32, panel_size.1 * rows as u32 + 50)).into_drawing_area();
+    let root =
+        BitMapBackend::new(path, (panel_size.0 * columns as u32, panel_size.1 * rows as u32 + 50)).into_drawing_area();
     root.fill(&WHITE)?;
     let (head, body) = root.split_vertically(50);
     head.titled(title, ("sans-serif", 26))?;
@@ -334,7 +371,12 @@ pub fn bar_panels(path: &Path, title: &str, panels: &[BarPanel], columns: usize,
         let top = panel
             .groups
             .iter()
-            .flat_map(|g| g.values.iter().enumerate().map(move |(k, v)| v + g.errors.get(k).copied().filter(|e| e.is_finite()).unwrap_or(0.0)))
+            .flat_map(|g| {
+                g.values
+                    .iter()
+                    .enumerate()
+                    .map(move |(k, v)| v + g.errors.get(k).copied().filter(|e| e.is_finite()).unwrap_or(0.0))
+            })
             .filter(|v| v.is_finite())
             .fold(0.0_f64, f64::max);
         // Room above the bars for the legend, when there is one.
@@ -355,7 +397,11 @@ pub fn bar_panels(path: &Path, title: &str, panels: &[BarPanel], columns: usize,
             .x_labels(n.min(40))
             .x_label_formatter(&|x| {
                 let k = x.round();
-                if (x - k).abs() < 1e-6 && k >= 0.0 && (k as usize) < names.len() && (k as usize) % step == 0 { names[k as usize].clone() } else { String::new() }
+                if (x - k).abs() < 1e-6 && k >= 0.0 && (k as usize) < names.len() && (k as usize) % step == 0 {
+                    names[k as usize].clone()
+                } else {
+                    String::new()
+                }
             })
             .y_label_formatter(&tick)
             .label_style(("sans-serif", 14))
@@ -366,18 +412,39 @@ pub fn bar_panels(path: &Path, title: &str, panels: &[BarPanel], columns: usize,
             let color = group.color;
             let left = |k: usize| k as f64 - 0.4 + g as f64 * width;
             let drawn = chart.draw_series(
-                group.values.iter().enumerate().filter(|(_, v)| v.is_finite()).map(|(k, &v)| Rectangle::new([(left(k), 0.0), (left(k) + width * 0.9, v)], color.filled())),
+                group
+                    .values
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, v)| v.is_finite())
+                    .map(|(k, &v)| Rectangle::new([(left(k), 0.0), (left(k) + width * 0.9, v)], color.filled())),
             )?;
             if !group.label.is_empty() {
-                drawn.label(group.label.as_str()).legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 14, y + 6)], color.filled()));
+                drawn
+                    .label(group.label.as_str())
+                    .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 14, y + 6)], color.filled()));
             }
-            chart.draw_series(group.values.iter().zip(&group.errors).enumerate().filter(|(_, (v, e))| v.is_finite() && e.is_finite()).map(|(k, (&v, &e))| {
-                let x = left(k) + width * 0.45;
-                PathElement::new(vec![(x, v - e), (x, v + e)], BLACK.stroke_width(2))
-            }))?;
+            chart.draw_series(
+                group
+                    .values
+                    .iter()
+                    .zip(&group.errors)
+                    .enumerate()
+                    .filter(|(_, (v, e))| v.is_finite() && e.is_finite())
+                    .map(|(k, (&v, &e))| {
+                        let x = left(k) + width * 0.45;
+                        PathElement::new(vec![(x, v - e), (x, v + e)], BLACK.stroke_width(2))
+                    }),
+            )?;
         }
         if labelled {
-            chart.configure_series_labels().label_font(("sans-serif", 14)).background_style(WHITE.mix(0.85)).border_style(BLACK).position(SeriesLabelPosition::UpperRight).draw()?;
+            chart
+                .configure_series_labels()
+                .label_font(("sans-serif", 14))
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .position(SeriesLabelPosition::UpperRight)
+                .draw()?;
         }
     }
     root.present()?;
@@ -431,7 +498,12 @@ pub struct BoxPanel {
 
 /// Box-plot panels on a grid of `columns` (box: quartiles, red median line, whiskers to the
 /// fences, blue dot at the mean, as in the paper's figure), written to `path` (PNG).
-pub fn box_panels(path: &Path, title: &str, panels: &[BoxPanel], columns: usize) -> Result<(), Box<dyn std::error::Error>> {
+pub fn box_panels(
+    path: &Path,
+    title: &str,
+    panels: &[BoxPanel],
+    columns: usize,
+) -> Result<(), Box<dyn std::error::Error>> {
     register_font()?;
     let rows = panels.len().div_ceil(columns.max(1));
     let root = BitMapBackend::new(path, (560 * columns as u32, 460 * rows as u32 + 50)).into_drawing_area();
@@ -440,8 +512,14 @@ pub fn box_panels(path: &Path, title: &str, panels: &[BoxPanel], columns: usize)
     head.titled(title, ("sans-serif", 26))?;
     let blue = RGBColor(20, 90, 200);
     for (panel, area) in panels.iter().zip(body.split_evenly((rows, columns))) {
-        let labels: Vec<String> = panel.boxes.iter().map(|b| b.label.clone()).chain(panel.markers.iter().map(|m| m.0.clone())).collect();
-        let top = panel.boxes.iter().map(|b| b.upper_fence.max(b.mean)).chain(panel.markers.iter().map(|m| m.1 + m.2)).fold(0.0_f64, f64::max);
+        let labels: Vec<String> =
+            panel.boxes.iter().map(|b| b.label.clone()).chain(panel.markers.iter().map(|m| m.0.clone())).collect();
+        let top = panel
+            .boxes
+            .iter()
+            .map(|b| b.upper_fence.max(b.mean))
+            .chain(panel.markers.iter().map(|m| m.1 + m.2))
+            .fold(0.0_f64, f64::max);
         let n = labels.len();
         let mut chart = ChartBuilder::on(&area)
             .caption(&panel.title, ("sans-serif", 20))
@@ -456,7 +534,11 @@ pub fn box_panels(path: &Path, title: &str, panels: &[BoxPanel], columns: usize)
             .x_labels(n)
             .x_label_formatter(&|x| {
                 let k = x.round();
-                if (x - k).abs() < 1e-6 && k >= 0.0 && (k as usize) < labels.len() { labels[k as usize].clone() } else { String::new() }
+                if (x - k).abs() < 1e-6 && k >= 0.0 && (k as usize) < labels.len() {
+                    labels[k as usize].clone()
+                } else {
+                    String::new()
+                }
             })
             .y_label_formatter(&tick)
             .label_style(("sans-serif", 14))
@@ -479,7 +561,10 @@ pub fn box_panels(path: &Path, title: &str, panels: &[BoxPanel], columns: usize)
         }
         for (k, (_, mean, std)) in panel.markers.iter().enumerate() {
             let x = (panel.boxes.len() + k) as f64;
-            chart.draw_series([PathElement::new(vec![(x, (mean - std).max(0.0)), (x, mean + std)], BLACK.stroke_width(2))])?;
+            chart.draw_series([PathElement::new(
+                vec![(x, (mean - std).max(0.0)), (x, mean + std)],
+                BLACK.stroke_width(2),
+            )])?;
             chart.draw_series([Circle::new((x, *mean), 5, blue.filled())])?;
         }
     }

@@ -68,9 +68,13 @@ fn frame_budget(scene: &Scene, contacts: usize) -> u64 {
 fn check_space(scene: &Scene, output: &Path, frame: usize, contacts: usize) -> Result<(), RunFailure> {
     let needed = frame_budget(scene, contacts);
     match free_space(output) {
-        Some(free) if free < needed => {
-            Err(RunFailure::DiskFull { path: output.display().to_string(), frame, last: frame.saturating_sub(1), free, needed })
-        }
+        Some(free) if free < needed => Err(RunFailure::DiskFull {
+            path: output.display().to_string(),
+            frame,
+            last: frame.saturating_sub(1),
+            free,
+            needed,
+        }),
         _ => Ok(()),
     }
 }
@@ -89,15 +93,25 @@ impl OutputLock {
         let mut name = output.as_os_str().to_owned();
         name.push(".lock");
         let path = std::path::PathBuf::from(name);
-        let file = std::fs::OpenOptions::new().create(true).truncate(false).write(true).open(&path).map_err(|e| RunFailure::Refused(format!("cannot create the lock {}: {e}", path.display())))?;
+        let file = std::fs::OpenOptions::new()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(&path)
+            .map_err(|e| RunFailure::Refused(format!("cannot create the lock {}: {e}", path.display())))?;
         match file.try_lock() {
             Ok(()) => Ok(Self { _file: file }),
-            Err(std::fs::TryLockError::WouldBlock) => Err(RunFailure::Refused(format!("{} is being written by another magdem process (it holds {})", output.display(), path.display()))),
-            Err(std::fs::TryLockError::Error(e)) => Err(RunFailure::Refused(format!("cannot lock {}: {e}", path.display()))),
+            Err(std::fs::TryLockError::WouldBlock) => Err(RunFailure::Refused(format!(
+                "{} is being written by another magdem process (it holds {})",
+                output.display(),
+                path.display()
+            ))),
+            Err(std::fs::TryLockError::Error(e)) => {
+                Err(RunFailure::Refused(format!("cannot lock {}: {e}", path.display())))
+            }
         }
     }
 }
-
 
 /// Refuses an existing output that `options` do not allow to touch: without `--resume` or
 /// `--overwrite` any existing file; with `--resume` a completed file of another scene.
@@ -105,9 +119,14 @@ fn check_existing(scene: &Scene, output: &Path, options: &RunOptions) -> Result<
     if !output.exists() || options.overwrite {
         return Ok(());
     }
-    let described = crate::io::trajectory::Trajectory::open(output).ok().and_then(|t| Some((t.attr_string("status").ok()?, t.attr_string("scene_sha256").ok()?)));
+    let described = crate::io::trajectory::Trajectory::open(output)
+        .ok()
+        .and_then(|t| Some((t.attr_string("status").ok()?, t.attr_string("scene_sha256").ok()?)));
     let Some((state, hash)) = described else {
-        return Err(RunFailure::Refused(format!("{} exists and is not a readable magdem trajectory; give --overwrite to replace it", output.display())));
+        return Err(RunFailure::Refused(format!(
+            "{} exists and is not a readable magdem trajectory; give --overwrite to replace it",
+            output.display()
+        )));
     };
     if !options.resume {
         let same = if hash == scene.hash { "this scene" } else { "another scene" };

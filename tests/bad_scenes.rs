@@ -58,7 +58,10 @@ fn cases() -> Vec<(String, Vec<String>)> {
 #[test]
 fn every_bad_scene_of_the_corpus_is_refused_with_a_message_naming_the_cause() {
     let cases = cases();
-    let files = std::fs::read_dir(corpus()).unwrap().filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "toml")).count();
+    let files = std::fs::read_dir(corpus())
+        .unwrap()
+        .filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "toml"))
+        .count();
     assert_eq!(cases.len(), files, "every corpus file has its expectation, and no expectation lacks its file");
     assert!(cases.len() >= 40, "{} cases", cases.len());
     for (name, expected) in &cases {
@@ -93,7 +96,8 @@ fn cli_exits_with_code_2_and_one_line_on_a_bad_scene() {
 fn the_cli_refuses_every_corpus_scene_with_code_2_and_one_line() {
     for (name, _) in cases().iter().step_by(5) {
         let path = corpus().join(name);
-        let out = Command::new(env!("CARGO_BIN_EXE_magdem")).args(["validate", path.to_str().unwrap()]).output().unwrap();
+        let out =
+            Command::new(env!("CARGO_BIN_EXE_magdem")).args(["validate", path.to_str().unwrap()]).output().unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(2), "{name}: {stderr}");
         assert_eq!(stderr.trim().lines().count(), 1, "{name}: {stderr}");
@@ -111,9 +115,12 @@ fn mutate(text: &str, rng: &mut rand_chacha::ChaCha8Rng) -> String {
         let mut spans = vec![];
         let mut i = 0;
         while i < bytes.len() {
-            let starts = bytes[i].is_ascii_digit() && (i == 0 || !bytes[i - 1].is_ascii_alphanumeric() && bytes[i - 1] != b'_');
+            let starts =
+                bytes[i].is_ascii_digit() && (i == 0 || !bytes[i - 1].is_ascii_alphanumeric() && bytes[i - 1] != b'_');
             if starts {
-                let j = (i..bytes.len()).find(|&j| !(bytes[j].is_ascii_alphanumeric() || b".+-_".contains(&bytes[j]))).unwrap_or(bytes.len());
+                let j = (i..bytes.len())
+                    .find(|&j| !(bytes[j].is_ascii_alphanumeric() || b".+-_".contains(&bytes[j])))
+                    .unwrap_or(bytes.len());
                 spans.push((i, j));
                 i = j;
             } else {
@@ -130,13 +137,33 @@ fn mutate(text: &str, rng: &mut rand_chacha::ChaCha8Rng) -> String {
             let spans = numbers(&lines[k]);
             if let Some(&(a, b)) = spans.get(rng.random_range(0..spans.len().max(1))) {
                 let old = lines[k][a..b].to_string();
-                let new = ["nan", "inf", "-inf", "0", "0.0", &format!("-{old}"), "1e300", "-1e300", "1e-300", "\"x\"", "[1.0]", "true"][rng.random_range(0..12)].to_string();
+                let new = [
+                    "nan",
+                    "inf",
+                    "-inf",
+                    "0",
+                    "0.0",
+                    &format!("-{old}"),
+                    "1e300",
+                    "-1e300",
+                    "1e-300",
+                    "\"x\"",
+                    "[1.0]",
+                    "true",
+                ][rng.random_range(0..12)]
+                .to_string();
                 lines[k].replace_range(a..b, &new);
             }
         }
         _ => {
             if let Some((key, value)) = lines[k].split_once(" = ") {
-                let swapped = if value.starts_with('"') { "1.0".to_string() } else if value.starts_with('[') { "0.5".into() } else { format!("\"{value}\"") };
+                let swapped = if value.starts_with('"') {
+                    "1.0".to_string()
+                } else if value.starts_with('[') {
+                    "0.5".into()
+                } else {
+                    format!("\"{value}\"")
+                };
                 lines[k] = format!("{key} = {swapped}");
             }
         }
@@ -148,7 +175,8 @@ fn mutate(text: &str, rng: &mut rand_chacha::ChaCha8Rng) -> String {
 fn ten_thousand_random_edits_of_the_shipped_scenes_never_panic() {
     use rand::SeedableRng;
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/scenes");
-    let mut scenes: Vec<String> = std::fs::read_dir(&dir).unwrap().map(|e| std::fs::read_to_string(e.unwrap().path()).unwrap()).collect();
+    let mut scenes: Vec<String> =
+        std::fs::read_dir(&dir).unwrap().map(|e| std::fs::read_to_string(e.unwrap().path()).unwrap()).collect();
     scenes.sort();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(21);
     let (mut valid, mut refused) = (0, 0);
@@ -161,7 +189,10 @@ fn ten_thousand_random_edits_of_the_shipped_scenes_never_panic() {
         match std::panic::catch_unwind(|| Scene::parse(&text, "fuzz.toml").map(|_| ()).map_err(|e| e.to_string())) {
             Ok(Ok(())) => valid += 1,
             Ok(Err(message)) => {
-                assert!(!message.contains('\n') && !message.is_empty(), "case {case}: not one line: {message:?}\n{text}");
+                assert!(
+                    !message.contains('\n') && !message.is_empty(),
+                    "case {case}: not one line: {message:?}\n{text}"
+                );
                 refused += 1;
             }
             Err(_) => panic!("case {case} panicked on:\n{text}"),
@@ -169,5 +200,8 @@ fn ten_thousand_random_edits_of_the_shipped_scenes_never_panic() {
     }
     println!("{cases} mutated scenes: {valid} valid, {refused} refused with one line");
     assert_eq!(valid + refused, cases);
-    assert!(refused > cases / 4 && valid > cases / 20, "the mutations reach both outcomes: {valid} valid, {refused} refused");
+    assert!(
+        refused > cases / 4 && valid > cases / 20,
+        "the mutations reach both outcomes: {valid} valid, {refused} refused"
+    );
 }

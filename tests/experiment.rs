@@ -43,13 +43,18 @@ fn setup(name: &str, sweep: &str) -> (TempDir, PathBuf, PathBuf) {
     std::fs::write(dir.join("base.toml"), base()).unwrap();
     let out = dir.join("runs");
     let file = dir.join("experiment.toml");
-    std::fs::write(&file, format!("name = \"{name}\"\nbases = [\"base.toml\"]\noutput = \"{}\"\n[sweep]\n{sweep}", out.display())).unwrap();
+    std::fs::write(
+        &file,
+        format!("name = \"{name}\"\nbases = [\"base.toml\"]\noutput = \"{}\"\n[sweep]\n{sweep}", out.display()),
+    )
+    .unwrap();
     (work, file, out)
 }
 
 #[test]
 fn sweeps_run_once_skip_when_done_and_never_overwrite_changed_runs_silently() {
-    let (_work, file, out) = setup("sweep", "seed = [1, 2]\n\"integration.dt\" = [1.0e-8, 2.0e-8]\n\"particles.0.count\" = [12]\n");
+    let (_work, file, out) =
+        setup("sweep", "seed = [1, 2]\n\"integration.dt\" = [1.0e-8, 2.0e-8]\n\"particles.0.count\" = [12]\n");
     let exp = Experiment::from_file(&file).unwrap();
     assert_eq!(exp.points.len(), 4);
     let ids: Vec<&str> = exp.points.iter().map(|p| p.id.as_str()).collect();
@@ -57,7 +62,11 @@ fn sweeps_run_once_skip_when_done_and_never_overwrite_changed_runs_silently() {
     assert_eq!(exp.points[0].scene.initial.len(), 12);
     let options = ExperimentOptions { jobs: Some(2), ..Default::default() };
     let first = run_experiment(&exp, &options).unwrap();
-    assert!(first.iter().all(|r| r.outcome == Outcome::Completed), "{:?}", first.iter().map(|r| r.outcome.label()).collect::<Vec<_>>());
+    assert!(
+        first.iter().all(|r| r.outcome == Outcome::Completed),
+        "{:?}",
+        first.iter().map(|r| r.outcome.label()).collect::<Vec<_>>()
+    );
     let manifest = std::fs::read_to_string(out.join("manifest.csv")).unwrap();
     assert_eq!(manifest.lines().count(), 5, "{manifest}");
     // The two seeds place particles differently.
@@ -69,7 +78,8 @@ fn sweeps_run_once_skip_when_done_and_never_overwrite_changed_runs_silently() {
     assert!(again.iter().all(|r| r.outcome == Outcome::Skipped));
 
     // The base scene changes: finished runs are kept and reported, unless overwriting is asked for.
-    std::fs::write(file.parent().unwrap().join("base.toml"), base().replace("restitution = 0.5", "restitution = 0.6")).unwrap();
+    std::fs::write(file.parent().unwrap().join("base.toml"), base().replace("restitution = 0.5", "restitution = 0.6"))
+        .unwrap();
     let changed = Experiment::from_file(&file).unwrap();
     let kept = run_experiment(&changed, &options).unwrap();
     assert!(kept.iter().all(|r| matches!(r.outcome, Outcome::KeptChanged { .. })));
@@ -138,7 +148,11 @@ fn variants_cross_the_sweep_and_an_unstable_run_is_a_recorded_result() {
     for (point, result) in exp.points.iter().zip(&results) {
         match point.variant.as_deref() {
             Some("fast") => assert_eq!(result.outcome, Outcome::Completed),
-            _ => assert!(matches!(&result.outcome, Outcome::Unstable(why) if why.contains("stable dt")), "{}", result.outcome.label()),
+            _ => assert!(
+                matches!(&result.outcome, Outcome::Unstable(why) if why.contains("stable dt")),
+                "{}",
+                result.outcome.label()
+            ),
         }
     }
     // Rerunning does not retry the unstable runs: same scene, same outcome, from the file.
@@ -173,9 +187,14 @@ fn a_killed_ensemble_loses_no_finished_run_and_resumes_the_rest() {
     // Runs of about a second each, one at a time.
     std::fs::write(&file, format!("{text}\"integration.end_time\" = [2.0e-4]\n")).unwrap();
     let exp = Experiment::from_file(&file).unwrap();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_magdem")).args(["experiment", file.to_str().unwrap(), "-j", "1", "-q"]).spawn().unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_magdem"))
+        .args(["experiment", file.to_str().unwrap(), "-j", "1", "-q"])
+        .spawn()
+        .unwrap();
     let status = |p: &magdem::scene::experiment::Point| {
-        magdem::io::trajectory::Trajectory::open(&out.join(format!("{}.h5", p.id))).ok().and_then(|t| t.attr_string("status").ok())
+        magdem::io::trajectory::Trajectory::open(&out.join(format!("{}.h5", p.id)))
+            .ok()
+            .and_then(|t| t.attr_string("status").ok())
     };
     let started = std::time::Instant::now();
     loop {
@@ -184,7 +203,10 @@ fn a_killed_ensemble_loses_no_finished_run_and_resumes_the_rest() {
         if done >= 1 && states.iter().any(|s| s.as_deref() == Some("running")) {
             break;
         }
-        assert!(started.elapsed().as_secs() < 120 && done < exp.points.len(), "no moment with a finished and a running point: {states:?}");
+        assert!(
+            started.elapsed().as_secs() < 120 && done < exp.points.len(),
+            "no moment with a finished and a running point: {states:?}"
+        );
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
     Command::new("kill").args(["-9", &child.id().to_string()]).status().unwrap();
@@ -203,7 +225,9 @@ fn a_killed_ensemble_loses_no_finished_run_and_resumes_the_rest() {
                 assert_eq!(r.outcome, Outcome::Skipped, "{}", p.id);
                 assert_eq!(std::fs::metadata(&r.file).unwrap().modified().unwrap(), *modified, "{} untouched", p.id);
             }
-            None => assert!(matches!(r.outcome, Outcome::Resumed | Outcome::Completed), "{}: {}", p.id, r.outcome.label()),
+            None => {
+                assert!(matches!(r.outcome, Outcome::Resumed | Outcome::Completed), "{}: {}", p.id, r.outcome.label())
+            }
         }
     }
     assert!(results.iter().any(|r| r.outcome == Outcome::Resumed), "the point running at the kill is resumed");

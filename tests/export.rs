@@ -53,7 +53,10 @@ fn run() -> (tempfile::TempDir, std::path::PathBuf) {
     let scene_file = work.path().join("scene.toml");
     std::fs::write(&scene_file, scene()).unwrap();
     let h5 = work.path().join("run.h5");
-    let out = Command::new(env!("CARGO_BIN_EXE_magdem")).args(["run", path(&scene_file), "-q", "-o", path(&h5)]).output().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_magdem"))
+        .args(["run", path(&scene_file), "-q", "-o", path(&h5)])
+        .output()
+        .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     (work, h5)
 }
@@ -118,11 +121,19 @@ print("arrays", len(names), " ".join(names))
     let png = work.join("frame.png");
     let script = magdem::io::export::PARAVIEW_RENDER;
     std::fs::write(work.join("render.py"), script).unwrap();
-    let render = || Command::new("xvfb-run").args(["-a", "pvbatch", path(&work.join("render.py")), path(&xdmf), path(&png)]).output().unwrap();
+    let render = || {
+        Command::new("xvfb-run")
+            .args(["-a", "pvbatch", path(&work.join("render.py")), path(&xdmf), path(&png)])
+            .output()
+            .unwrap()
+    };
     let mut out = render();
     if !out.status.success() {
         // pvbatch under a fresh X server occasionally aborts at start-up; one more try.
-        println!("first render failed, trying once more: {}", String::from_utf8_lossy(&out.stderr).lines().last().unwrap_or(""));
+        println!(
+            "first render failed, trying once more: {}",
+            String::from_utf8_lossy(&out.stderr).lines().last().unwrap_or("")
+        );
         out = render();
     }
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
@@ -139,7 +150,10 @@ fn ovito_reads_the_lammps_dump_export() {
     }
     let (_work, h5) = run();
     let dump = h5.with_extension("dump");
-    let out = Command::new(env!("CARGO_BIN_EXE_magdem")).args(["export", path(&h5), "--format", "lammps-dump"]).output().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_magdem"))
+        .args(["export", path(&h5), "--format", "lammps-dump"])
+        .output()
+        .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let (n, frames, x7) = truth(&h5);
     let script = r#"

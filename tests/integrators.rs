@@ -32,10 +32,8 @@ fn respa_with_k_1_is_velocity_verlet() {
 #[test]
 fn respa_converges_at_second_order_in_the_outer_step() {
     let reference = final_separation(&pair("velocity-verlet", 1e-9, 1));
-    let errors: Vec<(u64, f64)> = [16, 32, 64]
-        .iter()
-        .map(|&k| (k, (final_separation(&pair("respa", 1e-9, k)) - reference).abs()))
-        .collect();
+    let errors: Vec<(u64, f64)> =
+        [16, 32, 64].iter().map(|&k| (k, (final_separation(&pair("respa", 1e-9, k)) - reference).abs())).collect();
     println!("reference separation {reference:.9e} m; |error| by K: {errors:?}");
     for w in errors.windows(2) {
         let ratio = w[1].1 / w[0].1;
@@ -113,9 +111,11 @@ interval = {end:e}
 
 #[test]
 fn exponential_verlet_is_exact_for_linear_drag_far_beyond_the_drag_time() {
-    let tau = 1087.0 * 4.0 / 3.0 * std::f64::consts::PI * 5.5e-6_f64.powi(3) / (6.0 * std::f64::consts::PI * 1.0e-3 * 5.5e-6);
+    let tau =
+        1087.0 * 4.0 / 3.0 * std::f64::consts::PI * 5.5e-6_f64.powi(3) / (6.0 * std::f64::consts::PI * 1.0e-3 * 5.5e-6);
     let dt = 5.0 * tau;
-    let expected = 4.0 / 3.0 * std::f64::consts::PI * 5.5e-6_f64.powi(3) * 1.0e4 * 1.4 / (6.0 * std::f64::consts::PI * 1.0e-3 * 5.5e-6);
+    let expected = 4.0 / 3.0 * std::f64::consts::PI * 5.5e-6_f64.powi(3) * 1.0e4 * 1.4
+        / (6.0 * std::f64::consts::PI * 1.0e-3 * 5.5e-6);
     let scene = gradient_particle("exponential-verlet", dt);
     assert!(scene.estimate.stable_dt > dt, "{}", scene.estimate.summary(dt));
     let mut sim = scene.simulation(None);
@@ -139,7 +139,8 @@ fn exponential_verlet_is_exact_for_linear_drag_far_beyond_the_drag_time() {
 fn exponential_verlet_converges_at_second_order() {
     let run = |scheme: &str, dt: f64| final_separation(&pair(scheme, dt, 1));
     let reference = run("exponential-verlet", 2.5e-10);
-    let errors: Vec<(f64, f64)> = [4e-9, 8e-9, 16e-9].iter().map(|&dt| (dt, (run("exponential-verlet", dt) - reference).abs())).collect();
+    let errors: Vec<(f64, f64)> =
+        [4e-9, 8e-9, 16e-9].iter().map(|&dt| (dt, (run("exponential-verlet", dt) - reference).abs())).collect();
     println!("|error| by dt: {errors:?}");
     for w in errors.windows(2) {
         let ratio = w[1].1 / w[0].1;
@@ -197,7 +198,14 @@ fn elastic_impact_rebound(scheme: &str, extra: &str) -> Option<f64> {
 fn adaptive_verlet_resolves_an_impact_and_its_error_follows_the_tolerance() {
     let errors: Vec<(f64, f64)> = [1e-5, 1e-7, 1e-9]
         .iter()
-        .map(|&tol| (tol, (elastic_impact_rebound("adaptive-verlet", &format!("tolerance = {tol:e}\n")).expect("stable") / 0.1 - 1.0).abs()))
+        .map(|&tol| {
+            (
+                tol,
+                (elastic_impact_rebound("adaptive-verlet", &format!("tolerance = {tol:e}\n")).expect("stable") / 0.1
+                    - 1.0)
+                    .abs(),
+            )
+        })
         .collect();
     println!("relative rebound error by tolerance: {errors:?}");
     assert!(errors[0].1 < 1e-2, "{errors:?}");

@@ -48,7 +48,11 @@ fn one_and_two_threads_give_identical_bits() {
     // Above the parallel threshold, with the paper's induction (listed pairs), with a plain
     // cut-off (neighbour rows) and over all pairs (bands weighted by their partners); 60 steps
     // let contacts form and springs build up (all pairs: 3 steps, for time).
-    let cases = [("induction = \"paper\"\ncutoff_diameters = 15.0", 60), ("induction = \"none\"\ncutoff_diameters = 10.0", 60), ("induction = \"none\"", 3)];
+    let cases = [
+        ("induction = \"paper\"\ncutoff_diameters = 15.0", 60),
+        ("induction = \"none\"\ncutoff_diameters = 10.0", 60),
+        ("induction = \"none\"", 3),
+    ];
     for (dipole, steps) in cases {
         let scene = crowd(MIN_PARALLEL_LEN + 500, dipole, steps);
         let (one, two) = (run_on(&scene, 1), run_on(&scene, 2));
@@ -63,7 +67,8 @@ fn the_row_sums_equal_a_direct_pair_sum() {
     // periodic sideways (minimum image), against a direct double loop over the pairs within the
     // cut-off; agreement to rounding (1e-12 of the largest force).
     let sideways = "boundary = { x = \"periodic\", y = \"periodic\", z = \"wall\" }";
-    for (n, boundary) in [(600, ""), (MIN_PARALLEL_LEN + 200, ""), (601, sideways), (MIN_PARALLEL_LEN + 201, sideways)] {
+    for (n, boundary) in [(600, ""), (MIN_PARALLEL_LEN + 200, ""), (601, sideways), (MIN_PARALLEL_LEN + 201, sideways)]
+    {
         for cutoff in [Some(10.0), None] {
             let dipole = match cutoff {
                 Some(c) => format!("induction = \"none\"\ncutoff_diameters = {c:?}"),
@@ -89,7 +94,10 @@ fn the_row_sums_equal_a_direct_pair_sum() {
             }
             let largest = direct.iter().map(|f| f.norm()).fold(0.0, f64::max);
             let worst = direct.iter().zip(&state.fields.force).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
-            assert!(worst < 1e-12 * largest, "n = {n} {boundary}, cut-off {cutoff:?}: worst difference {worst:e} of {largest:e}");
+            assert!(
+                worst < 1e-12 * largest,
+                "n = {n} {boundary}, cut-off {cutoff:?}: worst difference {worst:e} of {largest:e}"
+            );
         }
     }
 }
@@ -117,7 +125,9 @@ fn the_dipole_sum_does_not_depend_on_when_the_verlet_list_was_built() {
     let (mut a, mut b) = (state.clone(), state);
     aged.evaluate(&mut a, scene.dt());
     fresh.evaluate(&mut b, scene.dt());
-    let bits = |s: &magdem::core::state::State| s.fields.force.iter().flat_map(|f| f.iter().map(|c| c.to_bits())).collect::<Vec<_>>();
+    let bits = |s: &magdem::core::state::State| {
+        s.fields.force.iter().flat_map(|f| f.iter().map(|c| c.to_bits())).collect::<Vec<_>>()
+    };
     assert!(a.fields.force.iter().any(|f| f.norm() > 0.0), "the test should exercise the dipole sum");
     assert_eq!(bits(&a), bits(&b), "forces differ with the Verlet list's history");
 }
@@ -135,9 +145,16 @@ fn numbering_particles_in_space_changes_only_the_numbering() {
     let radius = 5.5e-6;
     let morton_neighbours = y0.windows(2).map(|w| (w[0] - w[1]).norm()).sum::<f64>();
     let placed_neighbours = x0.windows(2).map(|w| (w[0] - w[1]).norm()).sum::<f64>();
-    assert!(morton_neighbours < 0.5 * placed_neighbours, "consecutive particles {morton_neighbours:e} m apart in all against {placed_neighbours:e}");
+    assert!(
+        morton_neighbours < 0.5 * placed_neighbours,
+        "consecutive particles {morton_neighbours:e} m apart in all against {placed_neighbours:e}"
+    );
     let (a, b) = (run_on(&placed, 1), run_on(&spatial, 1));
     assert!(!a.contacts.pairs.is_empty(), "the test should exercise contacts");
-    let worst = matching.iter().enumerate().map(|(k, &i)| (a.particles.position[i] - b.particles.position[k]).norm()).fold(0.0, f64::max);
+    let worst = matching
+        .iter()
+        .enumerate()
+        .map(|(k, &i)| (a.particles.position[i] - b.particles.position[k]).norm())
+        .fold(0.0, f64::max);
     assert!(worst < 1e-9 * radius, "largest position difference {worst:e} m");
 }

@@ -61,7 +61,9 @@ fn hertz_elastic_impact_matches_closed_form() {
     let delta = (15.0 * m_eff * v * v / (16.0 * e_star * r_eff.sqrt())).powf(0.4);
     let t_c = 2.87 * (m_eff * m_eff / (r_eff * e_star * e_star * v)).powf(0.2);
     let duration = t_end.unwrap() - t_start.unwrap();
-    println!("max overlap {max_overlap:.6e} (closed form {delta:.6e}); duration {duration:.6e} (closed form {t_c:.6e})");
+    println!(
+        "max overlap {max_overlap:.6e} (closed form {delta:.6e}); duration {duration:.6e} (closed form {t_c:.6e})"
+    );
     assert!((max_overlap / delta - 1.0).abs() < 0.01, "max overlap {max_overlap:e} vs {delta:e}");
     assert!((duration / t_c - 1.0).abs() < 0.01, "duration {duration:e} vs {t_c:e}");
     // Elastic: the rebound speed equals the impact speed.
@@ -193,7 +195,10 @@ fn two_dipoles_with_exact_induction_match_an_independent_ode_solution() {
     let r0 = 6.0 * 11.0e-6;
     let t = time_to_contact(&two_dipoles("exact", r0, 1087.0));
     let reference = pair_ode_contact_time(r0, true);
-    println!("exact induction: time to contact {t:.6e} s, RK4 reference {reference:.6e} s (ratio {:.6})", t / reference);
+    println!(
+        "exact induction: time to contact {t:.6e} s, RK4 reference {reference:.6e} s (ratio {:.6})",
+        t / reference
+    );
     assert!((t / reference - 1.0).abs() < 1e-3);
     // Induction shortens the approach: the no-induction reference is longer.
     let t_none = pair_ode_contact_time(r0, false);
@@ -309,7 +314,8 @@ fn five_sphere_chain_moments_match_a_direct_solve() {
         ("dense", Induction::Exact { tolerance: 1e-12, max_iterations: 500, dense_max: 150 }),
         ("iterative", Induction::Exact { tolerance: 1e-12, max_iterations: 500, dense_max: 0 }),
     ] {
-        let mag = Magnetisation::new(induction, b0, nalgebra::Matrix3::zeros(), std::slice::from_ref(&sp), Skins::default());
+        let mag =
+            Magnetisation::new(induction, b0, nalgebra::Matrix3::zeros(), std::slice::from_ref(&sp), Skins::default());
         let mut field = ForceField::new(domain.clone(), vec![Box::new(mag) as Box<dyn ForceTerm>]);
         let mut state = State::new(p.clone());
         field.evaluate(&mut state, 1e-8);
@@ -328,7 +334,9 @@ fn five_sphere_chain_moments_match_a_direct_solve() {
 fn lens_area_matches_the_closed_form_at_several_offsets() {
     // Unequal and equal circles (two code paths): compare with numerical integration of the
     // overlap along the centre line.
-    for (r1, r2, s) in [0.35, 0.6, 1.0, 1.4, 1.65].into_iter().map(|s| (1.0, 0.7, s)).chain([0.1, 0.9, 1.8].map(|s| (1.0, 1.0, s))) {
+    for (r1, r2, s) in
+        [0.35, 0.6, 1.0, 1.4, 1.65].into_iter().map(|s| (1.0, 0.7, s)).chain([0.1, 0.9, 1.8].map(|s| (1.0, 1.0, s)))
+    {
         let n = 200_000;
         let (lo, hi) = (s - r2, r1);
         let h = (hi - lo) / n as f64;
@@ -438,7 +446,9 @@ fn frictionless_oblique_impact_spins_nothing_and_keeps_its_energy() {
     };
     let (spin, energy_ratio) = run("none");
     let (mindlin_spin, _) = run("mindlin");
-    println!("largest spin: none {spin:e} rad/s, mindlin {mindlin_spin:e} rad/s; energy after/before {energy_ratio:.6}");
+    println!(
+        "largest spin: none {spin:e} rad/s, mindlin {mindlin_spin:e} rad/s; energy after/before {energy_ratio:.6}"
+    );
     // Only round-off: the tangential part of a normal force, |F| ε, times the lever arm.
     assert!(spin < 1e-9 * mindlin_spin, "frictionless spheres do not spin ({spin:e} rad/s)");
     assert!(mindlin_spin > 1e3, "Mindlin's spring spins the spheres ({mindlin_spin:e} rad/s)");

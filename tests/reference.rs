@@ -30,7 +30,15 @@ fn single_contacts_agree_with_liggghts_and_lammps() {
     let Some(engines) = engines() else { return };
     let work = workdir("contacts");
     let dir = work.path();
-    let wanted = ["elastic pair", "elastic wall", "pair e = 0.5", "oblique 25°", "oblique 65°", "spin, normal", "unequal 1:2, elastic"];
+    let wanted = [
+        "elastic pair",
+        "elastic wall",
+        "pair e = 0.5",
+        "oblique 25°",
+        "oblique 65°",
+        "spin, normal",
+        "unequal 1:2, elastic",
+    ];
     for case in cases().into_iter().filter(|c| wanted.contains(&c.name.as_str())) {
         let outcomes = run_case(&case, &dir, &engines).unwrap();
         let get = |engine: &str| outcomes.iter().find(|o| o.engine == engine).unwrap().metrics;
@@ -40,10 +48,22 @@ fn single_contacts_agree_with_liggghts_and_lammps() {
         let speed = case.normal_speed.hypot(case.tangential_speed);
         // Normal quantities: 0.5% against LIGGGHTS and against LAMMPS (calibrated damping).
         for (reference, name) in [(l, "liggghts"), (p, "lammps")] {
-            assert!(relative(m.restitution, reference.restitution, 1.0).abs() < 0.005, "{}: restitution vs {name}", case.name);
+            assert!(
+                relative(m.restitution, reference.restitution, 1.0).abs() < 0.005,
+                "{}: restitution vs {name}",
+                case.name
+            );
             if case.tangential_speed == 0.0 && case.spin == 0.0 {
-                assert!(relative(m.duration, reference.duration, t_c).abs() < 0.005, "{}: duration vs {name}", case.name);
-                assert!(relative(m.max_overlap, reference.max_overlap, delta).abs() < 0.005, "{}: overlap vs {name}", case.name);
+                assert!(
+                    relative(m.duration, reference.duration, t_c).abs() < 0.005,
+                    "{}: duration vs {name}",
+                    case.name
+                );
+                assert!(
+                    relative(m.max_overlap, reference.max_overlap, delta).abs() < 0.005,
+                    "{}: overlap vs {name}",
+                    case.name
+                );
             }
         }
         // Tangential quantities: 1% against LIGGGHTS (the same Mindlin model).
@@ -51,7 +71,11 @@ fn single_contacts_agree_with_liggghts_and_lammps() {
         assert!(relative(m.rebound_spin, l.rebound_spin, speed / 5.5e-6).abs() < 0.01, "{}: ω", case.name);
         // The elastic cases also meet Hertz's closed forms (1%).
         if case.restitution == 1.0 {
-            assert!((m.max_overlap / delta - 1.0).abs() < 0.01 && (m.duration / t_c - 1.0).abs() < 0.01, "{}: Hertz", case.name);
+            assert!(
+                (m.max_overlap / delta - 1.0).abs() < 0.01 && (m.duration / t_c - 1.0).abs() < 0.01,
+                "{}: Hertz",
+                case.name
+            );
         }
     }
 }
@@ -107,8 +131,10 @@ fn multi_particle_decks_run_and_match_magdem() {
     if let Err(e) = magdem::run::run(&scene, &native, &Default::default()) {
         panic!("{e}");
     }
-    let reference_positions = magdem::io::trajectory::Trajectory::open(&native).unwrap().all_vectors("position").unwrap();
-    let contacts = magdem::io::trajectory::Trajectory::open(&native).unwrap().checkpoint().unwrap().0.contacts.walls.len();
+    let reference_positions =
+        magdem::io::trajectory::Trajectory::open(&native).unwrap().all_vectors("position").unwrap();
+    let contacts =
+        magdem::io::trajectory::Trajectory::open(&native).unwrap().checkpoint().unwrap().0.contacts.walls.len();
     assert!(contacts > 0, "the scene should end with wall contacts");
     for engine in engines {
         let out = dir.join(format!("{}.h5", engine.name()));
@@ -118,12 +144,17 @@ fn multi_particle_decks_run_and_match_magdem() {
         let x = t.all_vectors("position").unwrap();
         assert_eq!(x.shape(), reference_positions.shape());
         let diff = |frames: std::ops::Range<usize>| {
-            frames.flat_map(|k| (0..40).flat_map(move |i| (0..3).map(move |c| (k, i, c))))
+            frames
+                .flat_map(|k| (0..40).flat_map(move |i| (0..3).map(move |c| (k, i, c))))
                 .map(|(k, i, c)| (x[[k, i, c]] - reference_positions[[k, i, c]]).abs())
                 .fold(0.0, f64::max)
         };
         let (half, end) = (diff(0..11), diff(0..x.shape()[0]));
-        println!("{}: largest position difference to magdem {half:.3e} m up to 1e-5 s, {end:.3e} m ({:.2e} d) to the end", engine.name(), end / 11e-6);
+        println!(
+            "{}: largest position difference to magdem {half:.3e} m up to 1e-5 s, {end:.3e} m ({:.2e} d) to the end",
+            engine.name(),
+            end / 11e-6
+        );
         if engine == Engine::Liggghts {
             assert!(half / 11e-6 < 1e-12 && end / 11e-6 < 1e-4, "{}: {half:e} m, {end:e} m", engine.name());
         } else {
@@ -134,7 +165,10 @@ fn multi_particle_decks_run_and_match_magdem() {
 
 #[test]
 fn decks_carry_the_magnetic_fix_and_refuse_what_the_codes_cannot_express() {
-    let magnetic = SETTLING.replace("[forces.contact]", "[field]\nb0 = [0.4, 0.0, 0.0]\n[forces.contact]\n[forces.dipole]\ninduction = \"none\"");
+    let magnetic = SETTLING.replace(
+        "[forces.contact]",
+        "[field]\nb0 = [0.4, 0.0, 0.0]\n[forces.contact]\n[forces.dipole]\ninduction = \"none\"",
+    );
     let scene = Scene::parse(&magnetic, "magnetic").unwrap();
     for engine in [Engine::Liggghts, Engine::Lammps] {
         // Magnetic terms are not refused: the deck carries the fix external magdem drives.
@@ -186,9 +220,13 @@ fn magnetic_forces_in_lock_step_reproduce_magdem() {
         }
         let t = magdem::io::trajectory::Trajectory::open(&out).unwrap();
         let (y, my) = (t.all_vectors("position").unwrap(), t.all_vectors("moment").unwrap());
-        let before = (0..contact).flat_map(|k| (0..2).flat_map(move |i| (0..3).map(move |c| (k, i, c)))).map(|(k, i, c)| (x[[k, i, c]] - y[[k, i, c]]).abs()).fold(0.0, f64::max);
+        let before = (0..contact)
+            .flat_map(|k| (0..2).flat_map(move |i| (0..3).map(move |c| (k, i, c))))
+            .map(|(k, i, c)| (x[[k, i, c]] - y[[k, i, c]]).abs())
+            .fold(0.0, f64::max);
         let all = x.iter().zip(y.iter()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-        let moments = m.iter().zip(my.iter()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / m.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+        let moments = m.iter().zip(my.iter()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max)
+            / m.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
         println!("{}: position difference {before:.3e} m before contact, {all:.3e} m overall; moments {moments:.3e} relative", engine.name());
         assert!(before < 1e-15, "{}: {before:e}", engine.name());
         if engine == Engine::Liggghts {
@@ -225,7 +263,13 @@ fn dipole_forces_match_lammps_lj_cut_dipole_cut() {
         let text = std::fs::read_to_string(path).unwrap().replace("cutoff_diameters = 15.0", cutoff);
         let scene = Scene::parse(&text, name).unwrap();
         let check = reference::dipole_check::check(&scene, workdir(&format!("dipole-{name}")).path()).unwrap();
-        println!("{name} ({}): {} particles, largest force {:.3e} N, max error {:.3e} relative", if cutoff.is_empty() { "all pairs" } else { "15 d" }, check.particles, check.largest_force, check.max_relative_error);
+        println!(
+            "{name} ({}): {} particles, largest force {:.3e} N, max error {:.3e} relative",
+            if cutoff.is_empty() { "all pairs" } else { "15 d" },
+            check.particles,
+            check.largest_force,
+            check.max_relative_error
+        );
         assert!(check.max_relative_error < 1e-9, "{name}: {check:?}");
     }
 }
@@ -238,13 +282,27 @@ fn files_route_agrees_with_the_callback_route_to_first_order_in_the_lag() {
     let Some(engines) = engines() else { return };
     let magdem_bin = std::path::Path::new(env!("CARGO_BIN_EXE_magdem"));
     let text = magdem::verify::magnetic::files_route_scene();
-    let rows = magdem::verify::magnetic::files_route_lag(Engine::Liggghts, &text, workdir("files").path(), magdem_bin, &[30, 100]).unwrap();
+    let rows = magdem::verify::magnetic::files_route_lag(
+        Engine::Liggghts,
+        &text,
+        workdir("files").path(),
+        magdem_bin,
+        &[30, 100],
+    )
+    .unwrap();
     println!("liggghts files route: {rows:?}");
     let ratio = rows[1].1 / rows[0].1;
     assert!(rows[0].1 < 2e-7 && (2.5..4.5).contains(&ratio), "{rows:?}");
     // LAMMPS' binary accepts the same files-route deck.
     if engines.contains(&Engine::Lammps) {
-        let rows = magdem::verify::magnetic::files_route_lag(Engine::Lammps, &text, workdir("files-lammps").path(), magdem_bin, &[300]).unwrap();
+        let rows = magdem::verify::magnetic::files_route_lag(
+            Engine::Lammps,
+            &text,
+            workdir("files-lammps").path(),
+            magdem_bin,
+            &[300],
+        )
+        .unwrap();
         println!("lammps files route: {rows:?}");
         assert!(rows[0].1 < 2e-6, "{rows:?}");
     }

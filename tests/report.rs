@@ -45,7 +45,12 @@ interval = 2.0e-4
 }
 
 fn read_csv(path: &Path) -> DataFrame {
-    CsvReadOptions::default().with_has_header(true).try_into_reader_with_file_path(Some(path.to_path_buf())).unwrap().finish().unwrap()
+    CsvReadOptions::default()
+        .with_has_header(true)
+        .try_into_reader_with_file_path(Some(path.to_path_buf()))
+        .unwrap()
+        .finish()
+        .unwrap()
 }
 
 #[test]
@@ -59,7 +64,10 @@ fn report_tables_are_the_analysis_of_the_runs() {
     let file = experiments.join("table3.toml");
     std::fs::write(
         &file,
-        format!("name = \"paper-table3\"\nbases = [\"../case1-c0.563.toml\"]\noutput = \"{}\"\n[sweep]\nseed = [1, 2, 3]\n", runs.display()),
+        format!(
+            "name = \"paper-table3\"\nbases = [\"../case1-c0.563.toml\"]\noutput = \"{}\"\n[sweep]\nseed = [1, 2, 3]\n",
+            runs.display()
+        ),
     )
     .unwrap();
     let experiment = Experiment::from_file(&file).unwrap();
@@ -67,7 +75,14 @@ fn report_tables_are_the_analysis_of_the_runs() {
 
     let out = dir.join("report");
     let reference = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("reference/paper");
-    let readme = write_report(&PaperReportOptions { experiments: experiments.clone(), reference, out: out.clone(), gap: 1e-3, wall_time: Some(12.0) }).unwrap();
+    let readme = write_report(&PaperReportOptions {
+        experiments: experiments.clone(),
+        reference,
+        out: out.clone(),
+        gap: 1e-3,
+        wall_time: Some(12.0),
+    })
+    .unwrap();
     let text = std::fs::read_to_string(&readme).unwrap();
 
     // Independent analysis of the three runs' last frames.
@@ -81,7 +96,14 @@ fn report_tables_are_the_analysis_of_the_runs() {
     let expected = summary(&means).mean;
     assert!(expected > 11.0, "some chains formed: {means:?}");
     let table3 = read_csv(&out.join("tables/table3.csv"));
-    let row = table3.column("concentration_mg_per_ml").unwrap().f64().unwrap().into_iter().position(|c| c == Some(0.563)).unwrap();
+    let row = table3
+        .column("concentration_mg_per_ml")
+        .unwrap()
+        .f64()
+        .unwrap()
+        .into_iter()
+        .position(|c| c == Some(0.563))
+        .unwrap();
     let reported = table3.column("magdem_mean_length_um").unwrap().f64().unwrap().get(row).unwrap();
     assert!((reported - expected).abs() <= 1e-9 * expected, "report {reported} vs analysis {expected}");
     assert_eq!(table3.column("runs").unwrap().cast(&DataType::UInt64).unwrap().u64().unwrap().get(row), Some(3));
@@ -122,11 +144,22 @@ fn report_tables_are_the_analysis_of_the_runs() {
     let damaged = runs.join("case1-c0.563__seed-3.h5");
     let bytes = std::fs::read(&damaged).unwrap();
     std::fs::write(&damaged, &bytes[..bytes.len() / 3]).unwrap();
-    let readme = write_report(&PaperReportOptions { experiments, reference: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("reference/paper"), out: out.clone(), gap: 1e-3, wall_time: None }).unwrap();
+    let readme = write_report(&PaperReportOptions {
+        experiments,
+        reference: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("reference/paper"),
+        out: out.clone(),
+        gap: 1e-3,
+        wall_time: None,
+    })
+    .unwrap();
     let text = std::fs::read_to_string(&readme).unwrap();
-    assert!(text.contains("Unreadable run files") && text.contains("case1-c0.563__seed-3.h5"), "the damaged run is named");
+    assert!(
+        text.contains("Unreadable run files") && text.contains("case1-c0.563__seed-3.h5"),
+        "the damaged run is named"
+    );
     let runs_table = read_csv(&out.join("tables/runs.csv"));
-    let status: Vec<String> = runs_table.column("status").unwrap().str().unwrap().into_no_null_iter().map(str::to_string).collect();
+    let status: Vec<String> =
+        runs_table.column("status").unwrap().str().unwrap().into_no_null_iter().map(str::to_string).collect();
     assert_eq!(status.iter().filter(|s| *s == "unreadable").count(), 1, "{status:?}");
     let table3 = read_csv(&out.join("tables/table3.csv"));
     assert_eq!(table3.column("runs").unwrap().cast(&DataType::UInt64).unwrap().u64().unwrap().get(row), Some(2));

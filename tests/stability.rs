@@ -87,7 +87,10 @@ fn cli_reports_instability_with_exit_code_3_and_keeps_the_file() {
     let dir = work.path();
     let (scene, out) = (dir.join("s.toml"), dir.join("s.h5"));
     std::fs::write(&scene, collision("explicit-euler", 2.0e-8)).unwrap();
-    let run = Command::new(env!("CARGO_BIN_EXE_magdem")).args(["run", scene.to_str().unwrap(), "-q", "-o", out.to_str().unwrap()]).output().unwrap();
+    let run = Command::new(env!("CARGO_BIN_EXE_magdem"))
+        .args(["run", scene.to_str().unwrap(), "-q", "-o", out.to_str().unwrap()])
+        .output()
+        .unwrap();
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert_eq!(run.status.code(), Some(3), "{stderr}");
     assert!(stderr.contains("error: unstable at step"), "{stderr}");
@@ -104,7 +107,12 @@ fn stability_map_brackets_the_estimate_at_the_paper_setting() {
     let p = magdem::study::stability::map_point(magdem::core::integrators::Scheme::VelocityVerlet, 1e9, 0.4).unwrap();
     println!("estimate {:.3e} s, measured {:.3e} s, Rayleigh {:.3e} s", p.estimate, p.measured, p.rayleigh);
     assert!(p.measured.is_finite());
-    assert!(p.measured >= 0.7 * p.estimate && p.measured <= 16.0 * p.estimate, "measured {:e} vs estimate {:e}", p.measured, p.estimate);
+    assert!(
+        p.measured >= 0.7 * p.estimate && p.measured <= 16.0 * p.estimate,
+        "measured {:e} vs estimate {:e}",
+        p.measured,
+        p.estimate
+    );
 }
 
 /// Every stiff and extreme case either completes with finite values or stops (or is refused)
@@ -114,7 +122,9 @@ fn extreme_cases_complete_or_stop_with_a_message() {
     for case in magdem::study::stability::extremes() {
         println!("{}: {}", case.name, case.outcome);
         assert!(
-            case.outcome.starts_with("completed ") || case.outcome.starts_with("stopped: unstable at step") || case.outcome.starts_with("refused at load: "),
+            case.outcome.starts_with("completed ")
+                || case.outcome.starts_with("stopped: unstable at step")
+                || case.outcome.starts_with("refused at load: "),
             "{}: {}",
             case.name,
             case.outcome
@@ -130,7 +140,10 @@ fn extreme_cases_complete_or_stop_with_a_message() {
 fn the_respa_estimate_accounts_for_the_outer_step() {
     let base = collision("velocity-verlet", 1.0e-9);
     let verlet = Scene::parse(&base, "verlet").unwrap().estimate;
-    let respa = Scene::parse(&base.replace("scheme = \"velocity-verlet\"", "scheme = \"respa\"\nslow_every = 10"), "respa").unwrap().estimate;
+    let respa =
+        Scene::parse(&base.replace("scheme = \"velocity-verlet\"", "scheme = \"respa\"\nslow_every = 10"), "respa")
+            .unwrap()
+            .estimate;
     assert!(verlet.magnetic_bound.is_none());
     let (mu0, d, rho): (f64, f64, f64) = (4.0e-7 * std::f64::consts::PI, 11.0e-6, 1087.0);
     let volume = std::f64::consts::PI * d.powi(3) / 6.0;
@@ -139,5 +152,10 @@ fn the_respa_estimate_accounts_for_the_outer_step() {
     let expected = 2.0 / (10.0 * (k / (0.5 * rho * volume)).sqrt());
     let bound = respa.magnetic_bound.expect("a bound for K = 10");
     assert!((bound / expected - 1.0).abs() < 1e-12, "{bound:e} against {expected:e}");
-    assert!(respa.stable_dt == bound && bound < verlet.stable_dt, "{} against {}", respa.summary(1e-9), verlet.summary(1e-9));
+    assert!(
+        respa.stable_dt == bound && bound < verlet.stable_dt,
+        "{} against {}",
+        respa.summary(1e-9),
+        verlet.summary(1e-9)
+    );
 }

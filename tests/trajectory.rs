@@ -69,7 +69,10 @@ fn assert_identical(a: &Path, b: &Path) {
     }
     assert_eq!(ta.times().unwrap(), tb.times().unwrap());
     for name in ["pair", "overlap", "frame_start"] {
-        let (x, y) = (ta.file.dataset(&format!("contacts/{name}")).unwrap(), tb.file.dataset(&format!("contacts/{name}")).unwrap());
+        let (x, y) = (
+            ta.file.dataset(&format!("contacts/{name}")).unwrap(),
+            tb.file.dataset(&format!("contacts/{name}")).unwrap(),
+        );
         assert_eq!(x.shape(), y.shape(), "contacts/{name}");
     }
 }
@@ -82,7 +85,10 @@ fn resume_after_kill_is_bitwise_equal_to_an_uninterrupted_run() {
 /// Multiple time stepping carries the slow forces between steps: they are in the checkpoint.
 #[test]
 fn resume_after_kill_is_bitwise_equal_with_multiple_time_stepping() {
-    resume_after_kill("resume-respa", &scene_text().replace("dt = 1.0e-8", "scheme = \"respa\"\ndt = 1.0e-8\nslow_every = 10"));
+    resume_after_kill(
+        "resume-respa",
+        &scene_text().replace("dt = 1.0e-8", "scheme = \"respa\"\ndt = 1.0e-8\nslow_every = 10"),
+    );
 }
 
 /// The adaptive integrator's proposed substep is in the checkpoint.
@@ -90,7 +96,9 @@ fn resume_after_kill_is_bitwise_equal_with_multiple_time_stepping() {
 fn resume_after_kill_is_bitwise_equal_with_the_adaptive_step() {
     // A loose tolerance and a shorter run: with 60 particles in chains the substeps follow every
     // contact oscillation, and tight tolerances cost minutes.
-    let text = scene_text().replace("dt = 1.0e-8", "scheme = \"adaptive-verlet\"\ntolerance = 1e-4\ndt = 1.0e-8").replace("end_time = 3.0e-4", "end_time = 1.2e-4");
+    let text = scene_text()
+        .replace("dt = 1.0e-8", "scheme = \"adaptive-verlet\"\ntolerance = 1e-4\ndt = 1.0e-8")
+        .replace("end_time = 3.0e-4", "end_time = 1.2e-4");
     resume_after_kill("resume-adaptive", &text.replace("induction = \"paper\"", "induction = \"none\""));
 }
 
@@ -220,13 +228,20 @@ print("h5py ok", pos.shape)
     match python {
         Ok(out) if out.status.success() => println!("{}", String::from_utf8_lossy(&out.stdout)),
         Ok(out) if String::from_utf8_lossy(&out.stderr).contains("No module named") => {
-            let dump = Command::new("h5dump").args(["-H", path(&file)]).output().expect("neither h5py nor h5dump available");
+            let dump =
+                Command::new("h5dump").args(["-H", path(&file)]).output().expect("neither h5py nor h5dump available");
             let text = String::from_utf8_lossy(&dump.stdout);
-            assert!(dump.status.success() && text.contains("DATASET \"position\"") && text.contains("( 3, 60, 3 )"), "{text}");
+            assert!(
+                dump.status.success() && text.contains("DATASET \"position\"") && text.contains("( 3, 60, 3 )"),
+                "{text}"
+            );
         }
         Ok(out) => panic!("h5py check failed: {}", String::from_utf8_lossy(&out.stderr)),
         Err(_) => {
-            let dump = Command::new("h5dump").args(["-H", path(&file)]).output().expect("neither python3 nor h5dump available");
+            let dump = Command::new("h5dump")
+                .args(["-H", path(&file)])
+                .output()
+                .expect("neither python3 nor h5dump available");
             assert!(dump.status.success());
         }
     }
@@ -246,7 +261,12 @@ fn an_existing_output_is_refused_unless_overwritten() {
     let out = magdem(&["run", path(&scene), "-q", "-o", path(&file)]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
-    assert!(err.contains("run.h5 exists (status completed") && err.contains("--overwrite") && err.trim().lines().count() == 1, "{err}");
+    assert!(
+        err.contains("run.h5 exists (status completed")
+            && err.contains("--overwrite")
+            && err.trim().lines().count() == 1,
+        "{err}"
+    );
     assert_eq!(std::fs::read(&file).unwrap(), before, "the refused run left the file as it was");
     // A file that is not a trajectory is refused too.
     let junk = dir.join("junk.h5");
@@ -268,7 +288,10 @@ fn a_second_writer_is_refused_and_a_killed_one_leaves_no_lock() {
     let scene = dir.join("scene.toml");
     std::fs::write(&scene, scene_text().replace("end_time = 3.0e-4", "end_time = 3.0e-3")).unwrap();
     let file = dir.join("run.h5");
-    let mut first = Command::new(env!("CARGO_BIN_EXE_magdem")).args(["run", path(&scene), "-q", "-o", path(&file)]).spawn().unwrap();
+    let mut first = Command::new(env!("CARGO_BIN_EXE_magdem"))
+        .args(["run", path(&scene), "-q", "-o", path(&file)])
+        .spawn()
+        .unwrap();
     // Wait for the first frames (the lock is taken before the file is created).
     let started = std::time::Instant::now();
     while Trajectory::open(&file).ok().and_then(|t| t.frames().ok()).unwrap_or(0) < 2 {
@@ -292,7 +315,10 @@ struct Tmpfs(std::path::PathBuf);
 impl Tmpfs {
     fn mount(size: &str) -> Option<Self> {
         let dir = tempfile::Builder::new().prefix("magdem-full-").tempdir().unwrap().keep();
-        let ok = Command::new("mount").args(["-t", "tmpfs", "-o", &format!("size={size}"), "tmpfs", path(&dir)]).status().is_ok_and(|s| s.success());
+        let ok = Command::new("mount")
+            .args(["-t", "tmpfs", "-o", &format!("size={size}"), "tmpfs", path(&dir)])
+            .status()
+            .is_ok_and(|s| s.success());
         if !ok {
             println!("skipped: cannot mount a tmpfs here (needs root and mount permission)");
             let _ = std::fs::remove_dir(&dir);
@@ -301,7 +327,11 @@ impl Tmpfs {
         Some(Self(dir))
     }
     fn resize(&self, size: &str) {
-        assert!(Command::new("mount").args(["-o", &format!("remount,size={size}"), path(&self.0)]).status().unwrap().success());
+        assert!(Command::new("mount")
+            .args(["-o", &format!("remount,size={size}"), path(&self.0)])
+            .status()
+            .unwrap()
+            .success());
     }
 }
 
@@ -321,7 +351,13 @@ fn a_full_disk_stops_the_run_cleanly_and_resume_continues() {
     let work = workdir("full");
     let dir = work.path();
     let scene = dir.join("scene.toml");
-    std::fs::write(&scene, scene_text().replace("interval = 2.0e-5", "interval = 2.0e-6").replace("end_time = 3.0e-4", "end_time = 2.0e-4")).unwrap();
+    std::fs::write(
+        &scene,
+        scene_text()
+            .replace("interval = 2.0e-5", "interval = 2.0e-6")
+            .replace("end_time = 3.0e-4", "end_time = 2.0e-4"),
+    )
+    .unwrap();
     let (full, file) = (dir.join("full.h5"), disk.0.join("run.h5"));
     assert!(magdem(&["run", path(&scene), "-q", "-o", path(&full)]).status.success());
     let out = magdem(&["run", path(&scene), "-q", "-o", path(&file)]);
@@ -358,7 +394,11 @@ fn damaged_and_foreign_files_are_refused_with_one_line_naming_them() {
     drop(f);
     for file in [&truncated, &foreign] {
         let name = file.file_name().unwrap().to_str().unwrap();
-        for args in [vec!["info", path(file)], vec!["analyse", path(file)], vec!["run", path(&scene), "-q", "-o", path(file), "--resume"]] {
+        for args in [
+            vec!["info", path(file)],
+            vec!["analyse", path(file)],
+            vec!["run", path(&scene), "-q", "-o", path(file), "--resume"],
+        ] {
             let out = magdem(&args);
             let err = String::from_utf8_lossy(&out.stderr);
             assert!(!out.status.success(), "{args:?} accepted {name}");

@@ -87,7 +87,12 @@ pub fn aggregates(frame: &Frame, domain: &Domain, field_direction: &Vec3, gap_to
     let n = frame.position.len();
     let largest = frame.radius.iter().fold(0.0_f64, |a, &r| a.max(r));
     let mut pairs = vec![];
-    CellList::default().pairs_within(frame.position, domain, Some(2.0 * largest * (1.0 + gap_tolerance) + 1e-300), &mut pairs);
+    CellList::default().pairs_within(
+        frame.position,
+        domain,
+        Some(2.0 * largest * (1.0 + gap_tolerance) + 1e-300),
+        &mut pairs,
+    );
     let mut parent: Vec<usize> = (0..n).collect();
     let mut links: Vec<Vec<(usize, Vec3)>> = vec![vec![]; n];
     for p in &pairs {
@@ -110,7 +115,8 @@ pub fn aggregates(frame: &Frame, domain: &Domain, field_direction: &Vec3, gap_to
     // A cycle returning more than half the shortest periodic edge away from where it started
     // has wrapped around the box.
     let wrap = (0..3).filter(|&k| domain.periodic[k]).map(|k| 0.5 * domain.length()[k]).fold(f64::INFINITY, f64::min);
-    let mut out: Vec<Aggregate> = groups.into_values().map(|members| describe(frame, &members, &links, &dir, wrap)).collect();
+    let mut out: Vec<Aggregate> =
+        groups.into_values().map(|members| describe(frame, &members, &links, &dir, wrap)).collect();
     out.sort_by(|a, b| b.size().cmp(&a.size()).then(a.members[0].cmp(&b.members[0])));
     out
 }
@@ -130,7 +136,9 @@ fn describe(frame: &Frame, members: &[usize], links: &[Vec<(usize, Vec3)>], dir:
                     e.insert(xi + offset);
                     queue.push_back(j);
                 }
-                std::collections::hash_map::Entry::Occupied(e) => percolating |= (e.get() - (xi + offset)).norm() > wrap,
+                std::collections::hash_map::Entry::Occupied(e) => {
+                    percolating |= (e.get() - (xi + offset)).norm() > wrap
+                }
             }
         }
     }
@@ -140,7 +148,15 @@ fn describe(frame: &Frame, members: &[usize], links: &[Vec<(usize, Vec3)>], dir:
     let diameter = 2.0 * members.iter().map(|&i| frame.radius[i]).sum::<f64>() / members.len() as f64;
     if pts.len() == 1 {
         let (length, field_extent) = (diameter, diameter);
-        return Aggregate { members: members.to_vec(), length, orientation_deg: 0.0, com_velocity, field_extent, percolating, positions: pts };
+        return Aggregate {
+            members: members.to_vec(),
+            length,
+            orientation_deg: 0.0,
+            com_velocity,
+            field_extent,
+            percolating,
+            positions: pts,
+        };
     }
     let centre = pts.iter().sum::<Vec3>() / pts.len() as f64;
     let cov: Matrix3<f64> = pts.iter().map(|p| (p - centre) * (p - centre).transpose()).sum();
@@ -148,11 +164,22 @@ fn describe(frame: &Frame, members: &[usize], links: &[Vec<(usize, Vec3)>], dir:
     let k = eig.eigenvalues.imax();
     let axis: Vec3 = eig.eigenvectors.column(k).into();
     let proj: Vec<f64> = pts.iter().map(|p| (p - centre).dot(&axis)).collect();
-    let extent = proj.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b)) - proj.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+    let extent =
+        proj.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b)) - proj.iter().fold(f64::INFINITY, |a, &b| a.min(b));
     let cos = axis.dot(dir).abs().min(1.0);
     let along: Vec<f64> = pts.iter().map(|p| p.dot(dir)).collect();
-    let field_extent = along.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b)) - along.iter().fold(f64::INFINITY, |a, &b| a.min(b)) + diameter;
+    let field_extent = along.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b))
+        - along.iter().fold(f64::INFINITY, |a, &b| a.min(b))
+        + diameter;
     let length = if percolating { f64::NAN } else { extent + diameter };
     let orientation_deg = cos.acos().to_degrees();
-    Aggregate { members: members.to_vec(), length, orientation_deg, com_velocity, field_extent, percolating, positions: pts }
+    Aggregate {
+        members: members.to_vec(),
+        length,
+        orientation_deg,
+        com_velocity,
+        field_extent,
+        percolating,
+        positions: pts,
+    }
 }

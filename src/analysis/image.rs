@@ -83,7 +83,9 @@ impl Raster {
             // Pixel (i, j) has its centre at lo + (i + ½, j + ½)·pixel.
             let (u, v) = ((c[0] - lo[0]) / pixel - 0.5, (c[1] - lo[1]) / pixel - 0.5);
             let rp = r / pixel;
-            let span = |centre: f64, n: usize| ((centre - rp).ceil().max(0.0) as usize, ((centre + rp).floor().max(-1.0) + 1.0).min(n as f64) as usize);
+            let span = |centre: f64, n: usize| {
+                ((centre - rp).ceil().max(0.0) as usize, ((centre + rp).floor().max(-1.0) + 1.0).min(n as f64) as usize)
+            };
             let ((i0, i1), (j0, j1)) = (span(u, nx), span(v, ny));
             for j in j0..j1 {
                 for i in i0..i1 {
@@ -114,7 +116,10 @@ impl Raster {
                 }
                 // Right, and the three neighbours of the row above: every 8-neighbour pair once.
                 let right = (i + 1 < nx).then(|| (i + 1, j));
-                let above = (j + 1 < ny).then_some(j + 1).into_iter().flat_map(|jj| [i.wrapping_sub(1), i, i + 1].map(|ii| (ii, jj)));
+                let above = (j + 1 < ny)
+                    .then_some(j + 1)
+                    .into_iter()
+                    .flat_map(|jj| [i.wrapping_sub(1), i, i + 1].map(|ii| (ii, jj)));
                 for (ii, jj) in right.into_iter().chain(above) {
                     if ii >= nx {
                         continue;
@@ -150,7 +155,11 @@ impl Raster {
         let mut out: Vec<Region> = members
             .into_iter()
             .filter(|(root, _)| moments[*root].n > 0.0)
-            .map(|(root, particles)| Region { particles, pixels: moments[root].n as usize, major_axis: moments[root].major_axis() * pixel })
+            .map(|(root, particles)| Region {
+                particles,
+                pixels: moments[root].n as usize,
+                major_axis: moments[root].major_axis() * pixel,
+            })
             .collect();
         out.sort_by(|a, b| b.pixels.cmp(&a.pixels).then(a.particles[0].cmp(&b.particles[0])));
         out
@@ -232,7 +241,8 @@ mod tests {
         let lo = Vec3::zeros();
         let hi = Vec3::new(2e-4, 2e-4, 2e-4);
         // Two particles far apart in depth but overlapping in projection, and one alone.
-        let pos = [Vec3::new(5e-5, 5e-5, 1e-5), Vec3::new(5e-5 + 0.5 * D, 5e-5, 1.5e-4), Vec3::new(1.5e-4, 1.5e-4, 1e-4)];
+        let pos =
+            [Vec3::new(5e-5, 5e-5, 1e-5), Vec3::new(5e-5 + 0.5 * D, 5e-5, 1.5e-4), Vec3::new(1.5e-4, 1.5e-4, 1e-4)];
         let regions = XY.image(&pos, &[0.5 * D; 3], &lo, &hi);
         assert_eq!(regions.len(), 2);
         assert_eq!(regions[0].particles, vec![0, 1]);

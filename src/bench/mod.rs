@@ -16,9 +16,9 @@ use crate::scene::Scene;
 use stats_alloc::INSTRUMENTED_SYSTEM;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::{Path, PathBuf};
+use std::process::Command;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Barrier;
-use std::process::Command;
 use std::time::Instant;
 
 pub type Error = Box<dyn std::error::Error + Send + Sync>;
@@ -138,16 +138,32 @@ pub fn count_allocations(on: bool) {
 // Both branches allocate from `System`, so a block may be freed by either.
 unsafe impl GlobalAlloc for SwitchableCounter {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        if COUNTING.load(Ordering::Relaxed) { INSTRUMENTED_SYSTEM.alloc(layout) } else { System.alloc(layout) }
+        if COUNTING.load(Ordering::Relaxed) {
+            INSTRUMENTED_SYSTEM.alloc(layout)
+        } else {
+            System.alloc(layout)
+        }
     }
     unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        if COUNTING.load(Ordering::Relaxed) { INSTRUMENTED_SYSTEM.alloc_zeroed(layout) } else { System.alloc_zeroed(layout) }
+        if COUNTING.load(Ordering::Relaxed) {
+            INSTRUMENTED_SYSTEM.alloc_zeroed(layout)
+        } else {
+            System.alloc_zeroed(layout)
+        }
     }
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        if COUNTING.load(Ordering::Relaxed) { INSTRUMENTED_SYSTEM.dealloc(ptr, layout) } else { System.dealloc(ptr, layout) }
+        if COUNTING.load(Ordering::Relaxed) {
+            INSTRUMENTED_SYSTEM.dealloc(ptr, layout)
+        } else {
+            System.dealloc(ptr, layout)
+        }
     }
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        if COUNTING.load(Ordering::Relaxed) { INSTRUMENTED_SYSTEM.realloc(ptr, layout, new_size) } else { System.realloc(ptr, layout, new_size) }
+        if COUNTING.load(Ordering::Relaxed) {
+            INSTRUMENTED_SYSTEM.realloc(ptr, layout, new_size)
+        } else {
+            System.realloc(ptr, layout, new_size)
+        }
     }
 }
 
@@ -187,7 +203,13 @@ pub enum Start<'a> {
 }
 
 /// [`time_magdem`] with the clock started as `start` says.
-pub fn time_magdem_from(scene: &Scene, threads: usize, work: Work, timings: bool, start: Start) -> Result<MagdemRun, Error> {
+pub fn time_magdem_from(
+    scene: &Scene,
+    threads: usize,
+    work: Work,
+    timings: bool,
+    start: Start,
+) -> Result<MagdemRun, Error> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
     count_allocations(matches!(start, Start::Alone) && threads == 1);
     let result = pool.install(|| {
@@ -243,7 +265,13 @@ pub fn time_engine(engine: Engine, dir: &Path, in_file: &str, procs: usize) -> R
     let log = std::fs::read_to_string(dir.join("log.bench")).unwrap_or_default();
     match (out.status.success(), loop_time(&log)) {
         (true, Some(t)) => Ok(t),
-        _ => Err(format!("{} failed in {} (exit {:?}); see its log.bench", engine.name(), dir.display(), out.status.code()).into()),
+        _ => Err(format!(
+            "{} failed in {} (exit {:?}); see its log.bench",
+            engine.name(),
+            dir.display(),
+            out.status.code()
+        )
+        .into()),
     }
 }
 

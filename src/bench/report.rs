@@ -98,7 +98,8 @@ struct MagdemRuns {
 impl MagdemRuns {
     /// Median seconds per step of phase `name` over the timed runs.
     fn median(&self, name: &str) -> f64 {
-        let times: Vec<f64> = self.phases.iter().map(|run| run.iter().find(|(n, _)| *n == name).map_or(0.0, |(_, t)| *t)).collect();
+        let times: Vec<f64> =
+            self.phases.iter().map(|run| run.iter().find(|(n, _)| *n == name).map_or(0.0, |(_, t)| *t)).collect();
         Spread::of(&times).median
     }
 }
@@ -118,7 +119,9 @@ impl<'a> Contender<'a> {
         let run = move || {
             let run = time_magdem(scene, threads, work, timed)?;
             if timed {
-                runs.phases.push(run.simulation.timers().phases().iter().map(|(name, d)| (*name, d.as_secs_f64() / steps)).collect());
+                runs.phases.push(
+                    run.simulation.timers().phases().iter().map(|(name, d)| (*name, d.as_secs_f64() / steps)).collect(),
+                );
             }
             let seconds = run.seconds;
             runs.last = Some(run);
@@ -142,7 +145,8 @@ impl<'a> Contender<'a> {
             let barrier = Barrier::new(2);
             let runs = std::thread::scope(|scope| {
                 // Both runs are the same scene: if one fails before the barrier, so does the other.
-                let both = [(); 2].map(|_| scope.spawn(|| time_magdem_from(scene, 1, work, false, Start::Together(&barrier))));
+                let both =
+                    [(); 2].map(|_| scope.spawn(|| time_magdem_from(scene, 1, work, false, Start::Together(&barrier))));
                 both.map(|run| run.join().expect("a timed run does not panic"))
             });
             let [a, b] = runs;
@@ -180,7 +184,14 @@ impl Bench<'_> {
             }
         }
         for (c, times) in contenders {
-            self.measurements.push(Measurement { case: case.into(), engine: c.engine, threads: c.threads, particles, steps, seconds: Spread::of(&times) });
+            self.measurements.push(Measurement {
+                case: case.into(),
+                engine: c.engine,
+                threads: c.threads,
+                particles,
+                steps,
+                seconds: Spread::of(&times),
+            });
         }
         Ok(())
     }
@@ -239,13 +250,25 @@ impl Bench<'_> {
                 // clock read per phase, under a microsecond of a step of 100–400 µs.
                 let timed = n == 30000;
                 let (mut one, mut two) = (MagdemRuns::default(), MagdemRuns::default());
-                let mut contenders = vec![Contender::magdem(&scene, 1, Work::Steps, timed, &mut one), Contender::magdem(&scene, 2, Work::Steps, timed, &mut two)];
+                let mut contenders = vec![
+                    Contender::magdem(&scene, 1, Work::Steps, timed, &mut one),
+                    Contender::magdem(&scene, 2, Work::Steps, timed, &mut two),
+                ];
                 // At 30 000 the engines also run on both cores (mpirun -np 2), beside magdem's threads.
                 let procs = if n == 30000 && mpirun_available() { vec![1, 2] } else { vec![1] };
                 for engine in [Engine::Liggghts, Engine::Lammps] {
                     for &np in &procs {
-                        let (scene, engine_dir) = (&scene, dir.join(if np == 1 { engine.name().to_string() } else { format!("{}-np{np}", engine.name()) }));
-                        contenders.extend(Contender::engine(engine, np, move || time_engine_scene(engine, scene, &engine_dir, np)));
+                        let (scene, engine_dir) = (
+                            &scene,
+                            dir.join(if np == 1 {
+                                engine.name().to_string()
+                            } else {
+                                format!("{}-np{np}", engine.name())
+                            }),
+                        );
+                        contenders.extend(Contender::engine(engine, np, move || {
+                            time_engine_scene(engine, scene, &engine_dir, np)
+                        }));
                     }
                 }
                 if timed {
@@ -254,12 +277,21 @@ impl Bench<'_> {
                 }
                 self.compare(&case, n, steps, contenders)?;
                 if timed {
-                    let (machine, others): (Vec<_>, _) = std::mem::take(&mut self.measurements).into_iter().partition(|m| [ARITHMETIC, TWO_RUNS].contains(&m.engine));
+                    let (machine, others): (Vec<_>, _) = std::mem::take(&mut self.measurements)
+                        .into_iter()
+                        .partition(|m| [ARITHMETIC, TWO_RUNS].contains(&m.engine));
                     self.measurements = others;
-                    let on = |engine, threads| machine.iter().find(|m| m.engine == engine && m.threads == threads).map_or(Spread::of(&[f64::NAN]), |m| m.seconds);
+                    let on = |engine, threads| {
+                        machine
+                            .iter()
+                            .find(|m| m.engine == engine && m.threads == threads)
+                            .map_or(Spread::of(&[f64::NAN]), |m| m.seconds)
+                    };
                     let both = |engine| (on(engine, 1), on(engine, 2));
-                    self.ceilings.push((case.clone(), Ceilings { arithmetic: both(ARITHMETIC), two_runs: on(TWO_RUNS, 2) }));
-                    let phases = one.phases[0].iter().map(|(name, _)| (*name, one.median(name), two.median(name))).collect();
+                    self.ceilings
+                        .push((case.clone(), Ceilings { arithmetic: both(ARITHMETIC), two_runs: on(TWO_RUNS, 2) }));
+                    let phases =
+                        one.phases[0].iter().map(|(name, _)| (*name, one.median(name), two.median(name))).collect();
                     self.phases_on_both_cores.push((case.clone(), phases));
                 }
                 let (one, two) = (one.last.expect("one-thread runs"), two.last.expect("two-thread runs"));
@@ -328,7 +360,12 @@ impl Bench<'_> {
             let case = "scaling dipole cut-off 15 d".to_string();
             let mut pairs = vec![];
             let largest_d = scene.species.iter().map(|s| 2.0 * s.radius).fold(0.0, f64::max);
-            crate::core::neighbours::CellList::default().pairs_within(&scene.initial.position, &scene.domain, Some(15.0 * largest_d), &mut pairs);
+            crate::core::neighbours::CellList::default().pairs_within(
+                &scene.initial.position,
+                &scene.domain,
+                Some(15.0 * largest_d),
+                &mut pairs,
+            );
             self.dipole_pairs.push((n, pairs.len()));
             drop(pairs);
             let run = self.magdem(&case, &scene, 1, Work::Forces)?;
@@ -380,7 +417,8 @@ fn mpi_demo(bench: &mut Bench, progress: &indicatif::ProgressBar) -> Result<(), 
 /// Statistics of a trajectory's last frame (gap tolerance 1e-3 of the radius).
 fn last_frame(path: &Path, engine: &str, route: &'static str, procs: usize) -> Result<MpiRun, Error> {
     let trajectory = crate::io::trajectory::Trajectory::open(path)?;
-    let (_, aggregates) = crate::analysis::trajectory::frame_aggregates(&trajectory, -1, 1e-3).map_err(|e| e.to_string())?;
+    let (_, aggregates) =
+        crate::analysis::trajectory::frame_aggregates(&trajectory, -1, 1e-3).map_err(|e| e.to_string())?;
     let lengths: Vec<f64> = crate::analysis::aggregates::finite_lengths(&aggregates).iter().map(|l| l * 1e6).collect();
     let mean = lengths.iter().sum::<f64>() / lengths.len() as f64;
     let std = (lengths.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / lengths.len() as f64).sqrt();
@@ -439,11 +477,20 @@ fn scaling_sizes(max: usize) -> Vec<usize> {
 /// What this machine is (CPU model, cores, memory, kernel).
 fn machine() -> String {
     let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
-    let model = cpuinfo.lines().find_map(|l| l.strip_prefix("model name")).map(|s| s.trim_start_matches([' ', '\t', ':']).to_string()).unwrap_or("unknown CPU".into());
+    let model = cpuinfo
+        .lines()
+        .find_map(|l| l.strip_prefix("model name"))
+        .map(|s| s.trim_start_matches([' ', '\t', ':']).to_string())
+        .unwrap_or("unknown CPU".into());
     let flags = cpuinfo.lines().find_map(|l| l.strip_prefix("flags")).unwrap_or("");
-    let simd: Vec<&str> = ["avx512f", "avx2", "fma"].into_iter().filter(|f| flags.split_whitespace().any(|x| x == *f)).collect();
+    let simd: Vec<&str> =
+        ["avx512f", "avx2", "fma"].into_iter().filter(|f| flags.split_whitespace().any(|x| x == *f)).collect();
     let meminfo = std::fs::read_to_string("/proc/meminfo").unwrap_or_default();
-    let memory_kb: f64 = meminfo.lines().find_map(|l| l.strip_prefix("MemTotal:")).and_then(|s| s.split_whitespace().next()?.parse().ok()).unwrap_or(0.0);
+    let memory_kb: f64 = meminfo
+        .lines()
+        .find_map(|l| l.strip_prefix("MemTotal:"))
+        .and_then(|s| s.split_whitespace().next()?.parse().ok())
+        .unwrap_or(0.0);
     let kernel = std::fs::read_to_string("/proc/sys/kernel/osrelease").unwrap_or_default();
     format!(
         "{model} ({}), {} cores, {}, {:.1} GiB memory, Linux {}",
@@ -458,17 +505,42 @@ fn machine() -> String {
 /// The first core's data and unified caches, as Linux lists them ("L1d 32K, L2 512K, L3 32768K
 /// shared by 2 cores").
 fn caches() -> String {
-    let read = |index: usize, name: &str| std::fs::read_to_string(format!("/sys/devices/system/cpu/cpu0/cache/index{index}/{name}")).ok().map(|s| s.trim().to_string());
+    let read = |index: usize, name: &str| {
+        std::fs::read_to_string(format!("/sys/devices/system/cpu/cpu0/cache/index{index}/{name}"))
+            .ok()
+            .map(|s| s.trim().to_string())
+    };
     let levels: Vec<String> = (0..8)
-        .filter_map(|i| Some((read(i, "level")?, read(i, "type")?, read(i, "size")?, read(i, "shared_cpu_list").unwrap_or_default())))
+        .filter_map(|i| {
+            Some((
+                read(i, "level")?,
+                read(i, "type")?,
+                read(i, "size")?,
+                read(i, "shared_cpu_list").unwrap_or_default(),
+            ))
+        })
         .filter(|(_, kind, _, _)| kind != "Instruction")
         .map(|(level, kind, size, shared)| {
-            let cores = shared.split(',').map(|r| r.split_once('-').map_or(1, |(a, b)| b.parse::<usize>().unwrap_or(0) + 1 - a.parse::<usize>().unwrap_or(0))).sum::<usize>();
+            let cores = shared
+                .split(',')
+                .map(|r| {
+                    r.split_once('-')
+                        .map_or(1, |(a, b)| b.parse::<usize>().unwrap_or(0) + 1 - a.parse::<usize>().unwrap_or(0))
+                })
+                .sum::<usize>();
             let name = if kind == "Data" { format!("L{level}d") } else { format!("L{level}") };
-            if cores > 1 { format!("{name} {size} shared by {cores} cores") } else { format!("{name} {size}") }
+            if cores > 1 {
+                format!("{name} {size} shared by {cores} cores")
+            } else {
+                format!("{name} {size}")
+            }
         })
         .collect();
-    if levels.is_empty() { "caches unknown".into() } else { format!("caches {}", levels.join(", ")) }
+    if levels.is_empty() {
+        "caches unknown".into()
+    } else {
+        format!("caches {}", levels.join(", "))
+    }
 }
 
 /// How many times faster two cores ran than one (medians).
@@ -484,9 +556,22 @@ fn seconds(s: &Spread) -> String {
 /// `performance.csv` into `options.out`; returns the report's path.
 pub fn write(options: &Options) -> Result<PathBuf, Error> {
     std::fs::create_dir_all(&options.out)?;
-    let mut bench = Bench { options, measurements: vec![], profiles: vec![], bitwise: vec![], memory: vec![], dipole_pairs: vec![], engine_versions: vec![], mpi: vec![], ceilings: vec![], phases_on_both_cores: vec![], notes: vec![] };
+    let mut bench = Bench {
+        options,
+        measurements: vec![],
+        profiles: vec![],
+        bitwise: vec![],
+        memory: vec![],
+        dipole_pairs: vec![],
+        engine_versions: vec![],
+        mpi: vec![],
+        ceilings: vec![],
+        phases_on_both_cores: vec![],
+        notes: vec![],
+    };
     let total = 6 + 2 + scaling_sizes(options.max_particles).len() as u64 + options.mpi as u64;
-    let progress = indicatif::ProgressBar::new(total).with_style(indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} cases {elapsed} {msg}")?);
+    let progress = indicatif::ProgressBar::new(total)
+        .with_style(indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} cases {elapsed} {msg}")?);
     bench.contact_cases(&progress)?;
     let agreement = bench.magnetic_cases(&progress)?;
     bench.scaling(&progress)?;
@@ -509,7 +594,15 @@ fn write_csv(path: &Path, rows: &[Measurement]) -> Result<(), Error> {
         let _ = writeln!(
             csv,
             "{},{},{},{},{},{:.6},{:.6},{:.6},{:.4e}",
-            m.case, m.engine, m.threads, m.particles, m.steps, m.seconds.min, m.seconds.median, m.seconds.max, m.particle_steps_per_second()
+            m.case,
+            m.engine,
+            m.threads,
+            m.particles,
+            m.steps,
+            m.seconds.min,
+            m.seconds.median,
+            m.seconds.max,
+            m.particle_steps_per_second()
         );
     }
     std::fs::write(path, csv)?;
@@ -533,19 +626,43 @@ fn scaling_figure(path: &Path, rows: &[Measurement]) -> Result<(), Error> {
         Series::line("magdem contact sparse, 1 thread", line("scaling contact sparse", "magdem", 1), palette(0)),
         Series::line("magdem contact dense, 1 thread", line("scaling contact dense", "magdem", 1), palette(1)),
         Series::line("magdem contact dense, 2 threads", line("scaling contact dense", "magdem", 2), palette(5)),
-        Series::line("magdem dipoles, 15 d cut-off, 1 thread", line("scaling dipole cut-off 15 d", "magdem", 1), palette(4)),
-        Series::line("magdem dipoles, 15 d cut-off, 2 threads", line("scaling dipole cut-off 15 d", "magdem", 2), palette(7)),
+        Series::line(
+            "magdem dipoles, 15 d cut-off, 1 thread",
+            line("scaling dipole cut-off 15 d", "magdem", 1),
+            palette(4),
+        ),
+        Series::line(
+            "magdem dipoles, 15 d cut-off, 2 threads",
+            line("scaling dipole cut-off 15 d", "magdem", 2),
+            palette(7),
+        ),
     ];
-    for (k, (engine, packing)) in [("liggghts", "sparse"), ("liggghts", "dense"), ("lammps", "sparse"), ("lammps", "dense")].into_iter().enumerate() {
+    for (k, (engine, packing)) in
+        [("liggghts", "sparse"), ("liggghts", "dense"), ("lammps", "sparse"), ("lammps", "dense")]
+            .into_iter()
+            .enumerate()
+    {
         let colour = if engine == "liggghts" { RGBColor(30, 150, 60) } else { RGBColor(230, 140, 0) };
         let pts = points(packing, engine);
         if !pts.is_empty() {
-            series.push(Series::markers(format!("{engine} contact {packing}"), pts, colour, if k % 2 == 0 { 4 } else { 7 }));
+            series.push(Series::markers(
+                format!("{engine} contact {packing}"),
+                pts,
+                colour,
+                if k % 2 == 0 { 4 } else { 7 },
+            ));
         }
     }
     series.retain(|s| !s.points.is_empty());
     // The legend above the data: every other corner of this chart holds points.
-    line_chart_with_legend(path, "Cost per particle and step against N (flat = linear in N)", "log10 N (particles)", "log10 ns per particle-step", &series, Legend::above_data(0.5))
+    line_chart_with_legend(
+        path,
+        "Cost per particle and step against N (flat = linear in N)",
+        "log10 N (particles)",
+        "log10 ns per particle-step",
+        &series,
+        Legend::above_data(0.5),
+    )
     .map_err(|e| e.to_string().into())
 }
 
@@ -567,7 +684,10 @@ fn targets(bench: &Bench) -> String {
         .filter_map(|m| Some((m.case.clone(), bench.speedup(&m.case, ("magdem", 1), ("liggghts", 1))?)))
         .collect();
     if let Some((case, worst)) = contact.iter().min_by(|a, b| a.1.total_cmp(&b.1)) {
-        lines.push(format!("contact only, one thread ÷ LIGGGHTS ≥ 2× in every case: smallest {worst:.2}× ({case}) — {}", verdict(*worst, 2.0)));
+        lines.push(format!(
+            "contact only, one thread ÷ LIGGGHTS ≥ 2× in every case: smallest {worst:.2}× ({case}) — {}",
+            verdict(*worst, 2.0)
+        ));
     }
     for case in ["dipole all pairs 307", "dipole cut-off 15 d 307"] {
         if let Some(x) = bench.speedup(case, ("magdem", 1), ("lammps", 1)) {
@@ -578,13 +698,23 @@ fn targets(bench: &Bench) -> String {
         if let Some(x) = bench.speedup(case, ("magdem", 2), ("magdem", 1)) {
             let engines: Vec<String> = [("liggghts", "LIGGGHTS"), ("lammps", "LAMMPS")]
                 .iter()
-                .filter_map(|(engine, name)| Some(format!("{name} {:.2}×", bench.speedup(case, (engine, 2), (engine, 1))?)))
+                .filter_map(|(engine, name)| {
+                    Some(format!("{name} {:.2}×", bench.speedup(case, (engine, 2), (engine, 1))?))
+                })
                 .collect();
             let machine = bench.two_core_gains(case).map(|(arithmetic, two_runs)| {
                 format!("in the same minutes: arithmetic on two cores {arithmetic:.2}× one, two one-thread runs at once {two_runs:.2}× the throughput of one")
             });
-            let context: Vec<String> = [(!engines.is_empty()).then(|| format!("two MPI processes ÷ one: {}", engines.join(", "))), machine].into_iter().flatten().collect();
-            let context = if context.is_empty() { String::new() } else { format!(" ({}; see “Both cores”)", context.join("; ")) };
+            let context: Vec<String> =
+                [(!engines.is_empty()).then(|| format!("two MPI processes ÷ one: {}", engines.join(", "))), machine]
+                    .into_iter()
+                    .flatten()
+                    .collect();
+            let context = if context.is_empty() {
+                String::new()
+            } else {
+                format!(" ({}; see “Both cores”)", context.join("; "))
+            };
             lines.push(format!("{case}, two threads ÷ one ≥ 1.7×: {x:.3}× — {}{context}", verdict(x, 1.7)));
         }
     }
@@ -592,7 +722,11 @@ fn targets(bench: &Bench) -> String {
         let runs: Vec<&Measurement> = bench.measurements.iter().filter(|m| m.case == case && m.threads == 1).collect();
         let dipoles = case.contains("dipole");
         let cost = |m: &Measurement| if dipoles { bench.ns_per_pair(m) } else { Some(m.ns_per_particle_step()) };
-        let (Some(small), Some(large)) = (runs.iter().min_by_key(|m| m.particles), runs.iter().max_by_key(|m| m.particles)) else { continue };
+        let (Some(small), Some(large)) =
+            (runs.iter().min_by_key(|m| m.particles), runs.iter().max_by_key(|m| m.particles))
+        else {
+            continue;
+        };
         if let (Some(small_cost), Some(large_cost)) = (cost(small), cost(large)) {
             let unit = if dipoles { "per pair" } else { "per particle-step" };
             lines.push(format!(
@@ -607,11 +741,14 @@ fn targets(bench: &Bench) -> String {
     if lines.is_empty() {
         return String::new();
     }
-    format!("## Against the targets
+    format!(
+        "## Against the targets
 
 {}
 
-", lines.iter().map(|l| format!("- {l}")).collect::<Vec<_>>().join("\n"))
+",
+        lines.iter().map(|l| format!("- {l}")).collect::<Vec<_>>().join("\n")
+    )
 }
 
 /// magdem's two threads against the engines' two MPI processes at 30 000 particles, phase by
@@ -622,14 +759,21 @@ fn both_cores(bench: &Bench) -> String {
     for case in ["contact sparse 30000", "contact dense 30000"] {
         let ratio = |fast, slow| bench.speedup(case, fast, slow).map_or("–".into(), |x| format!("{x:.2}×"));
         let gained = |engine| ratio((engine, 2), (engine, 1));
-        let (against_liggghts, against_lammps) = (ratio(("magdem", 2), ("liggghts", 2)), ratio(("magdem", 2), ("lammps", 2)));
+        let (against_liggghts, against_lammps) =
+            (ratio(("magdem", 2), ("liggghts", 2)), ratio(("magdem", 2), ("lammps", 2)));
         let magdem_gain = bench.speedup(case, ("magdem", 2), ("magdem", 1));
         let machine = bench.two_core_gains(case).map(|(arithmetic, two_runs)| {
             let efficiency = magdem_gain.map_or("–".into(), |g| format!("{:.2}", g / two_runs));
             [format!("{arithmetic:.2}×"), format!("{two_runs:.2}×"), efficiency]
         });
         let machine = machine.unwrap_or_else(|| std::array::from_fn(|_| "–".to_string())).join(" | ");
-        let _ = writeln!(s, "| {case} | {} | {} | {} | {against_liggghts} | {against_lammps} | {machine} |", gained("magdem"), gained("liggghts"), gained("lammps"));
+        let _ = writeln!(
+            s,
+            "| {case} | {} | {} | {} | {against_liggghts} | {against_lammps} | {machine} |",
+            gained("magdem"),
+            gained("liggghts"),
+            gained("lammps")
+        );
     }
     if bench.phases_on_both_cores.is_empty() {
         return s;
@@ -644,7 +788,12 @@ fn both_cores(bench: &Bench) -> String {
         let _ = writeln!(s, "| {case} | sum of the phases | {:.1} | {:.1} | {:.2}× |", t1 * 1e6, t2 * 1e6, t1 / t2);
         if let Some((_, t1, t2)) = phases.iter().find(|(name, _, _)| *name == "integrate") {
             let bytes = integrate_bytes_per_step(bench, case);
-            integrate_bandwidth.push(format!("{case}: {:.1} MB per step, {:.1} GB/s on one thread and {:.1} GB/s on two", bytes / 1e6, bytes / t1 / 1e9, bytes / t2 / 1e9));
+            integrate_bandwidth.push(format!(
+                "{case}: {:.1} MB per step, {:.1} GB/s on one thread and {:.1} GB/s on two",
+                bytes / 1e6,
+                bytes / t1 / 1e9,
+                bytes / t2 / 1e9
+            ));
         }
     }
     let _ = write!(
@@ -687,12 +836,16 @@ fn markdown(bench: &Bench, agreement: &[(String, f64)]) -> String {
     s += &targets(bench);
     s += "## Contact only: Hertz + history + walls + gravity\n\n11 µm spheres (E = 1e9 Pa, e = 0.5, μ = 0.5), 300 / 3 000 / 30 000 particles placed at random and numbered along a Morton curve (`order = \"spatial\"`, as every bench scene: the engines read them in that order too), sparse (0.5 mm cube for 300, solid fraction 0.0017) and dense (0.1 mm cube for 300, solid fraction 0.21), the box edge scaled with N^(1/3); 3e7 particle-steps per run.\n\n";
     s += "| case | steps | magdem 1 thread (s) | magdem 2 threads (s) | LIGGGHTS (s) | LAMMPS (s) | magdem ÷ LIGGGHTS speed | magdem ÷ LAMMPS speed | 2 threads ÷ 1 | 1 and 2 threads bitwise equal |\n|---|---|---|---|---|---|---|---|---|---|\n";
-    let cases: Vec<String> = bench.measurements.iter().filter(|m| m.case.starts_with("contact ")).map(|m| m.case.clone()).fold(vec![], |mut v, c| {
-        if !v.contains(&c) {
-            v.push(c);
-        }
-        v
-    });
+    let cases: Vec<String> =
+        bench.measurements.iter().filter(|m| m.case.starts_with("contact ")).map(|m| m.case.clone()).fold(
+            vec![],
+            |mut v, c| {
+                if !v.contains(&c) {
+                    v.push(c);
+                }
+                v
+            },
+        );
     let ratio = |a: Option<&Measurement>, b: Option<&Measurement>| match (a, b) {
         (Some(a), Some(b)) => format!("{:.2}×", b.seconds.median / a.seconds.median),
         _ => "–".into(),
@@ -734,7 +887,13 @@ fn markdown(bench: &Bench, agreement: &[(String, f64)]) -> String {
     s += "\n|---|---|";
     s += &"---|".repeat(sizes.len());
     s += "\n";
-    for (case, threads) in [("scaling contact sparse", 1), ("scaling contact dense", 1), ("scaling contact dense", 2), ("scaling dipole cut-off 15 d", 1), ("scaling dipole cut-off 15 d", 2)] {
+    for (case, threads) in [
+        ("scaling contact sparse", 1),
+        ("scaling contact dense", 1),
+        ("scaling contact dense", 2),
+        ("scaling dipole cut-off 15 d", 1),
+        ("scaling dipole cut-off 15 d", 2),
+    ] {
         let _ = write!(s, "| {} | {threads} |", case.trim_start_matches("scaling "));
         for n in &sizes {
             let m = bench.measurements.iter().find(|m| m.case == case && m.threads == threads && m.particles == *n);
@@ -750,15 +909,24 @@ fn markdown(bench: &Bench, agreement: &[(String, f64)]) -> String {
     s += "\n";
     let _ = write!(s, "| dipole cut-off 15 d: ns per pair | 1 |");
     for n in &sizes {
-        let m = bench.measurements.iter().find(|m| m.case == "scaling dipole cut-off 15 d" && m.threads == 1 && m.particles == *n);
+        let m = bench
+            .measurements
+            .iter()
+            .find(|m| m.case == "scaling dipole cut-off 15 d" && m.threads == 1 && m.particles == *n);
         let _ = write!(s, " {} |", m.and_then(|m| bench.ns_per_pair(m)).map_or("–".into(), |ns| format!("{ns:.1} ns")));
     }
     s += "\n";
-    for (case, threads) in [("scaling contact sparse", 1), ("scaling contact dense", 1), ("scaling dipole cut-off 15 d", 1)] {
+    for (case, threads) in
+        [("scaling contact sparse", 1), ("scaling contact dense", 1), ("scaling dipole cut-off 15 d", 1)]
+    {
         let _ = write!(s, "| memory, {} | {threads} |", case.trim_start_matches("scaling "));
         for n in &sizes {
             let m = bench.memory.iter().find(|(c, k, _)| c == case && k == n);
-            let _ = write!(s, " {} |", m.filter(|(_, _, b)| *b > 0.0).map_or("–".into(), |(_, _, b)| format!("{:.0} B", b)));
+            let _ = write!(
+                s,
+                " {} |",
+                m.filter(|(_, _, b)| *b > 0.0).map_or("–".into(), |(_, _, b)| format!("{:.0} B", b))
+            );
         }
         s += "\n";
     }

@@ -27,9 +27,18 @@ pub fn experiment(files: &[PathBuf], options: &ExperimentOptions, dry_run: bool)
             let mut failed = false;
             for (experiment, results) in experiments.iter().zip(&all) {
                 failed |= report_outcomes(results);
-                println!("{}: {} runs in {} (manifest.csv)", experiment.spec.name, results.len(), experiment.output.display());
+                println!(
+                    "{}: {} runs in {} (manifest.csv)",
+                    experiment.spec.name,
+                    results.len(),
+                    experiment.output.display()
+                );
             }
-            if failed { ExitCode::from(1) } else { ExitCode::SUCCESS }
+            if failed {
+                ExitCode::from(1)
+            } else {
+                ExitCode::SUCCESS
+            }
         }
         Err(e) => fail(e, 1),
     }
@@ -39,7 +48,14 @@ pub fn experiment(files: &[PathBuf], options: &ExperimentOptions, dry_run: bool)
 fn list_points(experiments: &[Experiment]) {
     for e in experiments {
         for p in &e.points {
-            println!("{}/{}.h5  {} particles  {} steps  {}", e.output.display(), p.id, p.scene.initial.len(), p.scene.total_steps(), p.engine);
+            println!(
+                "{}/{}.h5  {} particles  {} steps  {}",
+                e.output.display(),
+                p.id,
+                p.scene.initial.len(),
+                p.scene.total_steps(),
+                p.engine
+            );
             for w in &p.scene.warnings {
                 println!("  warning: {w}");
             }

@@ -17,7 +17,14 @@ pub enum EngineChoice {
 
 /// Runs the scene at `path` into `output` with the chosen engine; `exchange_every` and `mpi`
 /// apply to the reference codes only.
-pub fn run(path: &Path, output: &Path, engine: EngineChoice, exchange_every: Option<u64>, mpi: usize, options: &RunOptions) -> ExitCode {
+pub fn run(
+    path: &Path,
+    output: &Path,
+    engine: EngineChoice,
+    exchange_every: Option<u64>,
+    mpi: usize,
+    options: &RunOptions,
+) -> ExitCode {
     let scene = match load(path) {
         Ok(s) => s,
         Err(code) => return code,
@@ -34,7 +41,9 @@ pub fn run(path: &Path, output: &Path, engine: EngineChoice, exchange_every: Opt
 fn run_reference(engine: Engine, scene: &Scene, output: &Path, exchange_every: Option<u64>, mpi: usize) -> ExitCode {
     let dir = output.with_extension(format!("{}.deck", engine.name()));
     let result = match exchange_every {
-        Some(every) => reference::run_binary(engine, scene, &dir, output, &Coupling::Files { magdem: current_exe(), every }, mpi),
+        Some(every) => {
+            reference::run_binary(engine, scene, &dir, output, &Coupling::Files { magdem: current_exe(), every }, mpi)
+        }
         None if mpi > 1 && scene.magnetic_force_field().is_some() => {
             eprintln!("error: --mpi {mpi}: magnetic forces reach MPI processes only by the files route; add --exchange-every K");
             return ExitCode::from(2);
@@ -44,7 +53,15 @@ fn run_reference(engine: Engine, scene: &Scene, output: &Path, exchange_every: O
     };
     match result {
         Ok(r) => {
-            println!("{}: {} frames from {} in {:.2} s (deck and dump in {}, log {})", output.display(), r.frames, engine.name(), r.wall_time.as_secs_f64(), dir.display(), r.log.display());
+            println!(
+                "{}: {} frames from {} in {:.2} s (deck and dump in {}, log {})",
+                output.display(),
+                r.frames,
+                engine.name(),
+                r.wall_time.as_secs_f64(),
+                dir.display(),
+                r.log.display()
+            );
             ExitCode::SUCCESS
         }
         Err(e) => {

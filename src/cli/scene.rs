@@ -53,7 +53,12 @@ pub fn deck(path: &Path, engine: Engine, output: &Path) -> ExitCode {
     };
     match reference::deck::write(engine, &scene, output) {
         Ok(deck) => {
-            println!("wrote {}, its fix.* include files and {} in {}", deck.input.display(), deck.data.display(), output.display());
+            println!(
+                "wrote {}, its fix.* include files and {} in {}",
+                deck.input.display(),
+                deck.data.display(),
+                output.display()
+            );
             ExitCode::SUCCESS
         }
         Err(e) => fail(e, 2),

@@ -93,7 +93,11 @@ fn print_report(time: f64, aggs: &[Aggregate], box_extent: f64, gap: f64) {
     let lengths: Vec<f64> = finite_lengths(aggs).iter().map(|l| l * 1e6).collect();
     let s = summary(&lengths);
     let (capped, percolating) = limited(aggs, box_extent);
-    println!("t = {time:e} s: {} aggregates of {} particles (gap tolerance {gap:e} of the smaller radius)", aggs.len(), aggs.iter().map(|a| a.size()).sum::<usize>());
+    println!(
+        "t = {time:e} s: {} aggregates of {} particles (gap tolerance {gap:e} of the smaller radius)",
+        aggs.len(),
+        aggs.iter().map(|a| a.size()).sum::<usize>()
+    );
     println!("length (µm): mean {:.2}, population std {:.2}, sample std {:.2}", s.mean, s.population_std, s.sample_std);
     println!(
         "box-limited: {capped} of {} aggregates ({:.1} %) reach {:.0} % of the box's {:.1} µm along the field or percolate; \
@@ -121,7 +125,18 @@ pub fn info(file: &Path) -> ExitCode {
 
 fn describe(path: &Path) -> Result<(), Error> {
     let t = Trajectory::open(path)?;
-    for key in ["format", "magdem_version", "git_commit", "engine", "integrator", "scene_name", "scene_sha256", "status", "status_message", "units"] {
+    for key in [
+        "format",
+        "magdem_version",
+        "git_commit",
+        "engine",
+        "integrator",
+        "scene_name",
+        "scene_sha256",
+        "status",
+        "status_message",
+        "units",
+    ] {
         println!("{key:<16} {}", t.attr_string(key)?);
     }
     println!("{:<16} {}", "particles", t.attr::<u64>("n_particles")?);
@@ -135,7 +150,14 @@ fn describe(path: &Path) -> Result<(), Error> {
         times.last().map_or("-".into(), |v| format!("{v:e}"))
     );
     let (state, frames) = t.checkpoint()?;
-    println!("{:<16} step {} (t = {:e} s) after frame {}, {} contacts", "checkpoint", state.step, state.time, frames, state.contacts.pairs.len());
+    println!(
+        "{:<16} step {} (t = {:e} s) after frame {}, {} contacts",
+        "checkpoint",
+        state.step,
+        state.time,
+        frames,
+        state.contacts.pairs.len()
+    );
     Ok(())
 }
 
@@ -156,7 +178,11 @@ pub fn export(files: &[PathBuf], format: ExportFormat, output: Option<&Path>) ->
         match written {
             Ok(out) => println!("{}: wrote {}", file.display(), out.display()),
             Err(e) => {
-                eprintln!("error: {}: {}", file.display(), e.to_string().split_whitespace().collect::<Vec<_>>().join(" "));
+                eprintln!(
+                    "error: {}: {}",
+                    file.display(),
+                    e.to_string().split_whitespace().collect::<Vec<_>>().join(" ")
+                );
                 return ExitCode::from(2);
             }
         }

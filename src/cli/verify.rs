@@ -13,7 +13,10 @@ pub fn contacts(report: &Path, work: &Path) -> ExitCode {
     let engines: Vec<Engine> = ENGINES.into_iter().filter(|e| e.available()).collect();
     if engines.len() < 2 {
         let missing: Vec<&str> = ENGINES.iter().filter(|e| !e.available()).map(|e| e.name()).collect();
-        eprintln!("note: reference engines missing ({}); their columns stay empty. `make setup` installs them.", missing.join(", "));
+        eprintln!(
+            "note: reference engines missing ({}); their columns stay empty. `make setup` installs them.",
+            missing.join(", ")
+        );
     }
     match magdem::verify::contacts::verify(report, work, &engines) {
         Ok(r) => {

@@ -41,8 +41,6 @@ impl Domain {
 
     /// Wall faces present (x-lo, x-hi, y-lo, ...), as (face index, axis, is_upper).
     pub fn walls(&self) -> impl Iterator<Item = (u8, usize, bool)> + '_ {
-        (0..3usize)
-            .filter(|&k| !self.periodic[k])
-            .flat_map(|k| [(2 * k as u8, k, false), (2 * k as u8 + 1, k, true)])
+        (0..3usize).filter(|&k| !self.periodic[k]).flat_map(|k| [(2 * k as u8, k, false), (2 * k as u8 + 1, k, true)])
     }
 }

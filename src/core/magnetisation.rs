@@ -112,7 +112,8 @@ impl Magnetisation {
         let mut field = std::mem::take(&mut self.field);
         field.clear();
         field.extend(p.position.iter().map(|x| self.external_field(x)));
-        let pair_fields = |k: usize| pair_dipole_fields(&moment[pairs[k].i as usize], &moment[pairs[k].j as usize], &pairs[k]);
+        let pair_fields =
+            |k: usize| pair_dipole_fields(&moment[pairs[k].i as usize], &moment[pairs[k].j as usize], &pairs[k]);
         parallel::add_in_order(pairs.len(), &mut self.pair_fields, pair_fields, |k, (on_i, on_j)| {
             field[pairs[k].i as usize] += on_i;
             field[pairs[k].j as usize] += on_j;
@@ -150,7 +151,13 @@ impl Magnetisation {
     }
 
     /// Fixed-point sweeps on `self.moments` (the current iterate).
-    fn iterate(&mut self, p: &Particles, pairs: &[Pair], tolerance: f64, max_iterations: usize) -> Result<(), InductionError> {
+    fn iterate(
+        &mut self,
+        p: &Particles,
+        pairs: &[Pair],
+        tolerance: f64,
+        max_iterations: usize,
+    ) -> Result<(), InductionError> {
         let mut residual = f64::INFINITY;
         let mut moments = std::mem::take(&mut self.moments);
         for iteration in 1..=max_iterations {
@@ -176,9 +183,7 @@ impl Magnetisation {
     /// Dense solve of (I − D T) m = m_perm + D H_ext (no saturation).
     fn solve_dense(&mut self, p: &Particles, pairs: &[Pair]) {
         let n = p.len();
-        let chi_v = |i: usize| {
-            self.susceptibility[p.species[i] as usize] * 4.0 / 3.0 * PI * p.radius[i].powi(3)
-        };
+        let chi_v = |i: usize| self.susceptibility[p.species[i] as usize] * 4.0 / 3.0 * PI * p.radius[i].powi(3);
         let mut a = faer::Mat::<f64>::identity(3 * n, 3 * n);
         let mut rhs = faer::Mat::<f64>::zeros(3 * n, 1);
         for i in 0..n {

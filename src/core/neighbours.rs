@@ -27,13 +27,7 @@ pub struct CellList {
 impl CellList {
     /// Fills `out` with every pair (i < j) closer than `range`, in (i, j) order. `range = None`
     /// means all pairs.
-    pub fn pairs_within(
-        &mut self,
-        positions: &[Vec3],
-        domain: &Domain,
-        range: Option<f64>,
-        out: &mut Vec<Pair>,
-    ) {
+    pub fn pairs_within(&mut self, positions: &[Vec3], domain: &Domain, range: Option<f64>, out: &mut Vec<Pair>) {
         out.clear();
         let n = positions.len();
         let Some(range) = range else {
@@ -164,7 +158,8 @@ impl VerletList {
         // map and reduce took three times as long on two threads (sparse 30 000 particles: 88–99
         // against 32–34 ms per 1 000 steps), more than on one.
         let any_moved = |xs: &[Vec3], x0s: &[Vec3]| xs.iter().zip(x0s).fold(false, |any, pair| any | moved(pair));
-        let moved_too_far = stale || parallel::any_share((positions, &self.reference[..]), |(xs, x0s)| any_moved(xs, x0s));
+        let moved_too_far =
+            stale || parallel::any_share((positions, &self.reference[..]), |(xs, x0s)| any_moved(xs, x0s));
         if moved_too_far {
             self.cells.pairs_within(positions, domain, Some(range + skin), &mut self.scratch);
             self.candidates.clear();
@@ -185,7 +180,14 @@ impl VerletList {
     /// Fills `out` with the pairs closer than `range` in (i, j) order; `skin` is the extra
     /// candidate distance (a larger skin rebuilds less often but filters more candidates).
     /// Returns whether the candidates were rebuilt.
-    pub fn pairs_within(&mut self, positions: &[Vec3], domain: &Domain, range: f64, skin: f64, out: &mut Vec<Pair>) -> bool {
+    pub fn pairs_within(
+        &mut self,
+        positions: &[Vec3],
+        domain: &Domain,
+        range: f64,
+        skin: f64,
+        out: &mut Vec<Pair>,
+    ) -> bool {
         let rebuilt = self.update(positions, domain, range, skin);
         // The filter gathers in the cell list's buffers (used only when it rebuilds).
         let (candidates, pieces) = (&self.candidates, &mut self.cells.pieces);
@@ -200,7 +202,14 @@ impl VerletList {
 
 /// The `candidates` closer than `range` into `out`, with their separation `displacement(x_i, x_j)`
 /// (generic, so that a box without periodic axes filters with a plain subtraction).
-fn filter(candidates: &[(u32, u32)], positions: &[Vec3], range: f64, out: &mut Vec<Pair>, pieces: &mut Pieces<Pair>, displacement: impl Fn(&Vec3, &Vec3) -> Vec3 + Sync) {
+fn filter(
+    candidates: &[(u32, u32)],
+    positions: &[Vec3],
+    range: f64,
+    out: &mut Vec<Pair>,
+    pieces: &mut Pieces<Pair>,
+    displacement: impl Fn(&Vec3, &Vec3) -> Vec3 + Sync,
+) {
     let range2 = range * range;
     parallel::collect_ordered_ranges(candidates.len(), out, pieces, |ks, out| {
         for &(i, j) in &candidates[ks] {
@@ -345,10 +354,15 @@ mod tests {
                 let got: Vec<(u32, u32)> = out.iter().map(|p| (p.i, p.j)).collect();
                 assert_eq!(got, brute(&pos, &domain, 0.15), "periodic {periodic:?}");
                 for p in &out {
-                    assert_eq!(p.r, domain.displacement(&pos[p.i as usize], &pos[p.j as usize]), "periodic {periodic:?}");
+                    assert_eq!(
+                        p.r,
+                        domain.displacement(&pos[p.i as usize], &pos[p.j as usize]),
+                        "periodic {periodic:?}"
+                    );
                 }
                 for x in pos.iter_mut() {
-                    *x += Vec3::new(rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5) * 0.004;
+                    *x += Vec3::new(rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5)
+                        * 0.004;
                     domain.wrap(x);
                     *x = x.zip_map(&domain.hi, |c, hi| c.clamp(0.0, hi));
                 }

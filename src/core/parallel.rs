@@ -46,13 +46,23 @@ impl<T> Default for Pieces<T> {
 
 /// Calls `f(k, out)` for k in 0..n, which may push items; the items end up in `out` in k order
 /// (in parallel chunks when worth it, gathered in `pieces` and then copied into place).
-pub fn collect_ordered<T: Copy + Default + Send + Sync>(n: usize, out: &mut Vec<T>, pieces: &mut Pieces<T>, f: impl Fn(usize, &mut Vec<T>) + Sync) {
+pub fn collect_ordered<T: Copy + Default + Send + Sync>(
+    n: usize,
+    out: &mut Vec<T>,
+    pieces: &mut Pieces<T>,
+    f: impl Fn(usize, &mut Vec<T>) + Sync,
+) {
     collect_ordered_ranges(n, out, pieces, |ks, out| ks.for_each(|k| f(k, out)))
 }
 
 /// [`collect_ordered`] with `f(ks, out)` called once per range of consecutive k (the chunks),
 /// for a caller whose loop over k should be its own.
-pub fn collect_ordered_ranges<T: Copy + Default + Send + Sync>(n: usize, out: &mut Vec<T>, pieces: &mut Pieces<T>, f: impl Fn(std::ops::Range<usize>, &mut Vec<T>) + Sync) {
+pub fn collect_ordered_ranges<T: Copy + Default + Send + Sync>(
+    n: usize,
+    out: &mut Vec<T>,
+    pieces: &mut Pieces<T>,
+    f: impl Fn(std::ops::Range<usize>, &mut Vec<T>) + Sync,
+) {
     if !worth_it(n) {
         out.clear();
         f(0..n, out);
@@ -193,7 +203,12 @@ pub fn any_share<S: Split>(parts: S, test: impl Fn(S) -> bool + Sync + Send) -> 
 
 /// `add(k, value(k))` for k in 0..n in k order, the values computed in parallel chunks (into
 /// `buffer`) when worth it: a pair sum whose accumulation order, and bits, stay serial.
-pub fn add_in_order<T: Send>(n: usize, buffer: &mut Vec<T>, value: impl Fn(usize) -> T + Sync + Send, mut add: impl FnMut(usize, T)) {
+pub fn add_in_order<T: Send>(
+    n: usize,
+    buffer: &mut Vec<T>,
+    value: impl Fn(usize) -> T + Sync + Send,
+    mut add: impl FnMut(usize, T),
+) {
     if worth_it(n) {
         map_ordered(n, buffer, value);
         buffer.drain(..).enumerate().for_each(|(k, v)| add(k, v));

@@ -34,7 +34,14 @@ impl ForceField {
     pub fn new(domain: Domain, mut terms: Vec<Box<dyn ForceTerm>>) -> Self {
         terms.sort_by_key(|t| !t.is_constant());
         let neighbours = Neighbours::new(terms.iter().filter_map(|t| t.pairs()));
-        Self { domain, terms, neighbours, timers: PhaseTimers::default(), evaluation_time: Duration::ZERO, induction_error: None }
+        Self {
+            domain,
+            terms,
+            neighbours,
+            timers: PhaseTimers::default(),
+            evaluation_time: Duration::ZERO,
+            induction_error: None,
+        }
     }
 
     /// The first induction failure since the last call, if any.

@@ -21,8 +21,8 @@
 use super::forces::contact::law::{ContactLaw, Normal};
 use super::forces::drag::Drag;
 use super::integrators::Scheme;
-use super::state::{Particles, Species, State, Vec3};
 use super::magnetisation::MU0;
+use super::state::{Particles, Species, State, Vec3};
 use std::f64::consts::PI;
 
 /// What the estimate needs to know about the scene.
@@ -148,7 +148,16 @@ impl StepEstimate {
                 limited_by = "drag relaxation";
             }
         }
-        Self { rayleigh_time, impact_speed, contact_duration, contact_bound, magnetic_bound, drag_relaxation_time, stable_dt, limited_by }
+        Self {
+            rayleigh_time,
+            impact_speed,
+            contact_duration,
+            contact_bound,
+            magnetic_bound,
+            drag_relaxation_time,
+            stable_dt,
+            limited_by,
+        }
     }
 
     pub fn summary(&self, dt: f64) -> String {
@@ -224,8 +233,12 @@ impl QuickTest {
         // position the wall test (infinite bounds included); an infinite velocity fails the
         // speed test, and an infinite position needs one a step earlier.
         let limit = self.travel * a;
-        let inside = (x.x >= self.lo.x - a) & (x.y >= self.lo.y - a) & (x.z >= self.lo.z - a)
-            & (x.x <= self.hi.x + a) & (x.y <= self.hi.y + a) & (x.z <= self.hi.z + a);
+        let inside = (x.x >= self.lo.x - a)
+            & (x.y >= self.lo.y - a)
+            & (x.z >= self.lo.z - a)
+            & (x.x <= self.hi.x + a)
+            & (x.y <= self.hi.y + a)
+            & (x.z <= self.hi.z + a);
         !(v.norm_squared() <= limit * limit) | !inside
     }
 }
@@ -236,7 +249,12 @@ impl Monitor {
         let d = state.diagnostics;
         if d.max_overlap_ratio > self.max_overlap {
             let j = d.max_overlap_pair.1.map_or("the wall".to_string(), |j| j.to_string());
-            return Err(Instability::Overlap { i: d.max_overlap_pair.0, j, ratio: d.max_overlap_ratio, limit: self.max_overlap });
+            return Err(Instability::Overlap {
+                i: d.max_overlap_pair.0,
+                j,
+                ratio: d.max_overlap_ratio,
+                limit: self.max_overlap,
+            });
         }
         // A cheap test per particle; the failing particle (the first, for any thread count) is
         // then examined to say what went wrong.
@@ -249,7 +267,9 @@ impl Monitor {
         let particles = || p.position.iter().zip(&p.velocity).zip(&p.radius);
         // Branch-free test of all particles first; the first failing one is looked for only then.
         let parts = (&p.position[..], &p.velocity[..], &p.radius[..]);
-        let any = super::parallel::any_share(parts, |(x, v, a)| x.iter().zip(v).zip(a).fold(false, |out, item| out | suspect(item)));
+        let any = super::parallel::any_share(parts, |(x, v, a)| {
+            x.iter().zip(v).zip(a).fold(false, |out, item| out | suspect(item))
+        });
         let first = if any { particles().position(suspect) } else { None };
         match first {
             Some(i) => Err(self.diagnose(state, i, domain, dt)),
@@ -280,7 +300,15 @@ impl Monitor {
         let x = p.position[i];
         let (_, k, upper) = domain
             .walls()
-            .find(|&(_, k, upper)| if upper { x[k] - domain.hi[k] > p.radius[i] } else { domain.lo[k] - x[k] > p.radius[i] })
+            .find(
+                |&(_, k, upper)| {
+                    if upper {
+                        x[k] - domain.hi[k] > p.radius[i]
+                    } else {
+                        domain.lo[k] - x[k] > p.radius[i]
+                    }
+                },
+            )
             .expect("a particle that failed the check is outside a wall");
         let face = format!("{}-{}", ["x", "y", "z"][k], if upper { "hi" } else { "lo" });
         Instability::Escaped { particle: i, face, position: [x.x, x.y, x.z] }

@@ -344,7 +344,10 @@ mod tests {
         let mut p = Particles::default();
         p.push(0, &small, Vec3::zeros(), Vec3::zeros());
         p.push(0, &small, Vec3::zeros(), Vec3::zeros());
-        assert_eq!(p.inverse_masses, InverseMasses::Uniform { mass: 1.0 / small.mass(), inertia: 1.0 / small.inertia() });
+        assert_eq!(
+            p.inverse_masses,
+            InverseMasses::Uniform { mass: 1.0 / small.mass(), inertia: 1.0 / small.inertia() }
+        );
         p.push(1, &large, Vec3::zeros(), Vec3::zeros());
         let InverseMasses::PerParticle { mass, inertia } = &p.inverse_masses else { panic!("{:?}", p.inverse_masses) };
         assert_eq!(mass, &[1.0 / small.mass(), 1.0 / small.mass(), 1.0 / large.mass()]);

@@ -12,7 +12,8 @@ use std::path::{Path, PathBuf};
 type Error = Box<dyn std::error::Error>;
 
 /// Per-frame vector datasets described in the sidecar, with their XDMF attribute names.
-const VECTORS: [(&str, &str); 3] = [("velocity", "velocity"), ("angular_velocity", "angular_velocity"), ("moment", "moment")];
+const VECTORS: [(&str, &str); 3] =
+    [("velocity", "velocity"), ("angular_velocity", "angular_velocity"), ("moment", "moment")];
 
 /// `path` with its extension replaced by `ext`.
 pub fn beside(path: &Path, ext: &str) -> PathBuf {
@@ -53,7 +54,11 @@ pub fn write_xdmf(h5: &Path) -> Result<PathBuf, Error> {
             slab(file, "position", k, frames, n)
         );
         for (name, label) in VECTORS {
-            let _ = writeln!(x, "<Attribute Name=\"{label}\" AttributeType=\"Vector\" Center=\"Node\">{}</Attribute>", slab(file, name, k, frames, n));
+            let _ = writeln!(
+                x,
+                "<Attribute Name=\"{label}\" AttributeType=\"Vector\" Center=\"Node\">{}</Attribute>",
+                slab(file, name, k, frames, n)
+            );
         }
         x += "</Grid>\n";
     }
@@ -74,8 +79,15 @@ pub fn write_lammps_dump(h5: &Path, out: &Path) -> Result<(), Error> {
     let bounds: Vec<&str> = d.periodic.iter().map(|&p| if p { "pp" } else { "ff" }).collect();
     let mut text = String::new();
     for k in 0..frames {
-        let (x, v, m) = (t.frame_vectors("position", k)?, t.frame_vectors("velocity", k)?, t.frame_vectors("moment", k)?);
-        let _ = writeln!(text, "ITEM: TIMESTEP\n{}\nITEM: NUMBER OF ATOMS\n{}\nITEM: BOX BOUNDS {}", steps[k], x.len(), bounds.join(" "));
+        let (x, v, m) =
+            (t.frame_vectors("position", k)?, t.frame_vectors("velocity", k)?, t.frame_vectors("moment", k)?);
+        let _ = writeln!(
+            text,
+            "ITEM: TIMESTEP\n{}\nITEM: NUMBER OF ATOMS\n{}\nITEM: BOX BOUNDS {}",
+            steps[k],
+            x.len(),
+            bounds.join(" ")
+        );
         for a in 0..3 {
             let _ = writeln!(text, "{:e} {:e}", d.lo[a], d.hi[a]);
         }

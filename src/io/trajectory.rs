@@ -79,12 +79,7 @@ fn extendible<T: hdf5::H5Type>(group: &Group, name: &str, tail: &[usize], units:
     if tail.is_empty() {
         chunk[0] = 1024;
     }
-    let ds = group
-        .new_dataset::<T>()
-        .shape(SimpleExtents::from_vec(extents))
-        .chunk(chunk)
-        .deflate(4)
-        .create(name)?;
+    let ds = group.new_dataset::<T>().shape(SimpleExtents::from_vec(extents)).chunk(chunk).deflate(4).create(name)?;
     write_str_attr(&ds, "units", units)?;
     Ok(ds)
 }
@@ -98,12 +93,8 @@ fn rows_vec3(a: &Array2<f64>) -> Vec<Vec3> {
 }
 
 /// Per-frame datasets: (name, units).
-const FRAME_VECTORS: [(&str, &str); 4] = [
-    ("position", "m"),
-    ("velocity", "m/s"),
-    ("angular_velocity", "rad/s"),
-    ("moment", "A m^2"),
-];
+const FRAME_VECTORS: [(&str, &str); 4] =
+    [("position", "m"), ("velocity", "m/s"), ("angular_velocity", "rad/s"), ("moment", "A m^2")];
 const FORCE_VECTORS: [(&str, &str); 2] = [("force", "N"), ("torque", "N m")];
 /// Metadata of a run, written at the root.
 pub struct RunInfo<'a> {
@@ -306,9 +297,14 @@ impl TrajectoryWriter {
                 ck.dataset(name)?.write(&vec3_rows(vector))?;
             }
             let (pairs, walls) = (&state.contacts.pairs, &state.contacts.walls);
-            let keys = Array2::from_shape_fn((pairs.len(), 2), |(r, c)| if c == 0 { pairs[r].0 .0 } else { pairs[r].0 .1 });
+            let keys =
+                Array2::from_shape_fn((pairs.len(), 2), |(r, c)| if c == 0 { pairs[r].0 .0 } else { pairs[r].0 .1 });
             let shear = vec3_rows(&pairs.iter().map(|p| p.1).collect::<Vec<_>>());
-            let wkeys = Array2::from_shape_fn((walls.len(), 2), |(r, c)| if c == 0 { walls[r].0 .0 } else { walls[r].0 .1 as u32 });
+            let wkeys =
+                Array2::from_shape_fn(
+                    (walls.len(), 2),
+                    |(r, c)| if c == 0 { walls[r].0 .0 } else { walls[r].0 .1 as u32 },
+                );
             let wshear = vec3_rows(&walls.iter().map(|p| p.1).collect::<Vec<_>>());
             for (name, data) in [("pair_keys", &keys), ("wall_keys", &wkeys)] {
                 let ds = ck.dataset(name)?;
@@ -333,7 +329,12 @@ impl TrajectoryWriter {
 
     /// Records how the run ended and adds `wall_time` to the file's `wall_time_s` (summed over
     /// resumed pieces).
-    pub fn finish(&self, run_status: &str, message: &str, wall_time: std::time::Duration) -> Result<(), TrajectoryError> {
+    pub fn finish(
+        &self,
+        run_status: &str,
+        message: &str,
+        wall_time: std::time::Duration,
+    ) -> Result<(), TrajectoryError> {
         (|| -> H5Result<()> {
             write_str_attr(&self.file, "status", run_status)?;
             write_str_attr(&self.file, "status_message", message)?;

@@ -12,8 +12,9 @@
 use super::{Engine, ReferenceError};
 use crate::core::forces::contact::PairMaterial;
 use crate::scene::{
-    Boundary, BoundarySpec, ContactSpec, DipoleSpec, DomainSpec, DragLawSpec, DragSpec, FieldSpec, FluidSpec, ForcesSpec, GradientSpec, GravitySpec, IntegrationSpec,
-    NormalSpec, OutputSpec, ParticleGroupSpec, Scene, SceneSpec, ShieldingSpec, SpeciesSpec, StabilitySpec, TangentialSpec,
+    Boundary, BoundarySpec, ContactSpec, DipoleSpec, DomainSpec, DragLawSpec, DragSpec, FieldSpec, FluidSpec,
+    ForcesSpec, GradientSpec, GravitySpec, IntegrationSpec, NormalSpec, OutputSpec, ParticleGroupSpec, Scene,
+    SceneSpec, ShieldingSpec, SpeciesSpec, StabilitySpec, TangentialSpec,
 };
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -85,7 +86,16 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
         stability,
     } = &scene.spec;
     for group in particles {
-        let ParticleGroupSpec { species: _, positions: _, velocities: _, angular_velocities: _, count: _, concentration: _, region: _, order: _ } = group;
+        let ParticleGroupSpec {
+            species: _,
+            positions: _,
+            velocities: _,
+            angular_velocities: _,
+            count: _,
+            concentration: _,
+            region: _,
+            order: _,
+        } = group;
     }
     for boundary in [x, y, z] {
         match boundary {
@@ -99,7 +109,15 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
     // cut-off and iteration settings) and the dipole and gradient forces, and hands them to
     // fix.magnetic (`fix external` in process, `fix addforce` by the files route).
     if let Some(FieldSpec { b0: _, gradient: _ }) = field {}
-    if let Some(DipoleSpec { induction: _, cutoff_diameters: _, paper_radius_diameters: _, tolerance: _, max_iterations: _, dense_max: _ }) = dipole {}
+    if let Some(DipoleSpec {
+        induction: _,
+        cutoff_diameters: _,
+        paper_radius_diameters: _,
+        tolerance: _,
+        max_iterations: _,
+        dense_max: _,
+    }) = dipole
+    {}
     if let Some(GradientSpec {}) = gradient {}
     // The engines integrate with nve/sphere (velocity Verlet) at dt up to end_time whatever the
     // scheme; their trajectories' `integrator` attribute says so.
@@ -115,7 +133,11 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
     if let Some(GravitySpec { g: _ }) = gravity {
         // fix gravity: |g| (1 − ρ_f/ρ_p) along g, one ρ_p for all.
         if species.iter().any(|s| s.density != species[0].density) {
-            return Err(unsupported(engine, "forces.gravity with species of different densities", "fix gravity applies one buoyancy-reduced g to all"));
+            return Err(unsupported(
+                engine,
+                "forces.gravity with species of different densities",
+                "fix gravity applies one buoyancy-reduced g to all",
+            ));
         }
     }
     let walls = scene.domain.walls().next().is_some();
@@ -125,17 +147,29 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
         match normal {
             NormalSpec::Hertz => {}
             NormalSpec::Hooke => {
-                return Err(unsupported(engine, "forces.contact.normal = \"hooke\"", "the decks write the Hertz law calibrated against magdem's"))
+                return Err(unsupported(
+                    engine,
+                    "forces.contact.normal = \"hooke\"",
+                    "the decks write the Hertz law calibrated against magdem's",
+                ))
             }
         }
         match tangential {
             TangentialSpec::Mindlin => {}
             TangentialSpec::None => {
-                return Err(unsupported(engine, "forces.contact.tangential = \"none\"", "the decks write Mindlin's spring with history"))
+                return Err(unsupported(
+                    engine,
+                    "forces.contact.tangential = \"none\"",
+                    "the decks write Mindlin's spring with history",
+                ))
             }
         }
         if !with_walls && walls {
-            return Err(unsupported(engine, "forces.contact.walls = false", "the decks always put granular walls on wall faces"));
+            return Err(unsupported(
+                engine,
+                "forces.contact.walls = false",
+                "the decks always put granular walls on wall faces",
+            ));
         }
     }
     Ok(())
@@ -148,15 +182,29 @@ fn check_drag(engine: Engine, drag: &DragSpec, fluid_velocity: Option<&[f64; 3]>
     match law {
         DragLawSpec::Stokes => {}
         DragLawSpec::SchillerNaumann => {
-            return Err(unsupported(engine, "forces.drag.law = \"schiller-naumann\"", "fix viscous applies linear (Stokes) drag only"))
+            return Err(unsupported(
+                engine,
+                "forces.drag.law = \"schiller-naumann\"",
+                "fix viscous applies linear (Stokes) drag only",
+            ))
         }
     }
     match shielding {
         ShieldingSpec::None => {}
-        ShieldingSpec::Paper => return Err(unsupported(engine, "forces.drag.shielding = \"paper\"", "fix viscous has no per-particle shielded area")),
+        ShieldingSpec::Paper => {
+            return Err(unsupported(
+                engine,
+                "forces.drag.shielding = \"paper\"",
+                "fix viscous has no per-particle shielded area",
+            ))
+        }
     }
     if *rotational {
-        return Err(unsupported(engine, "forces.drag.rotational = true", "neither build can apply a torque from a fix (no addtorque)"));
+        return Err(unsupported(
+            engine,
+            "forces.drag.rotational = true",
+            "neither build can apply a torque from a fix (no addtorque)",
+        ));
     }
     if fluid_velocity.is_some_and(|v| *v != [0.0; 3]) {
         return Err(unsupported(engine, "fluid.velocity", "fix viscous drags towards rest only"));
@@ -197,8 +245,14 @@ fn check_species(engine: Engine, species: &[SpeciesSpec], wall_contacts: bool) -
     if engine == Engine::Liggghts && species.iter().any(|s| s.restitution <= 0.05) {
         return Err(unsupported(engine, "species.restitution ≤ 0.05", "LIGGGHTS requires 0.05 < e ≤ 1"));
     }
-    if engine == Engine::Lammps && species.iter().any(|s| s.restitution < 1.0 && lammps_tsuji_input(s.restitution).is_none()) {
-        return Err(unsupported(engine, "species.restitution below 0.11", "LAMMPS' tsuji damping cannot reach LIGGGHTS' damping there"));
+    if engine == Engine::Lammps
+        && species.iter().any(|s| s.restitution < 1.0 && lammps_tsuji_input(s.restitution).is_none())
+    {
+        return Err(unsupported(
+            engine,
+            "species.restitution below 0.11",
+            "LAMMPS' tsuji damping cannot reach LIGGGHTS' damping there",
+        ));
     }
     Ok(())
 }
@@ -220,12 +274,21 @@ pub fn write(engine: Engine, scene: &Scene, dir: &Path) -> Result<WrittenDeck, R
 }
 
 /// Writes the deck with the given coupling of the magnetic forces.
-pub fn write_with(engine: Engine, scene: &Scene, dir: &Path, coupling: &Coupling) -> Result<WrittenDeck, ReferenceError> {
+pub fn write_with(
+    engine: Engine,
+    scene: &Scene,
+    dir: &Path,
+    coupling: &Coupling,
+) -> Result<WrittenDeck, ReferenceError> {
     check(engine, scene)?;
     std::fs::create_dir_all(dir)?;
     if let Coupling::Files { every, .. } = coupling {
         if *every == 0 || scene.total_steps() % every != 0 {
-            return Err(unsupported(engine, "the files route", &format!("the exchange interval ({every} steps) must divide the run ({} steps)", scene.total_steps())));
+            return Err(unsupported(
+                engine,
+                "the files route",
+                &format!("the exchange interval ({every} steps) must divide the run ({} steps)", scene.total_steps()),
+            ));
         }
         std::fs::write(dir.join(SCENE_COPY), &scene.text)?;
     }
@@ -267,7 +330,17 @@ fn data_file(scene: &Scene) -> String {
     for i in 0..p.len() {
         let sp = &scene.species[p.species[i] as usize];
         let x = p.position[i];
-        let _ = writeln!(s, "{} {} {:.17e} {:.17e} {:.17e} {:.17e} {:.17e}", i + 1, p.species[i] + 1, 2.0 * p.radius[i], sp.density, x.x, x.y, x.z);
+        let _ = writeln!(
+            s,
+            "{} {} {:.17e} {:.17e} {:.17e} {:.17e} {:.17e}",
+            i + 1,
+            p.species[i] + 1,
+            2.0 * p.radius[i],
+            sp.density,
+            x.x,
+            x.y,
+            x.z
+        );
     }
     s += "\nVelocities\n\n";
     for i in 0..p.len() {
@@ -303,12 +376,22 @@ fn input_deck(engine: Engine, scene: &Scene, data: &Path, dump: &str, coupling: 
     let atom_style = if engine == Engine::Liggghts { "granular" } else { "sphere" };
     let comm = if engine == Engine::Liggghts { "communicate single vel yes" } else { "comm_modify vel yes" };
     let _ = writeln!(s, "units si\natom_style {atom_style}\natom_modify map array sort 0 0");
-    let _ = writeln!(s, "boundary {} {} {}\nnewton off\n{comm}", bflag(periodic[0]), bflag(periodic[1]), bflag(periodic[2]));
+    let _ = writeln!(
+        s,
+        "boundary {} {} {}\nnewton off\n{comm}",
+        bflag(periodic[0]),
+        bflag(periodic[1]),
+        bflag(periodic[2])
+    );
     if engine == Engine::Liggghts && species.iter().any(|s| s.youngs_modulus > 1e9 || s.youngs_modulus < 5e6) {
         s += "# LIGGGHTS checks 5e6 <= E <= 1e9 unless told otherwise\nhard_particles yes\n";
     }
     let _ = writeln!(s, "read_data {}", data.display());
-    let _ = writeln!(s, "\n# Neighbour skin scaled to the particle size (0.2 diameters).\nneighbor {:.6e} bin", 0.2 * largest_d);
+    let _ = writeln!(
+        s,
+        "\n# Neighbour skin scaled to the particle size (0.2 diameters).\nneighbor {:.6e} bin",
+        0.2 * largest_d
+    );
     match engine {
         // LIGGGHTS resets a pair's shear history only while the pair is within
         // contact_distance_factor x (r_i + r_j) but not touching; at its default 1.0 that never
@@ -363,7 +446,11 @@ fn input_deck(engine: Engine, scene: &Scene, data: &Path, dump: &str, coupling: 
 }
 
 fn format_keyword(engine: Engine) -> &'static str {
-    if engine == Engine::Liggghts { "format" } else { "format line" }
+    if engine == Engine::Liggghts {
+        "format"
+    } else {
+        "format line"
+    }
 }
 
 /// Materials, pair style and walls.
@@ -377,12 +464,24 @@ fn contact_section(engine: Engine, scene: &Scene) -> String {
     s += "# Contact: Hertz normal, Mindlin tangential with history and Coulomb limit, damping from restitution.\n";
     match engine {
         Engine::Liggghts => {
-            let list = |f: &dyn Fn(usize) -> f64| (0..n_types).map(|k| format!("{:e}", f(k))).collect::<Vec<_>>().join(" ");
+            let list =
+                |f: &dyn Fn(usize) -> f64| (0..n_types).map(|k| format!("{:e}", f(k))).collect::<Vec<_>>().join(" ");
             let matrix = |f: &dyn Fn(usize, usize) -> f64| {
-                (0..n_types * n_types).map(|k| format!("{:e}", f(k / n_types, k % n_types))).collect::<Vec<_>>().join(" ")
+                (0..n_types * n_types)
+                    .map(|k| format!("{:e}", f(k / n_types, k % n_types)))
+                    .collect::<Vec<_>>()
+                    .join(" ")
             };
-            let _ = writeln!(s, "fix m1 all property/global youngsModulus peratomtype {}", list(&|k| species[k].youngs_modulus));
-            let _ = writeln!(s, "fix m2 all property/global poissonsRatio peratomtype {}", list(&|k| species[k].poisson_ratio));
+            let _ = writeln!(
+                s,
+                "fix m1 all property/global youngsModulus peratomtype {}",
+                list(&|k| species[k].youngs_modulus)
+            );
+            let _ = writeln!(
+                s,
+                "fix m2 all property/global poissonsRatio peratomtype {}",
+                list(&|k| species[k].poisson_ratio)
+            );
             let _ = writeln!(
                 s,
                 "fix m3 all property/global coefficientRestitution peratomtypepair {n_types} {}",
@@ -399,13 +498,20 @@ fn contact_section(engine: Engine, scene: &Scene) -> String {
             s += "# (E, nu) per pair solved so LAMMPS' effective moduli equal magdem's; tsuji input calibrated.\npair_style granular\n";
             for a in 0..n_types {
                 for b in a..n_types {
-                    let _ = writeln!(s, "pair_coeff {} {} {}", a + 1, b + 1, lammps_granular_model(&species[a], &species[b], false));
+                    let _ = writeln!(
+                        s,
+                        "pair_coeff {} {} {}",
+                        a + 1,
+                        b + 1,
+                        lammps_granular_model(&species[a], &species[b], false)
+                    );
                 }
             }
         }
     }
     let d = &scene.domain;
-    let walls: Vec<(usize, &str)> = (0..3).filter(|&k| !d.periodic[k]).map(|k| (k, ["xplane", "yplane", "zplane"][k])).collect();
+    let walls: Vec<(usize, &str)> =
+        (0..3).filter(|&k| !d.periodic[k]).map(|k| (k, ["xplane", "yplane", "zplane"][k])).collect();
     if !walls.is_empty() {
         s += "# Walls: planes of infinite radius and mass, of the first species' material.\n";
     }
@@ -417,7 +523,11 @@ fn contact_section(engine: Engine, scene: &Scene) -> String {
                 let _ = writeln!(s, "fix wall_{plane}_hi all wall/gran model hertz tangential history primitive type 1 {plane} {hi:.17e}");
             }
             Engine::Lammps => {
-                let _ = writeln!(s, "fix wall_{plane} all wall/gran granular {} {plane} {lo:.17e} {hi:.17e}", lammps_granular_model(&species[0], &species[0], true));
+                let _ = writeln!(
+                    s,
+                    "fix wall_{plane} all wall/gran granular {} {plane} {lo:.17e} {hi:.17e}",
+                    lammps_granular_model(&species[0], &species[0], true)
+                );
             }
         }
     }
@@ -497,7 +607,10 @@ fn lammps_granular_model(a: &crate::core::state::Species, b: &crate::core::state
         let e_in = lammps_tsuji_input(restitution).expect("checked by deck::check");
         format!("{e_in:.17e} {{nu}} tangential mindlin NULL {x_t:.17e} {{mu}} damping tsuji")
     };
-    format!("hertz/material {e_mod:.17e} {}", damping.replace("{nu}", &format!("{nu:.17e}")).replace("{mu}", &m.friction.to_string()))
+    format!(
+        "hertz/material {e_mod:.17e} {}",
+        damping.replace("{nu}", &format!("{nu:.17e}")).replace("{mu}", &m.friction.to_string())
+    )
 }
 
 #[cfg(test)]
@@ -551,7 +664,9 @@ mod tests {
             let mut node = &mut root;
             for part in path {
                 node = match node {
-                    toml::Value::Table(t) => t.entry(part.to_string()).or_insert_with(|| toml::Value::Table(toml::Table::new())),
+                    toml::Value::Table(t) => {
+                        t.entry(part.to_string()).or_insert_with(|| toml::Value::Table(toml::Table::new()))
+                    }
                     toml::Value::Array(a) => &mut a[part.parse::<usize>().expect("an index")],
                     other => panic!("{key}: {other} is neither a table nor an array"),
                 };
@@ -572,7 +687,10 @@ mod tests {
     /// The deck's text: in.scene and every file it includes.
     fn deck_text(dir: &Path, deck: &WrittenDeck) -> String {
         let main = std::fs::read_to_string(dir.join(&deck.input)).unwrap();
-        let includes = main.lines().filter_map(|l| l.strip_prefix("include ")).map(|name| std::fs::read_to_string(dir.join(name)).unwrap());
+        let includes = main
+            .lines()
+            .filter_map(|l| l.strip_prefix("include "))
+            .map(|name| std::fs::read_to_string(dir.join(name)).unwrap());
         std::iter::once(main.clone()).chain(includes).collect::<Vec<_>>().join("\n")
     }
 
@@ -598,7 +716,13 @@ mod tests {
             ("integration", true, "fix integrate all nve/sphere"),
         ];
         for (term, present, line) in lines {
-            assert_eq!(text.contains(line), present, "{label}, {}: {term} {} `{line}`", engine.name(), if present { "lacks" } else { "has" });
+            assert_eq!(
+                text.contains(line),
+                present,
+                "{label}, {}: {term} {} `{line}`",
+                engine.name(),
+                if present { "lacks" } else { "has" }
+            );
         }
     }
 
@@ -618,12 +742,23 @@ mod tests {
         let b = |v: bool| Some(Value::Boolean(v));
         let v3 = |v: [f64; 3]| Some(Value::Array(v.iter().map(|&x| Value::Float(x)).collect()));
         let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/scenes");
-        let mut files: Vec<PathBuf> = std::fs::read_dir(&scenes).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|x| x == "toml")).collect();
+        let mut files: Vec<PathBuf> = std::fs::read_dir(&scenes)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+            .collect();
         files.sort();
         assert!(!files.is_empty(), "no scenes in {}", scenes.display());
         for file in files {
             let shipped: toml::Table = toml::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
-            let base = edited(&shipped, &[("forces.drag.law", s("stokes")), ("forces.drag.shielding", s("none")), ("forces.drag.rotational", b(false))]);
+            let base = edited(
+                &shipped,
+                &[
+                    ("forces.drag.law", s("stokes")),
+                    ("forces.drag.shielding", s("none")),
+                    ("forces.drag.rotational", b(false)),
+                ],
+            );
             let walls = Scene::parse(&toml::to_string(&base).unwrap(), "base").unwrap().domain.walls().next().is_some();
             let species = |edits: &[(&str, Option<Value>)]| {
                 let mut other = edited(base["species"].as_array().unwrap()[0].as_table().unwrap(), edits);
@@ -632,51 +767,130 @@ mod tests {
             };
             let on_walls = |term| if walls { Some(term) } else { None };
             // (Periodic variants drop the dipole term, whose ranges must stay below half the box.)
-            let periodic = Some(Value::Table(["x", "y", "z"].iter().map(|k| (k.to_string(), Value::String("periodic".into()))).collect()));
+            let periodic = Some(Value::Table(
+                ["x", "y", "z"].iter().map(|k| (k.to_string(), Value::String("periodic".into()))).collect(),
+            ));
             let variants: Vec<Variant> = vec![
                 ("expressible", vec![], [None, None]),
-                ("Schiller-Naumann drag", vec![("forces.drag.law", s("schiller-naumann"))], [Some("forces.drag.law"); 2]),
+                (
+                    "Schiller-Naumann drag",
+                    vec![("forces.drag.law", s("schiller-naumann"))],
+                    [Some("forces.drag.law"); 2],
+                ),
                 ("shielded drag", vec![("forces.drag.shielding", s("paper"))], [Some("forces.drag.shielding"); 2]),
                 ("rotational drag", vec![("forces.drag.rotational", b(true))], [Some("forces.drag.rotational"); 2]),
                 ("drag touch tolerance", vec![("forces.drag.touch_tolerance", f(1e-2))], [None, None]),
                 ("no drag", vec![("forces.drag", None)], [None, None]),
                 ("moving fluid", vec![("fluid.velocity", v3([1e-4, 0.0, 0.0]))], [Some("fluid.velocity"); 2]),
-                ("moving fluid, no drag", vec![("forces.drag", None), ("fluid.velocity", v3([1e-4, 0.0, 0.0]))], [None, None]),
+                (
+                    "moving fluid, no drag",
+                    vec![("forces.drag", None), ("fluid.velocity", v3([1e-4, 0.0, 0.0]))],
+                    [None, None],
+                ),
                 ("gravity along y", vec![("forces.gravity.g", v3([0.0, -9.81, 0.0]))], [None, None]),
                 ("no gravity", vec![("forces.gravity", None)], [None, None]),
-                ("gravity, two densities", vec![("forces.gravity.g", v3([0.0, 0.0, -9.81])), ("species.+", species(&[("density", f(2000.0))]))], [Some("forces.gravity"); 2]),
-                ("two materials", vec![("species.+", species(&[("youngs_modulus", f(2e9))]))], [on_walls("walls with species of different materials"); 2]),
-                ("two materials, periodic", vec![("species.+", species(&[("youngs_modulus", f(2e9))])), ("domain.boundary", periodic.clone()), ("forces.dipole", None)], [None, None]),
-                ("permanent moment", vec![("species.0.permanent_moment", v3([1e-15, 0.0, 0.0]))], [Some("species.permanent_moment"); 2]),
+                (
+                    "gravity, two densities",
+                    vec![
+                        ("forces.gravity.g", v3([0.0, 0.0, -9.81])),
+                        ("species.+", species(&[("density", f(2000.0))])),
+                    ],
+                    [Some("forces.gravity"); 2],
+                ),
+                (
+                    "two materials",
+                    vec![("species.+", species(&[("youngs_modulus", f(2e9))]))],
+                    [on_walls("walls with species of different materials"); 2],
+                ),
+                (
+                    "two materials, periodic",
+                    vec![
+                        ("species.+", species(&[("youngs_modulus", f(2e9))])),
+                        ("domain.boundary", periodic.clone()),
+                        ("forces.dipole", None),
+                    ],
+                    [None, None],
+                ),
+                (
+                    "permanent moment",
+                    vec![("species.0.permanent_moment", v3([1e-15, 0.0, 0.0]))],
+                    [Some("species.permanent_moment"); 2],
+                ),
                 ("restitution 0.04", vec![("species.0.restitution", f(0.04))], [Some("species.restitution"); 2]),
                 ("restitution 0.08", vec![("species.0.restitution", f(0.08))], [None, Some("species.restitution")]),
                 ("elastic", vec![("species.0.restitution", f(1.0))], [None, None]),
-                ("saturation", vec![("species.0.saturation_magnetisation", f(4.8e5)), ("species.0.saturation_law", s("frohlich-kennelly"))], [None, None]),
+                (
+                    "saturation",
+                    vec![
+                        ("species.0.saturation_magnetisation", f(4.8e5)),
+                        ("species.0.saturation_law", s("frohlich-kennelly")),
+                    ],
+                    [None, None],
+                ),
                 ("no wall contacts", vec![("forces.contact.walls", b(false))], [on_walls("forces.contact.walls"); 2]),
-                ("no wall contacts, periodic", vec![("forces.contact.walls", b(false)), ("domain.boundary", periodic.clone()), ("forces.dipole", None)], [None, None]),
+                (
+                    "no wall contacts, periodic",
+                    vec![
+                        ("forces.contact.walls", b(false)),
+                        ("domain.boundary", periodic.clone()),
+                        ("forces.dipole", None),
+                    ],
+                    [None, None],
+                ),
                 ("no contact", vec![("forces.contact", None)], [None, None]),
-                ("Hooke contact", vec![("forces.contact.normal", s("hooke")), ("forces.contact.stiffness", f(1e3))], [Some("forces.contact.normal"); 2]),
-                ("frictionless contact", vec![("forces.contact.tangential", s("none"))], [Some("forces.contact.tangential"); 2]),
+                (
+                    "Hooke contact",
+                    vec![("forces.contact.normal", s("hooke")), ("forces.contact.stiffness", f(1e3))],
+                    [Some("forces.contact.normal"); 2],
+                ),
+                (
+                    "frictionless contact",
+                    vec![("forces.contact.tangential", s("none"))],
+                    [Some("forces.contact.tangential"); 2],
+                ),
                 ("induction none", vec![("forces.dipole.induction", s("none"))], [None, None]),
                 ("induction exact", vec![("forces.dipole.induction", s("exact"))], [None, None]),
-                ("gradient only", vec![("forces.dipole", None), ("forces.gradient", Some(Value::Table(toml::Table::new())))], [None, None]),
+                (
+                    "gradient only",
+                    vec![("forces.dipole", None), ("forces.gradient", Some(Value::Table(toml::Table::new())))],
+                    [None, None],
+                ),
                 ("no magnetic term", vec![("forces.dipole", None), ("forces.gradient", None)], [None, None]),
                 ("semi-implicit Euler", vec![("integration.scheme", s("semi-implicit-euler"))], [None, None]),
-                ("no forces or contacts stored", vec![("output.forces", b(false)), ("output.contacts", b(false))], [None, None]),
+                (
+                    "no forces or contacts stored",
+                    vec![("output.forces", b(false)), ("output.contacts", b(false))],
+                    [None, None],
+                ),
             ];
             for (what, edits, refused) in &variants {
                 let label = format!("{} ({what})", file.display());
-                let scene = Scene::parse(&toml::to_string(&edited(&base, edits)).unwrap(), &label).unwrap_or_else(|e| panic!("{label}: {e}"));
+                let scene = Scene::parse(&toml::to_string(&edited(&base, edits)).unwrap(), &label)
+                    .unwrap_or_else(|e| panic!("{label}: {e}"));
                 let magnetic = scene.spec.forces.dipole.is_some() || scene.spec.forces.gradient.is_some();
                 let every = scene.steps_per_frame();
                 let files_route = Coupling::Files { magdem: PathBuf::from("magdem"), every };
                 for (engine, refused) in [Engine::Liggghts, Engine::Lammps].into_iter().zip(refused) {
-                    for coupling in if magnetic { vec![Coupling::Callback, files_route.clone()] } else { vec![Coupling::Callback] } {
+                    for coupling in
+                        if magnetic { vec![Coupling::Callback, files_route.clone()] } else { vec![Coupling::Callback] }
+                    {
                         let dir = tempfile::tempdir().unwrap();
                         match (write_with(engine, &scene, dir.path(), &coupling), refused) {
-                            (Ok(deck), None) => assert_every_term_written(engine, &scene, &coupling, &deck_text(dir.path(), &deck), &label),
-                            (Err(ReferenceError::Unsupported { term, .. }), Some(name)) => assert!(term.contains(name), "{label}, {}: refused {term:?}, not {name:?}", engine.name()),
-                            (Ok(_), Some(name)) => panic!("{label}, {}: written, though {name} should be refused", engine.name()),
+                            (Ok(deck), None) => assert_every_term_written(
+                                engine,
+                                &scene,
+                                &coupling,
+                                &deck_text(dir.path(), &deck),
+                                &label,
+                            ),
+                            (Err(ReferenceError::Unsupported { term, .. }), Some(name)) => assert!(
+                                term.contains(name),
+                                "{label}, {}: refused {term:?}, not {name:?}",
+                                engine.name()
+                            ),
+                            (Ok(_), Some(name)) => {
+                                panic!("{label}, {}: written, though {name} should be refused", engine.name())
+                            }
                             (Err(e), _) => panic!("{label}, {}: {e}", engine.name()),
                         }
                     }
@@ -686,7 +900,8 @@ mod tests {
             let scene = Scene::parse(&toml::to_string(&base).unwrap(), "base").unwrap();
             if scene.magnetic_force_field().is_some() && scene.total_steps() > 2 {
                 let coupling = Coupling::Files { magdem: PathBuf::from("magdem"), every: scene.total_steps() - 1 };
-                let err = write_with(Engine::Lammps, &scene, tempfile::tempdir().unwrap().path(), &coupling).unwrap_err();
+                let err =
+                    write_with(Engine::Lammps, &scene, tempfile::tempdir().unwrap().path(), &coupling).unwrap_err();
                 assert!(matches!(&err, ReferenceError::Unsupported { term, .. } if term == "the files route"), "{err}");
             }
         }

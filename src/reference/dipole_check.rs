@@ -23,7 +23,9 @@ pub fn lammps_cutoff(scene: &Scene, cutoff_diameters: Option<f64>) -> Result<f64
     let largest_d = largest_diameter(&scene.species);
     match cutoff_diameters {
         Some(c) => Ok(c * largest_d),
-        None if d.periodic.iter().any(|&p| p) => Err("all-pairs dipole sums in a periodic box have no LAMMPS equivalent".into()),
+        None if d.periodic.iter().any(|&p| p) => {
+            Err("all-pairs dipole sums in a periodic box have no LAMMPS equivalent".into())
+        }
         None => Ok(1.01 * d.length().norm()),
     }
 }
@@ -32,7 +34,14 @@ pub fn lammps_cutoff(scene: &Scene, cutoff_diameters: Option<f64>) -> Result<f64
 /// dipoles under `lj/cut/dipole/cut` (ε = 0). With `run = None` the deck evaluates the forces
 /// once and dumps them; with `run = Some((steps, dt))` it evaluates them `steps` times with the
 /// particles held still (no integrating fix) and dumps nothing (a timing run).
-pub fn write_deck(state: &State, d: &Domain, rc: f64, dir: &Path, origin: &str, run: Option<(u64, f64)>) -> Result<(), ReferenceError> {
+pub fn write_deck(
+    state: &State,
+    d: &Domain,
+    rc: f64,
+    dir: &Path,
+    origin: &str,
+    run: Option<(u64, f64)>,
+) -> Result<(), ReferenceError> {
     std::fs::create_dir_all(dir)?;
     let p = &state.particles;
     let largest_d = p.radius.iter().fold(0.0_f64, |a, r| a.max(2.0 * r));
@@ -45,7 +54,18 @@ pub fn write_deck(state: &State, d: &Domain, rc: f64, dir: &Path, origin: &str, 
     for i in 0..p.len() {
         let (x, m) = (p.position[i], state.fields.moment[i] * scale);
         let density = p.mass[i] / sphere_volume(p.radius[i]);
-        let _ = writeln!(data, "{} 1 {:.17e} {:.17e} {:.17e} {:.17e} {density:.17e} 0.0 {:.17e} {:.17e} {:.17e}", i + 1, x.x, x.y, x.z, 2.0 * p.radius[i], m.x, m.y, m.z);
+        let _ = writeln!(
+            data,
+            "{} 1 {:.17e} {:.17e} {:.17e} {:.17e} {density:.17e} 0.0 {:.17e} {:.17e} {:.17e}",
+            i + 1,
+            x.x,
+            x.y,
+            x.z,
+            2.0 * p.radius[i],
+            m.x,
+            m.y,
+            m.z
+        );
     }
     std::fs::write(dir.join("data.dipole"), data)?;
     let bflag = |k: usize| if d.periodic[k] { "p" } else { "f" };
@@ -70,10 +90,16 @@ pub fn write_deck(state: &State, d: &Domain, rc: f64, dir: &Path, origin: &str, 
 /// Runs `in.dipole` in `dir` with LAMMPS (log in `log.dipole`).
 pub fn run_deck(dir: &Path) -> Result<(), ReferenceError> {
     let engine = Engine::Lammps;
-    let out = Command::new(engine.binary()).args(["-in", "in.dipole", "-log", "log.dipole"]).current_dir(dir).output()?;
+    let out =
+        Command::new(engine.binary()).args(["-in", "in.dipole", "-log", "log.dipole"]).current_dir(dir).output()?;
     if !out.status.success() {
         let text = String::from_utf8_lossy(&out.stdout);
-        return Err(ReferenceError::Failed { engine: engine.name(), code: out.status.code(), log: dir.join("log.dipole").display().to_string(), tail: text.lines().rev().take(10).collect::<Vec<_>>().join("\n") });
+        return Err(ReferenceError::Failed {
+            engine: engine.name(),
+            code: out.status.code(),
+            log: dir.join("log.dipole").display().to_string(),
+            tail: text.lines().rev().take(10).collect::<Vec<_>>().join("\n"),
+        });
     }
     Ok(())
 }
@@ -94,9 +120,14 @@ pub fn check(scene: &Scene, dir: &Path) -> Result<DipoleCheck, ReferenceError> {
     if !engine.available() {
         return Err(ReferenceError::NotInstalled { engine: engine.name(), binary: engine.binary() });
     }
-    let unsupported = |why: &str| ReferenceError::Unsupported { engine: engine.name(), term: "the dipole check".into(), why: why.into() };
+    let unsupported = |why: &str| ReferenceError::Unsupported {
+        engine: engine.name(),
+        term: "the dipole check".into(),
+        why: why.into(),
+    };
     let mut field = scene.magnetic_force_field().ok_or_else(|| unsupported("the scene has no magnetic term"))?;
-    let cutoff = scene.spec.forces.dipole.as_ref().ok_or_else(|| unsupported("the scene has no dipole term"))?.cutoff_diameters;
+    let cutoff =
+        scene.spec.forces.dipole.as_ref().ok_or_else(|| unsupported("the scene has no dipole term"))?.cutoff_diameters;
     field.terms.retain(|t| matches!(t.name(), "moments" | "dipole"));
     let mut state = scene.initial_state();
     field.evaluate(&mut state, scene.dt());
@@ -121,7 +152,11 @@ pub fn check(scene: &Scene, dir: &Path) -> Result<DipoleCheck, ReferenceError> {
         seen += 1;
     }
     if seen != p.len() {
-        return Err(ReferenceError::Dump { engine: engine.name(), path: dir.join("dump.dipole").display().to_string(), message: format!("{seen} rows for {} atoms", p.len()) });
+        return Err(ReferenceError::Dump {
+            engine: engine.name(),
+            path: dir.join("dump.dipole").display().to_string(),
+            message: format!("{seen} rows for {} atoms", p.len()),
+        });
     }
     Ok(DipoleCheck { particles: p.len(), max_relative_error: worst / largest_force, largest_force })
 }

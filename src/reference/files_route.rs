@@ -18,7 +18,11 @@ fn parse_rows(text: &str, columns: usize) -> Vec<Vec<f64>> {
 }
 
 pub fn magnetic_forces(scene: &Scene, positions: &Path, prefix: &Path) -> Result<(), ReferenceError> {
-    let fail = |message: String| ReferenceError::Dump { engine: "files route", path: positions.display().to_string(), message };
+    let fail = |message: String| ReferenceError::Dump {
+        engine: "files route",
+        path: positions.display().to_string(),
+        message,
+    };
     let mut field = scene.magnetic_force_field().ok_or_else(|| fail("the scene has no magnetic term".into()))?;
     let mut state = scene.initial_state();
     let n = state.particles.len();

@@ -43,7 +43,14 @@ struct Coupler {
     error: Option<String>,
 }
 
-extern "C" fn magnetic_forces(data: *mut c_void, step: i64, nlocal: c_int, ids: *mut c_int, x: *mut *mut f64, f: *mut *mut f64) {
+extern "C" fn magnetic_forces(
+    data: *mut c_void,
+    step: i64,
+    nlocal: c_int,
+    ids: *mut c_int,
+    x: *mut *mut f64,
+    f: *mut *mut f64,
+) {
     // SAFETY: `data` is the Coupler registered with the callback and outlives the run; the
     // engine passes `nlocal` rows of ids, positions and forces.
     let coupler = unsafe { &mut *(data as *mut Coupler) };
@@ -115,7 +122,11 @@ struct Instance {
 
 impl Instance {
     fn open(engine: Engine, log: &Path) -> Result<Self, ReferenceError> {
-        let fail = |why: String| ReferenceError::Unsupported { engine: engine.name(), term: "the in-process lock step".into(), why };
+        let fail = |why: String| ReferenceError::Unsupported {
+            engine: engine.name(),
+            term: "the in-process lock step".into(),
+            why,
+        };
         let (library, shim) = load(engine).map_err(fail)?;
         let shim = shim.as_ref();
         let args: Vec<CString> = ["magdem", "-screen", "none", "-log", log.to_str().unwrap_or("log.engine")]
@@ -134,8 +145,9 @@ impl Instance {
                 }
                 // LAMMPS 2021: void *lammps_open_no_mpi(int, char **, void **), handle returned
                 Engine::Lammps => {
-                    let open: libloading::Symbol<unsafe extern "C" fn(c_int, *mut *mut c_char, *mut *mut c_void) -> *mut c_void> =
-                        library.get(b"lammps_open_no_mpi").map_err(|e| fail(e.to_string()))?;
+                    let open: libloading::Symbol<
+                        unsafe extern "C" fn(c_int, *mut *mut c_char, *mut *mut c_void) -> *mut c_void,
+                    > = library.get(b"lammps_open_no_mpi").map_err(|e| fail(e.to_string()))?;
                     handle = open(argv.len() as c_int, argv.as_mut_ptr(), std::ptr::null_mut());
                 }
             }
@@ -158,20 +170,23 @@ impl Instance {
 
     fn set_callback(&self, callback: Callback, data: *mut c_void) -> Result<(), ReferenceError> {
         let id = CString::new(FIX_ID).expect("no NUL");
-        let fail = |why: String| ReferenceError::Unsupported { engine: self.engine.name(), term: "fix external".into(), why };
+        let fail =
+            |why: String| ReferenceError::Unsupported { engine: self.engine.name(), term: "fix external".into(), why };
         unsafe {
             match self.shim {
                 Some(shim) => {
-                    let set: libloading::Symbol<unsafe extern "C" fn(*mut c_void, *const c_char, Callback, *mut c_void) -> c_int> =
-                        shim.get(b"magdem_liggghts_set_callback").map_err(|e| fail(e.to_string()))?;
+                    let set: libloading::Symbol<
+                        unsafe extern "C" fn(*mut c_void, *const c_char, Callback, *mut c_void) -> c_int,
+                    > = shim.get(b"magdem_liggghts_set_callback").map_err(|e| fail(e.to_string()))?;
                     match set(self.handle, id.as_ptr(), callback, data) {
                         0 => Ok(()),
                         code => Err(fail(format!("the shim could not find fix external '{FIX_ID}' (code {code})"))),
                     }
                 }
                 None => {
-                    let set: libloading::Symbol<unsafe extern "C" fn(*mut c_void, *const c_char, Callback, *mut c_void)> =
-                        self.library.get(b"lammps_set_fix_external_callback").map_err(|e| fail(e.to_string()))?;
+                    let set: libloading::Symbol<
+                        unsafe extern "C" fn(*mut c_void, *const c_char, Callback, *mut c_void),
+                    > = self.library.get(b"lammps_set_fix_external_callback").map_err(|e| fail(e.to_string()))?;
                     set(self.handle, id.as_ptr(), callback, data);
                     Ok(())
                 }
@@ -239,12 +254,24 @@ pub fn run_coupled(engine: Engine, scene: &Scene, dir: &Path, output: &Path) -> 
     instance.command(run_line.as_deref().unwrap_or("run 0"))?;
     drop(instance);
     if let Some(message) = coupler.error.take() {
-        return Err(ReferenceError::Failed { engine: engine.name(), code: None, log: log.display().to_string(), tail: message });
+        return Err(ReferenceError::Failed {
+            engine: engine.name(),
+            code: None,
+            log: log.display().to_string(),
+            tail: message,
+        });
     }
     let mut frames = dump::read(engine, &dir.join(&written.dump), scene)?;
     for (state, moments) in frames.iter_mut().zip(&coupler.frame_moments) {
         state.fields.moment.clone_from(moments);
     }
-    super::store(engine, "velocity-verlet (nve/sphere), magnetic forces from magdem every step", scene, output, &frames, start.elapsed())?;
+    super::store(
+        engine,
+        "velocity-verlet (nve/sphere), magnetic forces from magdem every step",
+        scene,
+        output,
+        &frames,
+        start.elapsed(),
+    )?;
     Ok(ReferenceRun { frames: frames.len(), log, wall_time: start.elapsed() })
 }

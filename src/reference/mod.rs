@@ -84,7 +84,14 @@ pub fn run(engine: Engine, scene: &Scene, dir: &Path, output: &Path) -> Result<R
 /// Runs the engine's binary on the deck (with the files route for magnetic forces, if given),
 /// under `mpirun -np procs` when `procs` > 1: the deck is the same, each process holds part of
 /// the box, and the files route's `shell` exchange runs on the first process.
-pub fn run_binary(engine: Engine, scene: &Scene, dir: &Path, output: &Path, coupling: &deck::Coupling, procs: usize) -> Result<ReferenceRun, ReferenceError> {
+pub fn run_binary(
+    engine: Engine,
+    scene: &Scene,
+    dir: &Path,
+    output: &Path,
+    coupling: &deck::Coupling,
+    procs: usize,
+) -> Result<ReferenceRun, ReferenceError> {
     if !engine.available() {
         return Err(ReferenceError::NotInstalled { engine: engine.name(), binary: engine.binary() });
     }
@@ -126,7 +133,14 @@ pub fn run_binary(engine: Engine, scene: &Scene, dir: &Path, output: &Path, coup
 }
 
 /// Writes a finished reference run's frames as a completed trajectory in magdem's schema.
-fn store(engine: Engine, integrator: &str, scene: &Scene, output: &Path, frames: &[crate::core::state::State], wall_time: std::time::Duration) -> Result<(), ReferenceError> {
+fn store(
+    engine: Engine,
+    integrator: &str,
+    scene: &Scene,
+    output: &Path,
+    frames: &[crate::core::state::State],
+    wall_time: std::time::Duration,
+) -> Result<(), ReferenceError> {
     let mut writer = TrajectoryWriter::create(output, scene, &RunInfo { engine: engine.name(), integrator })?;
     for state in frames {
         writer.write_frame(state)?;

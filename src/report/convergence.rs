@@ -63,7 +63,12 @@ pub struct Effect {
 /// Completed runs of `experiments` with `variant` at concentration `c`, by seed (one per seed).
 fn select<'a>(runs: &'a [Run], experiments: &[&str], variant: &str, c: f64) -> Vec<&'a Run> {
     let mut by_seed: BTreeMap<u64, &Run> = BTreeMap::new();
-    for r in runs.iter().filter(|r| r.completed() && experiments.contains(&r.experiment.as_str()) && r.variant == variant && same(r.concentration, c)) {
+    for r in runs.iter().filter(|r| {
+        r.completed()
+            && experiments.contains(&r.experiment.as_str())
+            && r.variant == variant
+            && same(r.concentration, c)
+    }) {
         by_seed.entry(r.seed).or_insert(r);
     }
     by_seed.into_values().collect()
@@ -77,7 +82,8 @@ pub fn table3_runs(runs: &[Run], c: f64) -> Vec<&Run> {
 /// Paired relative change of `b` against `a` (%), matched by seed: each seed's
 /// 100 (b_s − a_s)/ā, mean ± CI95 over the seeds both have.
 fn paired(a: &[&Run], b: &[&Run], value: impl Fn(&Run) -> f64) -> Estimate {
-    let pairs: Vec<(f64, f64)> = a.iter().filter_map(|ra| b.iter().find(|rb| rb.seed == ra.seed).map(|rb| (value(ra), value(rb)))).collect();
+    let pairs: Vec<(f64, f64)> =
+        a.iter().filter_map(|ra| b.iter().find(|rb| rb.seed == ra.seed).map(|rb| (value(ra), value(rb)))).collect();
     let reference = Estimate::of(&pairs.iter().map(|p| p.0).collect::<Vec<_>>()).mean;
     Estimate::of(&pairs.iter().map(|(x, y)| 100.0 * (y - x) / reference).collect::<Vec<_>>())
 }
@@ -91,7 +97,11 @@ pub fn paired_change(a: &[&Run], b: &[&Run]) -> Estimate {
 /// the half-width √(CI_a² + CI_b²)/ā (conservative for independent means).
 fn unpaired(a: &[f64], b: &[f64]) -> Estimate {
     let (ea, eb) = (Estimate::of(a), Estimate::of(b));
-    Estimate { n: ea.n.min(eb.n), mean: 100.0 * (eb.mean / ea.mean - 1.0), ci95: 100.0 * ea.ci95.hypot(eb.ci95) / ea.mean }
+    Estimate {
+        n: ea.n.min(eb.n),
+        mean: 100.0 * (eb.mean / ea.mean - 1.0),
+        ci95: 100.0 * ea.ci95.hypot(eb.ci95) / ea.mean,
+    }
 }
 
 fn lengths(runs: &[&Run]) -> Vec<f64> {
@@ -134,8 +144,18 @@ fn respa_runs(runs: &[Run], c: f64) -> Vec<&Run> {
 /// r-RESPA's paired bias against velocity Verlet.
 pub fn seeds_section(runs: &[Run], t: &Targets, tables: &Path, effects: &mut Vec<Effect>) -> Result<String, Error> {
     let mut md = String::from("## Seeds and integration\n\n");
-    let (mut c_col, mut n_col, mut m_col, mut ci_col, mut rel5, mut rel10, mut rel_all, mut bias, mut bias_ci, mut bias_n) =
-        (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
+    let (
+        mut c_col,
+        mut n_col,
+        mut m_col,
+        mut ci_col,
+        mut rel5,
+        mut rel10,
+        mut rel_all,
+        mut bias,
+        mut bias_ci,
+        mut bias_n,
+    ) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
     for &c in &t.concentration {
         let verlet = table3_runs(runs, c);
         if verlet.is_empty() {
@@ -143,7 +163,8 @@ pub fn seeds_section(runs: &[Run], t: &Targets, tables: &Path, effects: &mut Vec
         }
         let l = lengths(&verlet);
         let e = Estimate::of(&l);
-        let rel = |n: usize| if l.len() >= n { 100.0 * ci95_half_width(&l[..n]) / summary(&l[..n]).mean } else { f64::NAN };
+        let rel =
+            |n: usize| if l.len() >= n { 100.0 * ci95_half_width(&l[..n]) / summary(&l[..n]).mean } else { f64::NAN };
         let b = paired(&verlet, &respa_runs(runs, c), |r| r.mean_length_um());
         c_col.push(c);
         n_col.push(l.len() as f64);
@@ -155,9 +176,19 @@ pub fn seeds_section(runs: &[Run], t: &Targets, tables: &Path, effects: &mut Vec
         bias.push(b.mean);
         bias_ci.push(b.ci95);
         bias_n.push(b.n as f64);
-        effects.push(Effect { concentration: c, explanation: "seeds", what: format!("CI95 of the {}-seed mean", l.len()), change: Estimate { n: l.len(), mean: 0.0, ci95: 100.0 * e.ci95 / e.mean } });
+        effects.push(Effect {
+            concentration: c,
+            explanation: "seeds",
+            what: format!("CI95 of the {}-seed mean", l.len()),
+            change: Estimate { n: l.len(), mean: 0.0, ci95: 100.0 * e.ci95 / e.mean },
+        });
         if b.n > 0 {
-            effects.push(Effect { concentration: c, explanation: "integration", what: format!("r-RESPA K = 10 against velocity Verlet, paired over {} seeds", b.n), change: b });
+            effects.push(Effect {
+                concentration: c,
+                explanation: "integration",
+                what: format!("r-RESPA K = 10 against velocity Verlet, paired over {} seeds", b.n),
+                change: b,
+            });
         }
     }
     if c_col.is_empty() {
@@ -182,7 +213,18 @@ pub fn seeds_section(runs: &[Run], t: &Targets, tables: &Path, effects: &mut Vec
            scenes under Verlet: its bias is each seed's difference over the Verlet mean, mean ± CI95 over the seeds both ran.\n\n";
     md += &markdown(
         &df,
-        &["c (mg/ml)", "seeds", "mean length (µm)", "± CI95", "CI95 % (5 seeds)", "CI95 % (10)", "CI95 % (all)", "r-RESPA bias (%)", "± CI95", "paired seeds"],
+        &[
+            "c (mg/ml)",
+            "seeds",
+            "mean length (µm)",
+            "± CI95",
+            "CI95 % (5 seeds)",
+            "CI95 % (10)",
+            "CI95 % (all)",
+            "r-RESPA bias (%)",
+            "± CI95",
+            "paired seeds",
+        ],
         &[3, 0, 1, 1, 1, 1, 1, 1, 1, 0],
     )?;
     md += "\nThe opt-in sweeps below (magnetisation, box size, time) use r-RESPA; its paired bias here is the *integration* row \
@@ -196,16 +238,27 @@ fn box_factor(variant: &str) -> Option<f64> {
 }
 
 /// Finite size: the mean length at 5 ms against the particle count at equal concentration.
-pub fn finite_size_section(runs: &[Run], t: &Targets, out: &Path, tables: &Path, effects: &mut Vec<Effect>) -> Result<String, Error> {
+pub fn finite_size_section(
+    runs: &[Run],
+    t: &Targets,
+    out: &Path,
+    tables: &Path,
+    effects: &mut Vec<Effect>,
+) -> Result<String, Error> {
     let mut md = String::from("## Finite size: box against the chains\n\n");
-    let mine = |r: &&Run| r.completed() && (r.experiment.starts_with("paper-finite-size-c") || r.experiment.ends_with("-x100")) && box_factor(&r.variant).is_some();
+    let mine = |r: &&Run| {
+        r.completed()
+            && (r.experiment.starts_with("paper-finite-size-c") || r.experiment.ends_with("-x100"))
+            && box_factor(&r.variant).is_some()
+    };
     let sized: Vec<&Run> = runs.iter().filter(mine).collect();
     if sized.is_empty() {
         return Ok(md
             + "Not run: `experiments/paper/opt-in/finite-size-*.toml` and `x100-*.toml` (periodic side faces, 1× to 100× the \
                paper's particles at equal concentration) enter here when their runs exist.\n\n");
     }
-    let (mut c_col, mut f_col, mut p_col, mut n_col, mut m_col, mut ci_col, mut cap_col, mut perc_col, mut wall_col) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
+    let (mut c_col, mut f_col, mut p_col, mut n_col, mut m_col, mut ci_col, mut cap_col, mut perc_col, mut wall_col) =
+        (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
     let mut series = vec![];
     let mut findings = vec![];
     for (k, (&c, &exp)) in t.concentration.iter().zip(&t.experiment).enumerate() {
@@ -235,7 +288,8 @@ pub fn finite_size_section(runs: &[Run], t: &Targets, out: &Path, tables: &Path,
             errs.push(e.ci95);
             (x_lo, x_hi) = (x_lo.min(particles), x_hi.max(particles));
         }
-        series.push(Series::markers(format!("{c} mg/ml (mean ± CI95 over seeds)"), pts, palette(k), 6).with_errors(errs));
+        series
+            .push(Series::markers(format!("{c} mg/ml (mean ± CI95 over seeds)"), pts, palette(k), 6).with_errors(errs));
         series.push(level(format!("experiment, {c} mg/ml"), exp, (x_lo.min(300.0), x_hi.max(3.0e4)), palette(k)));
         // The two largest boxes, and the walls-to-periodic change at the paper's box.
         let sizes: Vec<(&u64, &Vec<&Run>)> = by_factor.iter().collect();
@@ -252,7 +306,12 @@ pub fn finite_size_section(runs: &[Run], t: &Targets, out: &Path, tables: &Path,
                 a.len()
             ));
             if let Some(x1) = by_factor.get(&1) {
-                effects.push(Effect { concentration: c, explanation: "box", what: format!("periodic {fb}× the particles against the paper's box with walls"), change: unpaired(&lengths(&respa_runs(runs, c)), &lengths(b)) });
+                effects.push(Effect {
+                    concentration: c,
+                    explanation: "box",
+                    what: format!("periodic {fb}× the particles against the paper's box with walls"),
+                    change: unpaired(&lengths(&respa_runs(runs, c)), &lengths(b)),
+                });
                 let walls = paired(&respa_runs(runs, c), x1, |r| r.mean_length_um());
                 findings.push(format!("{c} mg/ml, the paper's box: periodic side faces against walls {:+.1} ± {:.1} % (paired over {} seeds)", walls.mean, walls.ci95, walls.n));
             }
@@ -274,12 +333,33 @@ pub fn finite_size_section(runs: &[Run], t: &Targets, out: &Path, tables: &Path,
            periodic (the field lies along x), walls at top and bottom, r-RESPA, t = 5 ms. `box-limited` is the share of \
            aggregates whose extent along the field reaches 90 % of the box's or that wrap through a periodic face onto \
            themselves (percolating: no finite length, left out of the mean, which is then a lower bound).\n\n";
-    md += &markdown(&df, &["c (mg/ml)", "× particles", "particles", "seeds", "mean length (µm)", "± CI95", "box-limited", "percolating (all seeds)", "wall time/run (s)"], &[3, 0, 0, 0, 1, 1, 3, 0, 0])?;
+    md += &markdown(
+        &df,
+        &[
+            "c (mg/ml)",
+            "× particles",
+            "particles",
+            "seeds",
+            "mean length (µm)",
+            "± CI95",
+            "box-limited",
+            "percolating (all seeds)",
+            "wall time/run (s)",
+        ],
+        &[3, 0, 0, 0, 1, 1, 3, 0, 0],
+    )?;
     if !findings.is_empty() {
         md += &format!("\n{}.\n", findings.join("; "));
     }
     let legend = Legend { position: SeriesLabelPosition::UpperLeft, headroom: 0.6 };
-    chart(&out.join("finite-size.png"), "Case 1 at 5 ms: mean length against the particle count", ("particles (log)", "mean length (µm, log)"), &series, legend, (Scale::Log, Scale::Log))?;
+    chart(
+        &out.join("finite-size.png"),
+        "Case 1 at 5 ms: mean length against the particle count",
+        ("particles (log)", "mean length (µm, log)"),
+        &series,
+        legend,
+        (Scale::Log, Scale::Log),
+    )?;
     md += "\n![Finite size](finite-size.png)\n\nMarks: magdem, mean ± CI95 over seeds; dotted lines: the experiment's mean \
            (about 10⁶ particles; its own spread is not a CI and is not drawn).\n\n";
     Ok(md)
@@ -287,7 +367,13 @@ pub fn finite_size_section(runs: &[Run], t: &Targets, out: &Path, tables: &Path,
 
 /// Least-squares slope of ln L against ln t over the frames with `from ≤ t ≤ to` (s).
 fn growth_exponent(r: &Run, from: f64, to: f64) -> f64 {
-    let pts: Vec<(f64, f64)> = r.times.iter().zip(&r.mean_length).filter(|(&t, &l)| t >= from - 1e-12 && t <= to + 1e-12 && l > 0.0).map(|(t, l)| (t.ln(), l.ln())).collect();
+    let pts: Vec<(f64, f64)> = r
+        .times
+        .iter()
+        .zip(&r.mean_length)
+        .filter(|(&t, &l)| t >= from - 1e-12 && t <= to + 1e-12 && l > 0.0)
+        .map(|(t, l)| (t.ln(), l.ln()))
+        .collect();
     if pts.len() < 3 {
         return f64::NAN;
     }
@@ -304,7 +390,13 @@ fn length_at(r: &Run, t: f64) -> f64 {
 }
 
 /// Stopping time: L(t) to 20 ms on log–log axes and its growth exponent.
-pub fn growth_section(runs: &[Run], t: &Targets, out: &Path, tables: &Path, effects: &mut Vec<Effect>) -> Result<String, Error> {
+pub fn growth_section(
+    runs: &[Run],
+    t: &Targets,
+    out: &Path,
+    tables: &Path,
+    effects: &mut Vec<Effect>,
+) -> Result<String, Error> {
     let mut md = String::from("## Stopping time: how the chains grow\n\n");
     let mut long: Vec<&Run> = runs.iter().filter(|r| r.experiment == "paper-long" && r.completed()).collect();
     let source = if long.is_empty() {
@@ -317,8 +409,21 @@ pub fn growth_section(runs: &[Run], t: &Targets, out: &Path, tables: &Path, effe
         return Ok(md + "No runs.\n\n");
     }
     let end = long.iter().filter_map(|r| r.times.last().copied()).fold(f64::INFINITY, f64::min);
-    let (mut c_col, mut n_col, mut z_all, mut z_all_ci, mut z_early, mut z_late, mut l5, mut lend, mut growth, mut growth_ci, mut cap5, mut capend, mut reach) =
-        (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
+    let (
+        mut c_col,
+        mut n_col,
+        mut z_all,
+        mut z_all_ci,
+        mut z_early,
+        mut z_late,
+        mut l5,
+        mut lend,
+        mut growth,
+        mut growth_ci,
+        mut cap5,
+        mut capend,
+        mut reach,
+    ) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
     let mut series = vec![];
     for (k, (&c, &exp)) in t.concentration.iter().zip(&t.experiment).enumerate() {
         let here: Vec<&Run> = long.iter().copied().filter(|r| same(r.concentration, c)).collect();
@@ -329,10 +434,20 @@ pub fn growth_section(runs: &[Run], t: &Targets, out: &Path, tables: &Path, effe
         // Quantities after 5 ms exist only for runs that go on past it.
         let later = |v: f64| if end > 5.5e-3 { v } else { f64::NAN };
         let zz = z(1e-3, end);
-        let g = Estimate::of(&here.iter().map(|r| 100.0 * (length_at(r, end) / length_at(r, 5e-3) - 1.0)).collect::<Vec<_>>());
+        let g = Estimate::of(
+            &here.iter().map(|r| 100.0 * (length_at(r, end) / length_at(r, 5e-3) - 1.0)).collect::<Vec<_>>(),
+        );
         let mean = mean_series(&here);
         let crossing = mean.iter().find(|p| p.1 >= exp).map_or(f64::NAN, |p| p.0 * 1e3);
-        let cap_at = |time: f64| Estimate::of(&here.iter().map(|r| r.times.iter().position(|&x| x >= time - 1e-12).map_or(f64::NAN, |i| r.box_limited[i])).collect::<Vec<_>>()).mean;
+        let cap_at = |time: f64| {
+            Estimate::of(
+                &here
+                    .iter()
+                    .map(|r| r.times.iter().position(|&x| x >= time - 1e-12).map_or(f64::NAN, |i| r.box_limited[i]))
+                    .collect::<Vec<_>>(),
+            )
+            .mean
+        };
         c_col.push(c);
         n_col.push(here.len() as f64);
         z_all.push(zz.mean);
@@ -347,7 +462,12 @@ pub fn growth_section(runs: &[Run], t: &Targets, out: &Path, tables: &Path, effe
         capend.push(later(cap_at(end)));
         reach.push(crossing);
         if end > 5.5e-3 {
-            effects.push(Effect { concentration: c, explanation: "stopping time", what: format!("{:.0} ms against 5 ms, paired over {} seeds", end * 1e3, g.n), change: g });
+            effects.push(Effect {
+                concentration: c,
+                explanation: "stopping time",
+                what: format!("{:.0} ms against 5 ms, paired over {} seeds", end * 1e3, g.n),
+                change: g,
+            });
         }
         let pts: Vec<(f64, f64)> = mean.iter().filter(|p| p.0 > 0.0).map(|&(t, l)| (t * 1e3, l)).collect();
         series.push(Series::line(format!("{c} mg/ml, mean of {} seeds", here.len()), pts, palette(k)));
@@ -379,7 +499,21 @@ pub fn growth_section(runs: &[Run], t: &Targets, out: &Path, tables: &Path, effe
     );
     md += &markdown(
         &df,
-        &["c (mg/ml)", "seeds", "z (1 ms–end)", "± CI95", "z (1–5 ms)", "z (5 ms–end)", "L at 5 ms (µm)", "L at end (µm)", "growth after 5 ms (%)", "± CI95", "box-limited at 5 ms", "at end", "reaches experiment (ms)"],
+        &[
+            "c (mg/ml)",
+            "seeds",
+            "z (1 ms–end)",
+            "± CI95",
+            "z (1–5 ms)",
+            "z (5 ms–end)",
+            "L at 5 ms (µm)",
+            "L at end (µm)",
+            "growth after 5 ms (%)",
+            "± CI95",
+            "box-limited at 5 ms",
+            "at end",
+            "reaches experiment (ms)",
+        ],
         &[3, 0, 2, 2, 2, 2, 1, 1, 0, 0, 3, 3, 2],
     )?;
     md += "\nPublished growth exponents for field-induced chaining are not universal. For chains whose diffusivity falls as \
@@ -394,7 +528,14 @@ pub fn growth_section(runs: &[Run], t: &Targets, out: &Path, tables: &Path, effe
            images were taken, so the report puts no experiment time on 5 ms: the dotted lines in the figure are the \
            experiment's means at an unknown time.\n\n";
     let legend = Legend { position: SeriesLabelPosition::UpperLeft, headroom: 0.35 };
-    chart(&out.join("length-vs-time.png"), "Case 1: mean aggregate length against time", ("time (ms, log)", "mean length (µm, log)"), &series, legend, (Scale::Log, Scale::Log))?;
+    chart(
+        &out.join("length-vs-time.png"),
+        "Case 1: mean aggregate length against time",
+        ("time (ms, log)", "mean length (µm, log)"),
+        &series,
+        legend,
+        (Scale::Log, Scale::Log),
+    )?;
     md += "![Mean length against time](length-vs-time.png)\n\nLines: magdem, the mean over seeds of each run's mean length; dotted lines: \
            the experiment's mean (observation time not stated) in the same colour.\n\n";
     Ok(md)
@@ -424,8 +565,17 @@ fn infer_m(points: &[(f64, Vec<f64>)], target: f64) -> (Option<f64>, f64, f64) {
     let resamples = 2000;
     let mut found: Vec<f64> = (0..resamples)
         .map(|_| {
-            let curve: Vec<(f64, f64)> = points.iter().map(|(m, l)| (*m, (0..l.len()).map(|_| l[rng.random_range(0..l.len())]).sum::<f64>() / l.len() as f64)).collect();
-            crossing(&curve, target).unwrap_or_else(|| if curve.iter().all(|p| p.1 > target) { 0.0 } else { f64::INFINITY })
+            let curve: Vec<(f64, f64)> = points
+                .iter()
+                .map(|(m, l)| (*m, (0..l.len()).map(|_| l[rng.random_range(0..l.len())]).sum::<f64>() / l.len() as f64))
+                .collect();
+            crossing(&curve, target).unwrap_or_else(|| {
+                if curve.iter().all(|p| p.1 > target) {
+                    0.0
+                } else {
+                    f64::INFINITY
+                }
+            })
         })
         .collect();
     found.sort_by(f64::total_cmp);
@@ -446,7 +596,13 @@ fn bound(m: f64, (m0, m1): (f64, f64)) -> String {
 
 /// Magnetisation: the mean length against M at every concentration, the M that meets each
 /// target, and whether the lengths collapse against t/τ, τ = μ/(μ0 M²).
-pub fn magnetisation_section(runs: &[Run], t: &Targets, out: &Path, tables: &Path, effects: &mut Vec<Effect>) -> Result<String, Error> {
+pub fn magnetisation_section(
+    runs: &[Run],
+    t: &Targets,
+    out: &Path,
+    tables: &Path,
+    effects: &mut Vec<Effect>,
+) -> Result<String, Error> {
     let mut md = String::from("## Magnetisation\n\n");
     let sweep: Vec<&Run> = runs.iter().filter(|r| r.experiment == "paper-magnetisation" && r.completed()).collect();
     if sweep.is_empty() {
@@ -459,7 +615,8 @@ pub fn magnetisation_section(runs: &[Run], t: &Targets, out: &Path, tables: &Pat
         }
     }
     variants.sort_by(|a, b| a.1.total_cmp(&b.1));
-    let (mut v_col, mut m_col, mut c_col, mut n_col, mut l_col, mut ci_col, mut cap_col) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
+    let (mut v_col, mut m_col, mut c_col, mut n_col, mut l_col, mut ci_col, mut cap_col) =
+        (vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
     let mut series = vec![];
     let mut inferred = String::from("| c (mg/ml) | target | length (µm) | M that meets it (A/m) | 95 % interval (bootstrap over seeds) |\n|---|---|---|---|---|\n");
     for (k, (&c, (&exp, &paper))) in t.concentration.iter().zip(t.experiment.iter().zip(&t.paper)).enumerate() {
@@ -488,7 +645,11 @@ pub fn magnetisation_section(runs: &[Run], t: &Targets, out: &Path, tables: &Pat
         // The saturation-cap curve: the Fröhlich–Kennelly point is another law, shown but not
         // interpolated through.
         let by_m: Vec<(f64, Vec<f64>)> = {
-            let mut p: Vec<(f64, Vec<f64>)> = points.iter().filter(|(_, _, name)| !name.starts_with("fk-")).map(|(m, l, _)| (*m, l.clone())).collect();
+            let mut p: Vec<(f64, Vec<f64>)> = points
+                .iter()
+                .filter(|(_, _, name)| !name.starts_with("fk-"))
+                .map(|(m, l, _)| (*m, l.clone()))
+                .collect();
             p.sort_by(|a, b| a.0.total_cmp(&b.0));
             p
         };
@@ -496,15 +657,31 @@ pub fn magnetisation_section(runs: &[Run], t: &Targets, out: &Path, tables: &Pat
             let (best, lo, hi) = infer_m(&by_m, target);
             let range = (by_m[0].0, by_m[by_m.len() - 1].0);
             let below = by_m.iter().all(|p| summary(&p.1).mean > target);
-            let cell = best.map_or_else(|| if below { format!("below {:.1e}", range.0) } else { format!("above {:.1e}", range.1) }, |m| format!("{m:.2e}"));
-            let _ = writeln!(inferred, "| {c} | {label} | {target:.0} | {cell} | {} to {} |", bound(lo, range), bound(hi, range));
+            let cell = best.map_or_else(
+                || if below { format!("below {:.1e}", range.0) } else { format!("above {:.1e}", range.1) },
+                |m| format!("{m:.2e}"),
+            );
+            let _ = writeln!(
+                inferred,
+                "| {c} | {label} | {target:.0} | {cell} | {} to {} |",
+                bound(lo, range),
+                bound(hi, range)
+            );
         }
-        if let (Some(bulk), Some(linear)) = (variants.iter().find(|v| v.0 == "ms-4.8e5"), variants.iter().find(|v| v.0 == "linear")) {
+        if let (Some(bulk), Some(linear)) =
+            (variants.iter().find(|v| v.0 == "ms-4.8e5"), variants.iter().find(|v| v.0 == "linear"))
+        {
             let a = select(runs, &["paper-magnetisation"], &linear.0, c);
             let b = select(runs, &["paper-magnetisation"], &bulk.0, c);
-            effects.push(Effect { concentration: c, explanation: "magnetisation", what: "Ms = 4.8e5 A/m (bulk magnetite) against the linear 7.5e5, paired".into(), change: paired(&a, &b, |r| r.mean_length_um()) });
+            effects.push(Effect {
+                concentration: c,
+                explanation: "magnetisation",
+                what: "Ms = 4.8e5 A/m (bulk magnetite) against the linear 7.5e5, paired".into(),
+                change: paired(&a, &b, |r| r.mean_length_um()),
+            });
         }
-        series.push(Series::markers(format!("{c} mg/ml (mean ± CI95 over seeds)"), pts, palette(k), 6).with_errors(errs));
+        series
+            .push(Series::markers(format!("{c} mg/ml (mean ± CI95 over seeds)"), pts, palette(k), 6).with_errors(errs));
         series.push(level("", exp, (variants[0].1, variants[variants.len() - 1].1), palette(k)));
     }
     let mut df = DataFrame::new(vec![
@@ -521,7 +698,11 @@ pub fn magnetisation_section(runs: &[Run], t: &Targets, out: &Path, tables: &Pat
            paper's linear law, from 5e4 A/m to bulk magnetite's 4.8e5, the Fröhlich–Kennelly law at Ms = 4.8e5, and the \
            unsaturated linear law (7.5e5 A/m); r-RESPA, t = 5 ms, the paper's walled box. M is an isolated bead's \
            magnetisation in the applied 0.4 T (mutual induction adds to it near neighbours, up to Ms).\n\n";
-    md += &markdown(&df, &["variant", "M (A/m)", "c (mg/ml)", "seeds", "mean length (µm)", "± CI95", "box-limited"], &[0, 0, 3, 0, 1, 1, 3])?;
+    md += &markdown(
+        &df,
+        &["variant", "M (A/m)", "c (mg/ml)", "seeds", "mean length (µm)", "± CI95", "box-limited"],
+        &[0, 0, 3, 0, 1, 1, 3],
+    )?;
     md += "\nThe M at which the mean length at 5 ms meets each target, interpolated log-linearly between the swept saturation \
            values (the Fröhlich–Kennelly point is another law and is left out of the curve):\n\n";
     md += &inferred;
@@ -550,7 +731,8 @@ fn collapse(runs: &[Run], variants: &[(String, f64)], out: &Path) -> Result<Stri
         let here = select(runs, &["paper-magnetisation"], name, c);
         let Some(first) = here.first() else { continue };
         let tau = first.viscosity / (MU0 * m * m);
-        let pts: Vec<(f64, f64)> = mean_series(&here).into_iter().filter(|p| p.0 > 0.0).map(|(t, l)| (t / tau, l)).collect();
+        let pts: Vec<(f64, f64)> =
+            mean_series(&here).into_iter().filter(|p| p.0 > 0.0).map(|(t, l)| (t / tau, l)).collect();
         if pts.len() < 2 {
             continue;
         }
@@ -573,7 +755,12 @@ fn collapse(runs: &[Run], variants: &[(String, f64)], out: &Path) -> Result<Stri
         if lo < hi {
             let xs: Vec<f64> = (0..=20).map(|k| lo * (hi / lo).powf(k as f64 / 20.0)).collect();
             let d = xs.iter().map(|&x| (at(a, x) / at(b, x)).ln().abs()).sum::<f64>() / xs.len() as f64;
-            overlaps.push(format!("{:.1e} and {:.1e} A/m: {:.0} % over t/τ = {lo:.2e}–{hi:.2e}", w[0].0, w[1].0, 100.0 * d.exp_m1()));
+            overlaps.push(format!(
+                "{:.1e} and {:.1e} A/m: {:.0} % over t/τ = {lo:.2e}–{hi:.2e}",
+                w[0].0,
+                w[1].0,
+                100.0 * d.exp_m1()
+            ));
         } else {
             overlaps.push(format!("{:.1e} and {:.1e} A/m: no common t/τ", w[0].0, w[1].0));
         }
@@ -597,7 +784,12 @@ fn collapse(runs: &[Run], variants: &[(String, f64)], out: &Path) -> Result<Stri
 }
 
 /// The experiment's length measurement emulated on the Table 3 runs' last frames.
-pub fn measurement_section(runs: &[Run], t: &Targets, tables: &Path, effects: &mut Vec<Effect>) -> Result<String, Error> {
+pub fn measurement_section(
+    runs: &[Run],
+    t: &Targets,
+    tables: &Path,
+    effects: &mut Vec<Effect>,
+) -> Result<String, Error> {
     let mut md = String::from("## Measurement: what an image of the same chains gives\n\n");
     let imaging = Imaging { axes: [0, 1], pixel: 0.5e-6 };
     let names = ["3-D, all", "3-D, 2+", "projected, all", "projected, 2+", "image, all", "image, 2+"];
@@ -616,12 +808,20 @@ pub fn measurement_section(runs: &[Run], t: &Targets, tables: &Path, effects: &m
         table.push((0..6).map(column).collect());
         done.push((c, exp, here.len()));
         let change = Estimate::of(&per_run.iter().map(|m| 100.0 * (m[2] / m[0] - 1.0)).collect::<Vec<_>>());
-        effects.push(Effect { concentration: c, explanation: "measurement", what: "each run's mean projected MajorAxisLength against its mean 3-D length, mean over runs".into(), change });
+        effects.push(Effect {
+            concentration: c,
+            explanation: "measurement",
+            what: "each run's mean projected MajorAxisLength against its mean 3-D length, mean over runs".into(),
+            change,
+        });
     }
     if done.is_empty() {
         return Ok(md + "No Table 3 runs.\n\n");
     }
-    let mut columns = vec![col("concentration_mg_per_ml", done.iter().map(|d| d.0).collect()), col("runs", done.iter().map(|d| d.2 as f64).collect())];
+    let mut columns = vec![
+        col("concentration_mg_per_ml", done.iter().map(|d| d.0).collect()),
+        col("runs", done.iter().map(|d| d.2 as f64).collect()),
+    ];
     for (k, name) in names.iter().enumerate() {
         let key = name.replace([',', '+'], "").replace(' ', "_").replace("__", "_");
         columns.push(col(&format!("{key}_um"), table.iter().map(|row| row[k].mean).collect()));
@@ -642,9 +842,18 @@ pub fn measurement_section(runs: &[Run], t: &Targets, tables: &Path, effects: &m
            the experiment's is not. The truth lies between *projected* and *image*;\n\
            - *all* counts single particles and *2+* leaves them out.\n\n\
            Mean over seeds of each run's mean, ± CI95 over seeds (µm):\n\n";
-    let _ = write!(md, "| c (mg/ml) | runs | {} | experiment |\n|---|---|{}---|\n", names.join(" | "), "---|".repeat(names.len()));
+    let _ = write!(
+        md,
+        "| c (mg/ml) | runs | {} | experiment |\n|---|---|{}---|\n",
+        names.join(" | "),
+        "---|".repeat(names.len())
+    );
     for ((c, exp, n), row) in done.iter().zip(&table) {
-        let _ = writeln!(md, "| {c} | {n} | {} | {exp:.0} |", row.iter().map(|e| e.cell(1)).collect::<Vec<_>>().join(" | "));
+        let _ = writeln!(
+            md,
+            "| {c} | {n} | {} | {exp:.0} |",
+            row.iter().map(|e| e.cell(1)).collect::<Vec<_>>().join(" | ")
+        );
     }
     md += "\n";
     Ok(md)
@@ -659,7 +868,9 @@ fn measures(r: &Run, imaging: &Imaging) -> Result<[f64; 6], Error> {
     let position = t.frame_vectors("position", reader.times.len() - 1)?;
     let m = |v: Vec<f64>| if v.is_empty() { f64::NAN } else { 1e6 * summary(&v).mean };
     let finite: Vec<&crate::analysis::aggregates::Aggregate> = r.last.iter().filter(|a| !a.percolating).collect();
-    let projected = |a: &&crate::analysis::aggregates::Aggregate| imaging.major_axis(&a.positions, &a.members.iter().map(|&i| radius[i]).collect::<Vec<_>>());
+    let projected = |a: &&crate::analysis::aggregates::Aggregate| {
+        imaging.major_axis(&a.positions, &a.members.iter().map(|&i| radius[i]).collect::<Vec<_>>())
+    };
     let domain = reader.domain();
     let regions = imaging.image(&position, &radius, &domain.lo, &domain.hi);
     Ok([
@@ -683,13 +894,21 @@ pub fn ranking_section(effects: &[Effect], t: &Targets, runs: &[Run], tables: &P
            study, and each row names what it compares. For *seeds* the number is the CI95 of the Table 3 mean, the \
            statistical uncertainty the other effects must clear. The first line of each block gives how far magdem's Table 3 \
            mean (velocity Verlet) lies from the experiment's and the paper's.\n\n";
-    let (mut c_col, mut e_col, mut w_col, mut m_col, mut ci_col, mut n_col) = (vec![], vec![], vec![], vec![], vec![], vec![]);
+    let (mut c_col, mut e_col, mut w_col, mut m_col, mut ci_col, mut n_col) =
+        (vec![], vec![], vec![], vec![], vec![], vec![]);
     for (&c, (&exp, &paper)) in t.concentration.iter().zip(t.experiment.iter().zip(&t.paper)) {
-        let mut here: Vec<&Effect> = effects.iter().filter(|e| same(e.concentration, c) && e.change.mean.is_finite()).collect();
+        let mut here: Vec<&Effect> =
+            effects.iter().filter(|e| same(e.concentration, c) && e.change.mean.is_finite()).collect();
         if here.is_empty() {
             continue;
         }
-        here.sort_by(|a, b| b.change.mean.abs().max(b.change.ci95 * (b.explanation == "seeds") as u8 as f64).total_cmp(&a.change.mean.abs().max(a.change.ci95 * (a.explanation == "seeds") as u8 as f64)));
+        here.sort_by(|a, b| {
+            b.change
+                .mean
+                .abs()
+                .max(b.change.ci95 * (b.explanation == "seeds") as u8 as f64)
+                .total_cmp(&a.change.mean.abs().max(a.change.ci95 * (a.explanation == "seeds") as u8 as f64))
+        });
         let table3 = Estimate::of(&lengths(&table3_runs(runs, c)));
         let _ = writeln!(
             md,
@@ -738,26 +957,42 @@ fn closest_combination(runs: &[Run], t: &Targets, effects: &[Effect]) -> String 
         return "The combination that comes closest needs the magnetisation sweep (`experiments/paper/opt-in/magnetisation.toml`).\n\n".into();
     }
     variants.sort_by(|a, b| a.1.total_cmp(&b.1));
-    let measurement = |c: f64| effects.iter().find(|e| same(e.concentration, c) && e.explanation == "measurement").map_or(0.0, |e| e.change.mean);
+    let measurement = |c: f64| {
+        effects
+            .iter()
+            .find(|e| same(e.concentration, c) && e.explanation == "measurement")
+            .map_or(0.0, |e| e.change.mean)
+    };
     let mut best: Option<(f64, String, bool, Vec<f64>)> = None;
     for (name, m) in &variants {
         for imaged in [false, true] {
             let predicted: Vec<f64> = t
                 .concentration
                 .iter()
-                .map(|&c| Estimate::of(&lengths(&select(runs, &["paper-magnetisation"], name, c))).mean * if imaged { 1.0 + measurement(c) / 100.0 } else { 1.0 })
+                .map(|&c| {
+                    Estimate::of(&lengths(&select(runs, &["paper-magnetisation"], name, c))).mean
+                        * if imaged { 1.0 + measurement(c) / 100.0 } else { 1.0 }
+                })
                 .collect();
             if predicted.iter().any(|p| !p.is_finite()) {
                 continue;
             }
-            let score = (predicted.iter().zip(&t.experiment).map(|(p, e)| (p / e).ln().powi(2)).sum::<f64>() / predicted.len() as f64).sqrt();
+            let score = (predicted.iter().zip(&t.experiment).map(|(p, e)| (p / e).ln().powi(2)).sum::<f64>()
+                / predicted.len() as f64)
+                .sqrt();
             if best.as_ref().is_none_or(|b| score < b.0) {
                 best = Some((score, format!("{name} (M = {m:.2e} A/m)"), imaged, predicted));
             }
         }
     }
     let Some((score, name, imaged, predicted)) = best else { return String::new() };
-    let rows: Vec<String> = t.concentration.iter().zip(&predicted).zip(&t.experiment).map(|((c, p), e)| format!("{c} mg/ml: {p:.0} µm against {e:.0} ({:+.0} %)", 100.0 * (p / e - 1.0))).collect();
+    let rows: Vec<String> = t
+        .concentration
+        .iter()
+        .zip(&predicted)
+        .zip(&t.experiment)
+        .map(|((c, p), e)| format!("{c} mg/ml: {p:.0} µm against {e:.0} ({:+.0} %)", 100.0 * (p / e - 1.0)))
+        .collect();
     format!(
         "**Closest defensible combination.** One bead magnetisation for all four concentrations (the same beads), at most \
          bulk magnetite's saturation (4.8e5 A/m; composite beads of 1087 kg/m³ hold less), at the paper's box and 5 ms, \

@@ -17,7 +17,10 @@ const GREEN: RGBColor = RGBColor(30, 150, 60);
 const RED: RGBColor = RGBColor(200, 30, 30);
 
 /// Positions of frames `frames` (indices) and the radii and box of a trajectory.
-fn read(file: &Path, frames: &[usize]) -> Result<(Vec<Vec<Vec3>>, Vec<f64>, crate::core::domain::Domain, Vec<f64>), Error> {
+fn read(
+    file: &Path,
+    frames: &[usize],
+) -> Result<(Vec<Vec<Vec3>>, Vec<f64>, crate::core::domain::Domain, Vec<f64>), Error> {
     let t = Trajectory::open(file)?;
     let reader = crate::analysis::trajectory::FrameReader::new(&t)?;
     let positions = frames.iter().map(|&k| t.frame_vectors("position", k)).collect::<Result<Vec<_>, _>>()?;
@@ -42,7 +45,12 @@ struct Panel<'a> {
 }
 
 fn draw_panel(area: &DrawingArea<BitMapBackend, plotters::coord::Shift>, panel: &Panel) -> Result<(), Error> {
-    let pts: Vec<(f64, f64)> = panel.layers.iter().flat_map(|(x, _)| x.iter().map(|p| (panel.project)(p))).chain(panel.edges.iter().flat_map(|e| [e.0, e.1])).collect();
+    let pts: Vec<(f64, f64)> = panel
+        .layers
+        .iter()
+        .flat_map(|(x, _)| x.iter().map(|p| (panel.project)(p)))
+        .chain(panel.edges.iter().flat_map(|e| [e.0, e.1]))
+        .collect();
     let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
     for (x, y) in &pts {
         (x0, x1, y0, y1) = (x0.min(*x), x1.max(*x), y0.min(*y), y1.max(*y));
@@ -60,9 +68,17 @@ fn draw_panel(area: &DrawingArea<BitMapBackend, plotters::coord::Shift>, panel: 
         .x_label_area_size(40)
         .y_label_area_size(50)
         .build_cartesian_2d((cx - hx) * 1e6..(cx + hx) * 1e6, (cy - hy) * 1e6..(cy + hy) * 1e6)?;
-    c.configure_mesh().disable_mesh().x_desc(panel.labels.0).y_desc(panel.labels.1).label_style(("sans-serif", 13)).draw()?;
+    c.configure_mesh()
+        .disable_mesh()
+        .x_desc(panel.labels.0)
+        .y_desc(panel.labels.1)
+        .label_style(("sans-serif", 13))
+        .draw()?;
     for (a, b) in &panel.edges {
-        c.draw_series(std::iter::once(PathElement::new(vec![(a.0 * 1e6, a.1 * 1e6), (b.0 * 1e6, b.1 * 1e6)], BLACK.mix(0.6).stroke_width(1))))?;
+        c.draw_series(std::iter::once(PathElement::new(
+            vec![(a.0 * 1e6, a.1 * 1e6), (b.0 * 1e6, b.1 * 1e6)],
+            BLACK.mix(0.6).stroke_width(1),
+        )))?;
     }
     for (x, color) in &panel.layers {
         c.draw_series(x.iter().zip(panel.radius).map(|(p, &r)| {
@@ -75,7 +91,13 @@ fn draw_panel(area: &DrawingArea<BitMapBackend, plotters::coord::Shift>, panel: 
 
 /// The twelve edges of the box, projected.
 fn box_edges(d: &crate::core::domain::Domain, project: &dyn Fn(&Vec3) -> (f64, f64)) -> Vec<((f64, f64), (f64, f64))> {
-    let corner = |k: usize| Vec3::new(if k & 1 == 0 { d.lo.x } else { d.hi.x }, if k & 2 == 0 { d.lo.y } else { d.hi.y }, if k & 4 == 0 { d.lo.z } else { d.hi.z });
+    let corner = |k: usize| {
+        Vec3::new(
+            if k & 1 == 0 { d.lo.x } else { d.hi.x },
+            if k & 2 == 0 { d.lo.y } else { d.hi.y },
+            if k & 4 == 0 { d.lo.z } else { d.hi.z },
+        )
+    };
     let mut edges = vec![];
     for a in 0..8 {
         for bit in [1, 2, 4] {
@@ -110,7 +132,12 @@ pub fn chain_figures(runs: &[&Run], out: &Path) -> Result<String, Error> {
             let project: &dyn Fn(&Vec3) -> (f64, f64) = if three_d { &view } else { &xy };
             let edges = if three_d { box_edges(&domain, project) } else { box_edges(&domain, &xy) };
             let panel = Panel {
-                title: format!("{} mg/ml, {} particles, t = {:.0} ms", r.concentration, radius.len(), times[times.len() - 1] * 1e3),
+                title: format!(
+                    "{} mg/ml, {} particles, t = {:.0} ms",
+                    r.concentration,
+                    radius.len(),
+                    times[times.len() - 1] * 1e3
+                ),
                 layers: vec![(&frames[0], GREEN), (&frames[1], RED)],
                 radius: &radius,
                 edges,
@@ -132,7 +159,12 @@ pub fn chain_figures(runs: &[&Run], out: &Path) -> Result<String, Error> {
 pub fn case2_figure(run: Option<&Run>, out: &Path) -> Result<String, Error> {
     let Some(r) = run else { return Ok(String::new()) };
     let times = [0.12, 0.51, 0.94, 1.25];
-    let frames: Vec<usize> = times.iter().map(|&t| r.times.iter().enumerate().min_by(|a, b| (a.1 - t).abs().total_cmp(&(b.1 - t).abs())).map_or(0, |(k, _)| k)).collect();
+    let frames: Vec<usize> = times
+        .iter()
+        .map(|&t| {
+            r.times.iter().enumerate().min_by(|a, b| (a.1 - t).abs().total_cmp(&(b.1 - t).abs())).map_or(0, |(k, _)| k)
+        })
+        .collect();
     let mut wanted = vec![0];
     wanted.extend(&frames);
     let (positions, radius, domain, stored) = read(&r.file, &wanted)?;
@@ -140,7 +172,10 @@ pub fn case2_figure(run: Option<&Run>, out: &Path) -> Result<String, Error> {
     let root = BitMapBackend::new(&path, (1400, 1250)).into_drawing_area();
     root.fill(&WHITE)?;
     let (top, body) = root.split_vertically(50);
-    top.titled("Case 2, seed 1: starting positions (red) and positions at time t (green), gradient along x", ("sans-serif", 22))?;
+    top.titled(
+        "Case 2, seed 1: starting positions (red) and positions at time t (green), gradient along x",
+        ("sans-serif", 22),
+    )?;
     let xy = |p: &Vec3| (p.x, p.y);
     for (k, area) in body.split_evenly((2, 2)).iter().enumerate() {
         let panel = Panel {
@@ -213,7 +248,9 @@ pub fn paraview_section(run: Option<&Run>, out: &Path) -> Result<String, Error> 
         .is_ok_and(|o| o.status.success());
     let _ = std::fs::remove_file(&script);
     if !rendered && !png.exists() {
-        return Ok("## In ParaView\n\nParaView (pvbatch) or xvfb-run is not installed here, so no render was made.\n\n".into());
+        return Ok(
+            "## In ParaView\n\nParaView (pvbatch) or xvfb-run is not installed here, so no render was made.\n\n".into(),
+        );
     }
     Ok(format!(
         "## In ParaView and OVITO\n\nEvery run writes an XDMF sidecar beside its HDF5 file (`OUT.xdmf`, referencing the datasets in place), \

@@ -7,7 +7,10 @@ use super::figures;
 use super::runs::{experiment_files, load_runs, Run};
 use super::tables::{col, markdown, same, scol, ucol, write};
 use crate::analysis::stats::{ci95_half_width, summary};
-use crate::plot::{bar_panels, box_panels, engine_colour, line_chart_with_legend, palette, BarGroup, BarPanel, BoxPanel, BoxStats, RGBColor, Series, SeriesLabelPosition};
+use crate::plot::{
+    bar_panels, box_panels, engine_colour, line_chart_with_legend, palette, BarGroup, BarPanel, BoxPanel, BoxStats,
+    RGBColor, Series, SeriesLabelPosition,
+};
 use crate::scene::Scene;
 use polars::prelude::{Column, CsvReadOptions, DataFrame, DataType, PolarsResult, SerReader};
 use std::collections::BTreeMap;
@@ -53,7 +56,11 @@ fn frame(columns: Vec<Column>) -> PolarsResult<DataFrame> {
 
 /// Mean, NaN for no values.
 fn mean(v: &[f64]) -> f64 {
-    if v.is_empty() { f64::NAN } else { summary(v).mean }
+    if v.is_empty() {
+        f64::NAN
+    } else {
+        summary(v).mean
+    }
 }
 
 fn completed<'a>(runs: &'a [Run], experiment: &str) -> Vec<&'a Run> {
@@ -100,7 +107,10 @@ pub fn write_report(options: &PaperReportOptions) -> Result<PathBuf, Error> {
     let mut seed1: Vec<&Run> = table3_ensemble(&runs).into_iter().filter(|r| r.seed == 1).collect();
     seed1.sort_by(|a, b| a.concentration.total_cmp(&b.concentration));
     md += &figures::chain_figures(&seed1, out)?;
-    md += &figures::paraview_section(seed1.iter().copied().find(|r| same(r.concentration, 2.25)).or(seed1.first().copied()), out)?;
+    md += &figures::paraview_section(
+        seed1.iter().copied().find(|r| same(r.concentration, 2.25)).or(seed1.first().copied()),
+        out,
+    )?;
     md += &convergence::finite_size_section(&runs, &targets, out, &tables, &mut effects)?;
     md += &convergence::growth_section(&runs, &targets, out, &tables, &mut effects)?;
     md += &convergence::magnetisation_section(&runs, &targets, out, &tables, &mut effects)?;
@@ -109,7 +119,10 @@ pub fn write_report(options: &PaperReportOptions) -> Result<PathBuf, Error> {
     md += &convergence::ranking_section(&effects, &targets, &runs, &tables)?;
     md += &figures::shielding_figure(out)?;
     md += &case2_section(&runs, &paper, out, &tables)?;
-    md += &figures::case2_figure(runs.iter().find(|r| r.experiment == "paper-case2" && r.seed == 1 && r.completed()), out)?;
+    md += &figures::case2_figure(
+        runs.iter().find(|r| r.experiment == "paper-case2" && r.seed == 1 && r.completed()),
+        out,
+    )?;
     md += &approach_section(&runs, out)?;
     md += &box_effect_section(&runs, &paper, out, &tables)?;
     md += &reference_section(&runs, out, &tables)?;
@@ -122,7 +135,11 @@ pub fn write_report(options: &PaperReportOptions) -> Result<PathBuf, Error> {
 fn header(runs: &[Run], files: &[PathBuf], options: &PaperReportOptions) -> String {
     let done = runs.iter().filter(|r| r.completed()).count();
     let unstable = runs.iter().filter(|r| r.status == "unstable").count();
-    let unreadable: Vec<String> = runs.iter().filter(|r| r.status == crate::io::trajectory::status::UNREADABLE).map(|r| format!("`{}` ({})", r.file.display(), r.message)).collect();
+    let unreadable: Vec<String> = runs
+        .iter()
+        .filter(|r| r.status == crate::io::trajectory::status::UNREADABLE)
+        .map(|r| format!("`{}` ({})", r.file.display(), r.message))
+        .collect();
     let core_seconds: f64 = runs.iter().filter(|r| r.wall_time.is_finite()).map(|r| r.wall_time).sum();
     let mut md = format!(
         "# Reproducing the paper's case 1 and case 2\n\n\
@@ -218,13 +235,31 @@ fn table3_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Res
          still lengthen the chains.\n\n",
         ens.iter().max_by_key(|e| e.seeds.len()).map_or(String::new(), |e| seed_list(&e.seeds))
     );
-    let stopped: Vec<String> = runs.iter().filter(|r| convergence::TABLE3.contains(&r.experiment.as_str()) && !r.completed() && r.status != "missing").map(|r| format!("{} ({}: {})", r.id, r.status, r.message)).collect();
+    let stopped: Vec<String> = runs
+        .iter()
+        .filter(|r| convergence::TABLE3.contains(&r.experiment.as_str()) && !r.completed() && r.status != "missing")
+        .map(|r| format!("{} ({}: {})", r.id, r.status, r.message))
+        .collect();
     if !stopped.is_empty() {
         md += &format!("Runs not in the table (not completed): {}.\n\n", stopped.join("; "));
     }
     md += &markdown(
         &df,
-        &["c (mg/ml)", "runs", "particles", "paper particles", "aggregates/run", "magdem mean (µm)", "± CI95", "magdem std", "box-limited", "paper sim mean", "paper sim std", "experiment mean", "experiment std"],
+        &[
+            "c (mg/ml)",
+            "runs",
+            "particles",
+            "paper particles",
+            "aggregates/run",
+            "magdem mean (µm)",
+            "± CI95",
+            "magdem std",
+            "box-limited",
+            "paper sim mean",
+            "paper sim std",
+            "experiment mean",
+            "experiment std",
+        ],
         &[3, 0, 0, 0, 1, 1, 1, 1, 3, 1, 1, 0, 0],
     )?;
     let offset = |k: f64| conc.iter().map(move |&c| c * (1.0 + k)).collect::<Vec<f64>>();
@@ -232,25 +267,76 @@ fn table3_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Res
     // Means (magdem with its CI95 over seeds; the paper's and the experiment's means carry no CI)
     // and the intrinsic spread (population std of the lengths) in separate figures.
     let series = vec![
-        Series::markers("magdem (mean ± CI95 over seeds)", pts(offset(0.0), ens.iter().map(|e| mean(&e.runs)).collect()), engine_colour("magdem"), 6)
-            .with_errors(ens.iter().map(|e| ci95_half_width(&e.runs)).collect()),
-        Series::markers("paper simulation (mean)", pts(offset(0.04), floats(&paper.table3, "sim_mean_length_um")?), palette(3), 6),
-        Series::markers("experiment, Mathieu & Martel (mean)", pts(offset(-0.04), floats(&paper.table3, "exp_mean_length_um")?), RGBColor(0, 0, 0), 6),
+        Series::markers(
+            "magdem (mean ± CI95 over seeds)",
+            pts(offset(0.0), ens.iter().map(|e| mean(&e.runs)).collect()),
+            engine_colour("magdem"),
+            6,
+        )
+        .with_errors(ens.iter().map(|e| ci95_half_width(&e.runs)).collect()),
+        Series::markers(
+            "paper simulation (mean)",
+            pts(offset(0.04), floats(&paper.table3, "sim_mean_length_um")?),
+            palette(3),
+            6,
+        ),
+        Series::markers(
+            "experiment, Mathieu & Martel (mean)",
+            pts(offset(-0.04), floats(&paper.table3, "exp_mean_length_um")?),
+            RGBColor(0, 0, 0),
+            6,
+        ),
     ];
-    line_chart_with_legend(&out.join("table3.png"), "Case 1: mean aggregate length at 5 ms", "concentration (mg/ml)", "mean length (µm)", &series, SeriesLabelPosition::UpperLeft)?;
+    line_chart_with_legend(
+        &out.join("table3.png"),
+        "Case 1: mean aggregate length at 5 ms",
+        "concentration (mg/ml)",
+        "mean length (µm)",
+        &series,
+        SeriesLabelPosition::UpperLeft,
+    )?;
     let spread = vec![
-        Series::markers("magdem (mean over seeds of each run's population std)", pts(offset(0.0), ens.iter().map(|e| mean(&e.pop_std)).collect()), engine_colour("magdem"), 6),
-        Series::markers("paper simulation (std)", pts(offset(0.04), floats(&paper.table3, "sim_std_um")?), palette(3), 6),
-        Series::markers("experiment (std)", pts(offset(-0.04), floats(&paper.table3, "exp_std_um")?), RGBColor(0, 0, 0), 6),
+        Series::markers(
+            "magdem (mean over seeds of each run's population std)",
+            pts(offset(0.0), ens.iter().map(|e| mean(&e.pop_std)).collect()),
+            engine_colour("magdem"),
+            6,
+        ),
+        Series::markers(
+            "paper simulation (std)",
+            pts(offset(0.04), floats(&paper.table3, "sim_std_um")?),
+            palette(3),
+            6,
+        ),
+        Series::markers(
+            "experiment (std)",
+            pts(offset(-0.04), floats(&paper.table3, "exp_std_um")?),
+            RGBColor(0, 0, 0),
+            6,
+        ),
     ];
-    line_chart_with_legend(&out.join("table3-spread.png"), "Case 1: spread of the aggregate lengths at 5 ms", "concentration (mg/ml)", "standard deviation of the lengths (µm)", &spread, SeriesLabelPosition::UpperLeft)?;
+    line_chart_with_legend(
+        &out.join("table3-spread.png"),
+        "Case 1: spread of the aggregate lengths at 5 ms",
+        "concentration (mg/ml)",
+        "standard deviation of the lengths (µm)",
+        &spread,
+        SeriesLabelPosition::UpperLeft,
+    )?;
     md += "\n![Table 3](table3.png)\n\n![Spread of the lengths](table3-spread.png)\n\n";
     // Honest reading of the comparison.
     let within: Vec<String> = ens
         .iter()
         .zip(floats(&paper.table3, "exp_mean_length_um")?)
         .zip(floats(&paper.table3, "sim_mean_length_um")?)
-        .map(|((e, x), s)| format!("{} mg/ml: {:+.0}% against the experiment, {:+.0}% against the paper's simulation", e.concentration, 100.0 * (mean(&e.runs) / x - 1.0), 100.0 * (mean(&e.runs) / s - 1.0)))
+        .map(|((e, x), s)| {
+            format!(
+                "{} mg/ml: {:+.0}% against the experiment, {:+.0}% against the paper's simulation",
+                e.concentration,
+                100.0 * (mean(&e.runs) / x - 1.0),
+                100.0 * (mean(&e.runs) / s - 1.0)
+            )
+        })
         .collect();
     md += &format!("magdem's mean length: {}.\n\n", within.join("; "));
     md += &gap_sensitivity(runs)?;
@@ -270,7 +356,9 @@ fn gap_sensitivity(runs: &[Run]) -> Result<String, Error> {
         gaps.iter().map(|g| format!("{g:e}")).collect::<Vec<_>>().join(" | "),
         "---|".repeat(gaps.len())
     );
-    let respa = runs.iter().filter(|r| r.experiment == "paper-sensitivity" && r.variant == "respa" && r.seed == 1 && r.completed());
+    let respa = runs
+        .iter()
+        .filter(|r| r.experiment == "paper-sensitivity" && r.variant == "respa" && r.seed == 1 && r.completed());
     // Largest relative change of each run's mean from 1e-3 to 5e-2, and below 1e-3.
     let (mut above, mut below) = (0.0_f64, 0.0_f64);
     for r in table3_ensemble(runs).into_iter().filter(|r| r.seed == 1).chain(respa) {
@@ -278,7 +366,9 @@ fn gap_sensitivity(runs: &[Run]) -> Result<String, Error> {
         let reader = crate::analysis::trajectory::FrameReader::new(&t)?;
         let values: Vec<f64> = gaps
             .iter()
-            .map(|&g| reader.aggregates(-1, g).map(|(_, a)| 1e6 * mean(&crate::analysis::aggregates::finite_lengths(&a))))
+            .map(|&g| {
+                reader.aggregates(-1, g).map(|(_, a)| 1e6 * mean(&crate::analysis::aggregates::finite_lengths(&a)))
+            })
             .collect::<Result<_, _>>()?;
         above = values[1..].iter().fold(above, |m, v| m.max((v / values[1] - 1.0).abs()));
         below = below.max((values[0] / values[1] - 1.0).abs());
@@ -296,9 +386,15 @@ fn gap_sensitivity(runs: &[Run]) -> Result<String, Error> {
 
 fn table4_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Result<String, Error> {
     let conc = floats(&paper.table3, "concentration_mg_per_ml")?;
-    let paper_sizes: Vec<usize> = floats(&paper.table4, "particles_per_aggregate")?.iter().map(|&s| s as usize).collect();
+    let paper_sizes: Vec<usize> =
+        floats(&paper.table4, "particles_per_aggregate")?.iter().map(|&s| s as usize).collect();
     let table3 = table3_ensemble(runs);
-    let largest = table3.iter().flat_map(|r| r.last.iter().map(|a| a.size())).chain(paper_sizes.iter().copied()).max().unwrap_or(1);
+    let largest = table3
+        .iter()
+        .flat_map(|r| r.last.iter().map(|a| a.size()))
+        .chain(paper_sizes.iter().copied())
+        .max()
+        .unwrap_or(1);
     let (mut c_col, mut size_col, mut magdem_col, mut paper_col) = (vec![], vec![], vec![], vec![]);
     let (mut frac_col, mut frac_std_col, mut paper_frac_col) = (vec![], vec![], vec![]);
     let mut panels = vec![];
@@ -316,9 +412,12 @@ fn table4_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Res
             })
             .collect();
         let magdem: Vec<f64> = (0..largest).map(|s| mean(&per_run.iter().map(|h| h[s]).collect::<Vec<_>>())).collect();
-        let fractions: Vec<Vec<f64>> = per_run.iter().map(|h| h.iter().map(|n| n / h.iter().sum::<f64>()).collect()).collect();
-        let fraction: Vec<f64> = (0..largest).map(|s| mean(&fractions.iter().map(|f| f[s]).collect::<Vec<_>>())).collect();
-        let fraction_std: Vec<f64> = (0..largest).map(|s| summary(&fractions.iter().map(|f| f[s]).collect::<Vec<_>>()).sample_std).collect();
+        let fractions: Vec<Vec<f64>> =
+            per_run.iter().map(|h| h.iter().map(|n| n / h.iter().sum::<f64>()).collect()).collect();
+        let fraction: Vec<f64> =
+            (0..largest).map(|s| mean(&fractions.iter().map(|f| f[s]).collect::<Vec<_>>())).collect();
+        let fraction_std: Vec<f64> =
+            (0..largest).map(|s| summary(&fractions.iter().map(|f| f[s]).collect::<Vec<_>>()).sample_std).collect();
         let mut paper_row = vec![0.0; largest];
         for (s, n) in paper_sizes.iter().zip(&paper_counts) {
             paper_row[s - 1] = *n;
@@ -336,15 +435,34 @@ fn table4_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Res
         }
         let total = |v: &[f64]| v.iter().sum::<f64>();
         let max_size = |v: &[f64]| v.iter().rposition(|&n| n > 0.0).map_or(0.0, |k| (k + 1) as f64);
-        let mean_max = mean(&here.iter().map(|r| r.last.iter().map(|a| a.size()).max().unwrap_or(0) as f64).collect::<Vec<_>>());
-        summary_rows.push((c, total(&paper_row), total(&magdem), paper_row[0], magdem[0], max_size(&paper_row), mean_max));
+        let mean_max =
+            mean(&here.iter().map(|r| r.last.iter().map(|a| a.size()).max().unwrap_or(0) as f64).collect::<Vec<_>>());
+        summary_rows.push((
+            c,
+            total(&paper_row),
+            total(&magdem),
+            paper_row[0],
+            magdem[0],
+            max_size(&paper_row),
+            mean_max,
+        ));
         panels.push(BarPanel {
             title: format!("{c} mg/ml"),
             y_label: "fraction of aggregates".into(),
             categories: (1..=largest).map(|s| s.to_string()).collect(),
             groups: vec![
-                BarGroup { label: format!("magdem: mean of {} seeds, bars ± std over seeds", here.len()), color: engine_colour("magdem"), values: fraction, errors: fraction_std },
-                BarGroup { label: "paper simulation (one run)".into(), color: palette(3), values: paper_fraction, errors: vec![] },
+                BarGroup {
+                    label: format!("magdem: mean of {} seeds, bars ± std over seeds", here.len()),
+                    color: engine_colour("magdem"),
+                    values: fraction,
+                    errors: fraction_std,
+                },
+                BarGroup {
+                    label: "paper simulation (one run)".into(),
+                    color: palette(3),
+                    values: paper_fraction,
+                    errors: vec![],
+                },
             ],
         });
     }
@@ -358,7 +476,13 @@ fn table4_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Res
         col("paper_fraction", paper_frac_col),
     ])?;
     write(&mut df, tables, "table4")?;
-    bar_panels(&out.join("table4.png"), "Case 1: aggregate size distributions at 5 ms (x: particles per aggregate)", &panels, 2, (760, 420))?;
+    bar_panels(
+        &out.join("table4.png"),
+        "Case 1: aggregate size distributions at 5 ms (x: particles per aggregate)",
+        &panels,
+        2,
+        (760, 420),
+    )?;
     let mut sdf = frame(vec![
         col("concentration_mg_per_ml", summary_rows.iter().map(|r| r.0).collect::<Vec<_>>()),
         col("paper_aggregates", summary_rows.iter().map(|r| r.1).collect::<Vec<_>>()),
@@ -374,7 +498,19 @@ fn table4_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Res
            The figure shows each size's fraction of the aggregates (magdem: mean over seeds, bars ± the std over seeds, the \
            seed-to-seed spread; the paper: its one run). The full histograms, counts and fractions, are in \
            `tables/table4.csv`.\n\n";
-    md += &markdown(&sdf, &["c (mg/ml)", "paper aggregates", "magdem aggregates/run", "paper singles", "magdem singles/run", "paper largest", "magdem largest (mean)"], &[3, 0, 1, 0, 1, 0, 1])?;
+    md += &markdown(
+        &sdf,
+        &[
+            "c (mg/ml)",
+            "paper aggregates",
+            "magdem aggregates/run",
+            "paper singles",
+            "magdem singles/run",
+            "paper largest",
+            "magdem largest (mean)",
+        ],
+        &[3, 0, 1, 0, 1, 0, 1],
+    )?;
     md += "\n![Table 4](table4.png)\n\n";
     Ok(md)
 }
@@ -400,13 +536,22 @@ fn box_section(runs: &[Run], paper: &Paper, out: &Path) -> Result<String, Error>
             BoxStats::of("paper simulation", palette(3), &paper_lengths(paper, c)?),
         ];
         panels.push(BoxPanel {
-            title: format!("{}) {c} mg/ml; magdem: {capped} of {} lengths box-limited", ["a", "b", "c", "d"][k % 4], magdem.len()),
+            title: format!(
+                "{}) {c} mg/ml; magdem: {capped} of {} lengths box-limited",
+                ["a", "b", "c", "d"][k % 4],
+                magdem.len()
+            ),
             y_label: "major axis length (µm)".into(),
             boxes: boxes.into_iter().flatten().collect(),
             markers: vec![("experiment (mean ± std)".into(), exp_mean[k], exp_std[k])],
         });
     }
-    box_panels(&out.join("boxplots.png"), "Case 1: aggregate length at 5 ms (box: quartiles, red: median, whiskers: Tukey fences, blue: mean)", &panels, 2)?;
+    box_panels(
+        &out.join("boxplots.png"),
+        "Case 1: aggregate length at 5 ms (box: quartiles, red: median, whiskers: Tukey fences, blue: mean)",
+        &panels,
+        2,
+    )?;
     Ok("## The box-plot figure\n\n\
         The paper's figure compares its simulated lengths with the experiment's as box plots. The experiment's distributions \
         are not published as numbers (only mean and std, Table 3), so the experiment appears as its mean ± std; the paper's \
@@ -424,11 +569,13 @@ fn case2_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Resu
     // Per run: mean and population std of size and tracked x velocity, over all aggregates and
     // over aggregates of two or more particles.
     let per_run = |r: &Run, min_size: usize| {
-        let size = summary(&r.last.iter().map(|a| a.size()).filter(|&n| n >= min_size).map(|n| n as f64).collect::<Vec<_>>());
+        let size =
+            summary(&r.last.iter().map(|a| a.size()).filter(|&n| n >= min_size).map(|n| n as f64).collect::<Vec<_>>());
         let vx = summary(&r.free_velocities_um_per_s(min_size));
         [size.mean, size.population_std, vx.mean, vx.population_std]
     };
-    let instantaneous = mean(&here.iter().flat_map(|r| r.last.iter().map(|a| a.com_velocity.x * 1e6)).collect::<Vec<_>>());
+    let instantaneous =
+        mean(&here.iter().flat_map(|r| r.last.iter().map(|a| a.com_velocity.x * 1e6)).collect::<Vec<_>>());
     let walled = here.iter().map(|r| r.at_x_wall.iter().filter(|&&w| w).count()).sum::<usize>();
     let total = here.iter().map(|r| r.last.len()).sum::<usize>();
     let mut source = vec![];
@@ -445,7 +592,12 @@ fn case2_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Resu
     }
     for (k, name) in strings(&paper.table2, "source")?.into_iter().enumerate() {
         source.push(name);
-        for (c, key) in cols.iter_mut().zip(["mean_size_particles", "std_size_particles", "mean_velocity_um_per_s", "std_velocity_um_per_s"]) {
+        for (c, key) in cols.iter_mut().zip([
+            "mean_size_particles",
+            "std_size_particles",
+            "mean_velocity_um_per_s",
+            "std_velocity_um_per_s",
+        ]) {
             c.push(floats(&paper.table2, key)?[k]);
         }
         cols[4].push(f64::NAN);
@@ -488,7 +640,11 @@ fn case2_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Resu
         b0,
         h
     );
-    md += &markdown(&df, &["source", "mean size", "std", "± CI95", "mean velocity (µm/s)", "std", "± CI95"], &[0, 2, 2, 2, 2, 2, 2])?;
+    md += &markdown(
+        &df,
+        &["source", "mean size", "std", "± CI95", "mean velocity (µm/s)", "std", "± CI95"],
+        &[0, 2, 2, 2, 2, 2, 2],
+    )?;
     let panels = vec![
         BarPanel {
             title: "aggregate size".into(),
@@ -524,7 +680,12 @@ fn case2_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Resu
         &[
             Series::markers("magdem, mean per size", points.clone(), engine_colour("magdem"), 6),
             Series::line("n × single-particle velocity", ideal, palette(6)),
-            Series::markers("experiment (7.5 µm/s, any size)", vec![(1.0, 7.5), (points.last().map_or(1.0, |p| p.0), 7.5)], RGBColor(0, 0, 0), 4),
+            Series::markers(
+                "experiment (7.5 µm/s, any size)",
+                vec![(1.0, 7.5), (points.last().map_or(1.0, |p| p.0), 7.5)],
+                RGBColor(0, 0, 0),
+                4,
+            ),
         ],
         SeriesLabelPosition::UpperLeft,
     )?;
@@ -581,7 +742,14 @@ fn approach_section(runs: &[Run], out: &Path) -> Result<String, Error> {
     let contact = gap.iter().position(|&(r, _)| r <= 1.0).map(|k| times[k]);
     let peak = speed.iter().cloned().fold((0.0, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a });
     let peak = (peak.0, 10f64.powf(peak.1));
-    line_chart_with_legend(&out.join("approach.png"), "Two 11 µm particles from 15 diameters at 1.5 T", "time (ms)", "log10 speed of one particle (mm/s)", &[Series::line("magdem", speed, engine_colour("magdem"))], SeriesLabelPosition::UpperLeft)?;
+    line_chart_with_legend(
+        &out.join("approach.png"),
+        "Two 11 µm particles from 15 diameters at 1.5 T",
+        "time (ms)",
+        "log10 speed of one particle (mm/s)",
+        &[Series::line("magdem", speed, engine_colour("magdem"))],
+        SeriesLabelPosition::UpperLeft,
+    )?;
     line_chart_with_legend(
         &out.join("approach-distance.png"),
         "Approach speed against centre distance",
@@ -617,7 +785,8 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
     for r in &variants {
         groups.entry(r.variant.clone()).or_default().push(r);
     }
-    let reference: Vec<&Run> = groups.get("respa").map_or(vec![], |g| g.iter().copied().filter(|r| r.completed()).collect());
+    let reference: Vec<&Run> =
+        groups.get("respa").map_or(vec![], |g| g.iter().copied().filter(|r| r.completed()).collect());
     if reference.is_empty() {
         md += "Not run: `experiments/paper/opt-in/sensitivity.toml` (its reference variant `respa` has no completed runs) enters here \
                when its runs exist.\n\n";
@@ -625,14 +794,17 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
     }
     let base = convergence::Estimate::of(&reference.iter().map(|r| r.mean_length_um()).collect::<Vec<_>>());
     let shared: Vec<String> = reference.first().map(|r| r.variant_overrides.clone()).unwrap_or_default();
-    let (mut names, mut changes, mut done_runs, mut means, mut deltas, mut delta_cis, mut outcome, mut cost) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
+    let (mut names, mut changes, mut done_runs, mut means, mut deltas, mut delta_cis, mut outcome, mut cost) =
+        (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
     let (mut capped, mut fastest) = (vec![], vec![]);
     let mut bars = vec![];
     for (name, group) in groups.iter().filter(|(name, _)| name.as_str() != "respa") {
         let ok: Vec<&Run> = group.iter().copied().filter(|r| r.completed()).collect();
         let d = convergence::paired_change(&reference, &ok);
         names.push(name.clone());
-        changes.push(group[0].variant_overrides.iter().filter(|o| !shared.contains(o)).cloned().collect::<Vec<_>>().join(", "));
+        changes.push(
+            group[0].variant_overrides.iter().filter(|o| !shared.contains(o)).cloned().collect::<Vec<_>>().join(", "),
+        );
         done_runs.push(ok.len() as u64);
         means.push(mean(&ok.iter().map(|r| r.mean_length_um()).collect::<Vec<_>>()));
         capped.push(mean(&ok.iter().map(|r| r.box_limited_fraction()).collect::<Vec<_>>()));
@@ -642,7 +814,12 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
         delta_cis.push(d.ci95);
         let stopped: Vec<&&Run> = group.iter().filter(|r| r.status == "unstable").collect();
         outcome.push(match stopped.first() {
-            Some(r) => format!("{} of {} stopped: {}", stopped.len(), group.len(), r.message.split(';').next().unwrap_or(&r.message)),
+            Some(r) => format!(
+                "{} of {} stopped: {}",
+                stopped.len(),
+                group.len(),
+                r.message.split(';').next().unwrap_or(&r.message)
+            ),
             None if ok.len() < group.len() => format!("{} of {} not run", group.len() - ok.len(), group.len()),
             None => String::new(),
         });
@@ -657,7 +834,12 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
                 _ => None,
             };
             if let Some(explanation) = explanation {
-                effects.push(Effect { concentration: first.concentration, explanation, what: format!("{name} against r-RESPA, paired over {} seeds", d.n), change: d });
+                effects.push(Effect {
+                    concentration: first.concentration,
+                    explanation,
+                    what: format!("{name} against r-RESPA, paired over {} seeds", d.n),
+                    change: d,
+                });
             }
         }
     }
@@ -685,7 +867,18 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
     );
     md += &markdown(
         &df,
-        &["variant", "change", "runs", "mean length (µm)", "box-limited", "fastest aggregate at 5 ms (m/s)", "paired change (%)", "± CI95", "wall time/run (s)", "outcome"],
+        &[
+            "variant",
+            "change",
+            "runs",
+            "mean length (µm)",
+            "box-limited",
+            "fastest aggregate at 5 ms (m/s)",
+            "paired change (%)",
+            "± CI95",
+            "wall time/run (s)",
+            "outcome",
+        ],
         &[0, 0, 0, 1, 3, 4, 1, 1, 0, 0],
     )?;
     md += "\nThe paper's pipeline holds the moments and dipole forces over each 1e-6 s outer step while contacts are resolved at \
@@ -695,7 +888,9 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
     let series: Vec<Series> = bars
         .iter()
         .enumerate()
-        .map(|(k, (name, d))| Series::markers(name.clone(), vec![(k as f64, d.mean)], palette(k), 7).with_errors(vec![d.ci95]))
+        .map(|(k, (name, d))| {
+            Series::markers(name.clone(), vec![(k as f64, d.mean)], palette(k), 7).with_errors(vec![d.ci95])
+        })
         .collect();
     let zero = Series::line("", vec![(-0.5, 0.0), (bars.len() as f64 - 0.5, 0.0)], RGBColor(0, 0, 0));
     line_chart_with_legend(
@@ -721,7 +916,8 @@ fn box_effect_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) ->
     let conc = floats(&paper.table3, "concentration_mg_per_ml")?;
     let exp = floats(&paper.table3, "exp_mean_length_um")?;
     let table3 = table3_ensemble(runs);
-    let (mut c_col, mut v_col, mut n_col, mut p_col, mut m_col, mut ci_col, mut e_col) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
+    let (mut c_col, mut v_col, mut n_col, mut p_col, mut m_col, mut ci_col, mut e_col) =
+        (vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
     let mut panels = vec![];
     for (k, &c) in conc.iter().enumerate() {
         let mut groups: BTreeMap<String, Vec<&Run>> = BTreeMap::new();
@@ -732,7 +928,10 @@ fn box_effect_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) ->
             continue;
         }
         let seeds: Vec<u64> = groups.values().flatten().map(|r| r.seed).collect();
-        groups.insert("walls (table 3)".into(), table3.iter().copied().filter(|r| same(r.concentration, c) && seeds.contains(&r.seed)).collect());
+        groups.insert(
+            "walls (table 3)".into(),
+            table3.iter().copied().filter(|r| same(r.concentration, c) && seeds.contains(&r.seed)).collect(),
+        );
         let (mut cats, mut vals, mut errs) = (vec![], vec![], vec![]);
         for (variant, group) in &groups {
             let m: Vec<f64> = group.iter().map(|r| r.mean_length_um()).collect();
@@ -750,9 +949,15 @@ fn box_effect_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) ->
         cats.push("experiment".into());
         vals.push(exp[k]);
         errs.push(f64::NAN);
-        panels.push(BarPanel { title: format!("{c} mg/ml"), y_label: "mean length (µm)".into(), categories: cats, groups: vec![BarGroup { label: String::new(), color: palette(1), values: vals, errors: errs }] });
+        panels.push(BarPanel {
+            title: format!("{c} mg/ml"),
+            y_label: "mean length (µm)".into(),
+            categories: cats,
+            groups: vec![BarGroup { label: String::new(), color: palette(1), values: vals, errors: errs }],
+        });
     }
-    let rows: Vec<(f64, String, f64)> = c_col.iter().zip(&v_col).zip(&m_col).map(|((&c, v), &m)| (c, v.clone(), m)).collect();
+    let rows: Vec<(f64, String, f64)> =
+        c_col.iter().zip(&v_col).zip(&m_col).map(|((&c, v), &m)| (c, v.clone(), m)).collect();
     let mut df = frame(vec![
         col("concentration_mg_per_ml", c_col),
         scol("domain", v_col),
@@ -766,12 +971,17 @@ fn box_effect_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) ->
     md += "The paper attributes its underestimate at 2.25 and 4.5 mg/ml to its ~300 particles. Same scenes and seeds, with \
            periodic faces instead of walls, and with 10× (and, where run, 100×) the particles in a box scaled at equal \
            concentration (`experiments/paper/opt-in/`):\n\n";
-    md += &markdown(&df, &["c (mg/ml)", "domain", "runs", "particles", "mean length (µm)", "± CI95", "experiment (µm)"], &[3, 0, 0, 0, 1, 1, 0])?;
+    md += &markdown(
+        &df,
+        &["c (mg/ml)", "domain", "runs", "particles", "mean length (µm)", "± CI95", "experiment (µm)"],
+        &[3, 0, 0, 0, 1, 1, 0],
+    )?;
     let lookup = |c: f64, domain: &str| rows.iter().find(|r| same(r.0, c) && r.1 == domain).map(|r| r.2);
     let mut findings = vec![];
     for &c in &conc {
         if let (Some(walls), Some(big)) = (lookup(c, "walls (table 3)"), lookup(c, "x10-walls")) {
-            let periodic = lookup(c, "x10-periodic").map_or(String::new(), |p| format!(", {p:.0} µm with periodic sides"));
+            let periodic =
+                lookup(c, "x10-periodic").map_or(String::new(), |p| format!(", {p:.0} µm with periodic sides"));
             findings.push(format!("at {c} mg/ml the mean length goes from {walls:.0} µm (paper box) to {big:.0} µm with 10× the particles and walls{periodic}"));
         }
     }
@@ -783,7 +993,13 @@ fn box_effect_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) ->
             findings.join("; ")
         );
     }
-    bar_panels(&out.join("box-and-count.png"), "Case 1: effect of the walls and of the particle count (± CI95)", &panels, 2, (760, 460))?;
+    bar_panels(
+        &out.join("box-and-count.png"),
+        "Case 1: effect of the walls and of the particle count (± CI95)",
+        &panels,
+        2,
+        (760, 460),
+    )?;
     md += "\n![Walls and particle count](box-and-count.png)\n\n";
     Ok(md)
 }
@@ -800,7 +1016,8 @@ fn reference_section(runs: &[Run], out: &Path, tables: &Path) -> Result<String, 
     let differences: Vec<(f64, f64)> = here
         .iter()
         .map(|r| {
-            let native = here.iter().find(|n| n.engine == "magdem" && n.scene == r.scene && n.seed == r.seed && n.completed());
+            let native =
+                here.iter().find(|n| n.engine == "magdem" && n.scene == r.scene && n.seed == r.seed && n.completed());
             match native {
                 Some(n) if r.completed() => position_difference(&n.file, &r.file).unwrap_or((f64::NAN, f64::NAN)),
                 _ => (f64::NAN, f64::NAN),
@@ -811,11 +1028,32 @@ fn reference_section(runs: &[Run], out: &Path, tables: &Path) -> Result<String, 
         scol("scene", here.iter().map(|r| r.scene.clone()).collect()),
         scol("engine", here.iter().map(|r| r.engine.clone()).collect()),
         ucol("seed", here.iter().map(|r| r.seed).collect()),
-        scol("status", here.iter().map(|r| if r.completed() { "completed".to_string() } else { format!("{} {}", r.status, r.message) }).collect()),
-        col("aggregates", here.iter().map(|r| if r.completed() { r.last.len() as f64 } else { f64::NAN }).collect::<Vec<_>>()),
-        col("mean_length_um", here.iter().map(|r| if r.completed() { r.mean_length_um() } else { f64::NAN }).collect::<Vec<_>>()),
-        col("pop_std_um", here.iter().map(|r| if r.completed() { summary(&r.lengths_um()).population_std } else { f64::NAN }).collect::<Vec<_>>()),
-        col("largest", here.iter().map(|r| r.last.iter().map(|a| a.size()).max().map_or(f64::NAN, |s| s as f64)).collect::<Vec<_>>()),
+        scol(
+            "status",
+            here.iter()
+                .map(|r| if r.completed() { "completed".to_string() } else { format!("{} {}", r.status, r.message) })
+                .collect(),
+        ),
+        col(
+            "aggregates",
+            here.iter().map(|r| if r.completed() { r.last.len() as f64 } else { f64::NAN }).collect::<Vec<_>>(),
+        ),
+        col(
+            "mean_length_um",
+            here.iter().map(|r| if r.completed() { r.mean_length_um() } else { f64::NAN }).collect::<Vec<_>>(),
+        ),
+        col(
+            "pop_std_um",
+            here.iter()
+                .map(|r| if r.completed() { summary(&r.lengths_um()).population_std } else { f64::NAN })
+                .collect::<Vec<_>>(),
+        ),
+        col(
+            "largest",
+            here.iter()
+                .map(|r| r.last.iter().map(|a| a.size()).max().map_or(f64::NAN, |s| s as f64))
+                .collect::<Vec<_>>(),
+        ),
         scol("max_dx_end_m", differences.iter().map(|d| sci(d.0)).collect()),
         scol("max_dx_run_m", differences.iter().map(|d| sci(d.1)).collect()),
         col("wall_time_s", here.iter().map(|r| r.wall_time).collect::<Vec<_>>()),
@@ -830,11 +1068,43 @@ fn reference_section(runs: &[Run], out: &Path, tables: &Path) -> Result<String, 
          statistics is the requirement and agreement of trajectories a bonus; LAMMPS' tangential contact model differs from \
          LIGGGHTS' and magdem's by design (see the contact verification report). Engines not installed show as missing.\n\n"
     );
-    md += &markdown(&df, &["scene", "engine", "seed", "status", "aggregates", "mean length (µm)", "pop std (µm)", "largest", "largest Δx at the end (m)", "largest Δx over the run (m)", "wall time (s)"], &[0, 0, 0, 0, 0, 2, 2, 0, 0, 0, 1])?;
+    md += &markdown(
+        &df,
+        &[
+            "scene",
+            "engine",
+            "seed",
+            "status",
+            "aggregates",
+            "mean length (µm)",
+            "pop std (µm)",
+            "largest",
+            "largest Δx at the end (m)",
+            "largest Δx over the run (m)",
+            "wall time (s)",
+        ],
+        &[0, 0, 0, 0, 0, 2, 2, 0, 0, 0, 1],
+    )?;
     let done: Vec<&&Run> = here.iter().filter(|r| r.completed()).collect();
     if !done.is_empty() {
-        let series: Vec<Series> = done.iter().map(|r| Series::line(format!("{} ({})", r.engine, r.scene), r.times.iter().zip(&r.mean_length).map(|(t, l)| (t * 1e3, l * 1e6)).collect(), engine_colour(&r.engine))).collect();
-        line_chart_with_legend(&out.join("reference-engines.png"), "Case 1 with Stokes drag: mean length against time per engine", "time (ms)", "mean length (µm)", &series, SeriesLabelPosition::UpperLeft)?;
+        let series: Vec<Series> = done
+            .iter()
+            .map(|r| {
+                Series::line(
+                    format!("{} ({})", r.engine, r.scene),
+                    r.times.iter().zip(&r.mean_length).map(|(t, l)| (t * 1e3, l * 1e6)).collect(),
+                    engine_colour(&r.engine),
+                )
+            })
+            .collect();
+        line_chart_with_legend(
+            &out.join("reference-engines.png"),
+            "Case 1 with Stokes drag: mean length against time per engine",
+            "time (ms)",
+            "mean length (µm)",
+            &series,
+            SeriesLabelPosition::UpperLeft,
+        )?;
         md += "\n![Engines](reference-engines.png)\n\n";
     }
     Ok(md)
@@ -849,7 +1119,8 @@ fn reference_ensemble(runs: &[Run], out: &Path, tables: &Path) -> Result<String,
             .into());
     }
     const ENGINES: [&str; 3] = ["magdem", "liggghts", "lammps"];
-    let (mut c_col, mut e_col, mut n_col, mut m_col, mut ci_col, mut s_col) = (vec![], vec![], vec![], vec![], vec![], vec![]);
+    let (mut c_col, mut e_col, mut n_col, mut m_col, mut ci_col, mut s_col) =
+        (vec![], vec![], vec![], vec![], vec![], vec![]);
     let mut concentrations: Vec<f64> = all.iter().map(|r| r.concentration).collect();
     concentrations.sort_by(f64::total_cmp);
     concentrations.dedup();
@@ -859,7 +1130,8 @@ fn reference_ensemble(runs: &[Run], out: &Path, tables: &Path) -> Result<String,
     for &c in &concentrations {
         let mut per_engine = vec![];
         for engine in ENGINES {
-            let done: Vec<&&Run> = all.iter().filter(|r| r.completed() && r.engine == engine && same(r.concentration, c)).collect();
+            let done: Vec<&&Run> =
+                all.iter().filter(|r| r.completed() && r.engine == engine && same(r.concentration, c)).collect();
             let means: Vec<f64> = done.iter().map(|r| r.mean_length_um()).collect();
             let (m, ci) = (mean(&means), ci95_half_width(&means));
             c_col.push(c);
@@ -874,15 +1146,26 @@ fn reference_ensemble(runs: &[Run], out: &Path, tables: &Path) -> Result<String,
         for (engine, &(m, ci)) in ENGINES.iter().zip(&per_engine).skip(1) {
             if m.is_finite() && m0.is_finite() {
                 let within = (m - m0).abs() <= (ci * ci + ci0 * ci0).sqrt();
-                comparisons.push(format!("{c} mg/ml {engine} {:+.1} µm ({:+.1}%, {})", m - m0 + 0.0, 100.0 * (m - m0) / m0 + 0.0, if within { "within the CI95" } else { "outside the CI95" }));
+                comparisons.push(format!(
+                    "{c} mg/ml {engine} {:+.1} µm ({:+.1}%, {})",
+                    m - m0 + 0.0,
+                    100.0 * (m - m0) / m0 + 0.0,
+                    if within { "within the CI95" } else { "outside the CI95" }
+                ));
             }
         }
     }
     // The figure: each engine's difference to magdem, paired seed by seed (µm, mean ± CI95).
     let paired_difference = |engine: &str, c: f64| {
-        let of = |e: &str| all.iter().filter(|r| r.completed() && r.engine == e && same(r.concentration, c)).map(|r| (r.seed, r.mean_length_um())).collect::<Vec<_>>();
+        let of = |e: &str| {
+            all.iter()
+                .filter(|r| r.completed() && r.engine == e && same(r.concentration, c))
+                .map(|r| (r.seed, r.mean_length_um()))
+                .collect::<Vec<_>>()
+        };
         let base = of("magdem");
-        let d: Vec<f64> = of(engine).iter().filter_map(|(s, l)| base.iter().find(|b| b.0 == *s).map(|b| l - b.1)).collect();
+        let d: Vec<f64> =
+            of(engine).iter().filter_map(|(s, l)| base.iter().find(|b| b.0 == *s).map(|b| l - b.1)).collect();
         convergence::Estimate::of(&d)
     };
     let panel = BarPanel {
@@ -899,7 +1182,13 @@ fn reference_ensemble(runs: &[Run], out: &Path, tables: &Path) -> Result<String,
             })
             .collect(),
     };
-    bar_panels(&out.join("reference-table3.png"), "Table 3 in LIGGGHTS and LAMMPS against magdem (same scenes, same seeds)", &[panel], 1, (900, 480))?;
+    bar_panels(
+        &out.join("reference-table3.png"),
+        "Table 3 in LIGGGHTS and LAMMPS against magdem (same scenes, same seeds)",
+        &[panel],
+        1,
+        (900, 480),
+    )?;
     let mut df = frame(vec![
         col("concentration_mg_per_ml", c_col),
         scol("engine", e_col),
@@ -920,18 +1209,29 @@ fn reference_ensemble(runs: &[Run], out: &Path, tables: &Path) -> Result<String,
 
 /// A float in scientific notation for a table cell ("–" for NaN).
 fn sci(v: f64) -> String {
-    if v.is_nan() { "–".into() } else { format!("{v:.1e}") }
+    if v.is_nan() {
+        "–".into()
+    } else {
+        format!("{v:.1e}")
+    }
 }
 
 /// Largest particle position difference between two trajectories of the same scene: at the
 /// last frame and over all frames (m).
 fn position_difference(a: &Path, b: &Path) -> Result<(f64, f64), Error> {
-    let (x, y) = (crate::io::trajectory::Trajectory::open(a)?.all_vectors("position")?, crate::io::trajectory::Trajectory::open(b)?.all_vectors("position")?);
+    let (x, y) = (
+        crate::io::trajectory::Trajectory::open(a)?.all_vectors("position")?,
+        crate::io::trajectory::Trajectory::open(b)?.all_vectors("position")?,
+    );
     if x.shape() != y.shape() {
         return Err(format!("{} and {} hold different frames", a.display(), b.display()).into());
     }
     let per_frame: Vec<f64> = (0..x.shape()[0])
-        .map(|k| (0..x.shape()[1]).map(|i| (0..3).map(|c| (x[[k, i, c]] - y[[k, i, c]]).powi(2)).sum::<f64>().sqrt()).fold(0.0, f64::max))
+        .map(|k| {
+            (0..x.shape()[1])
+                .map(|i| (0..3).map(|c| (x[[k, i, c]] - y[[k, i, c]]).powi(2)).sum::<f64>().sqrt())
+                .fold(0.0, f64::max)
+        })
         .collect();
     Ok((*per_frame.last().unwrap_or(&f64::NAN), per_frame.iter().copied().fold(0.0, f64::max)))
 }
@@ -948,11 +1248,30 @@ fn runs_section(runs: &[Run], tables: &Path) -> Result<String, Error> {
         scol("status", runs.iter().map(|r| r.status.clone()).collect()),
         scol("message", runs.iter().map(|r| r.message.clone()).collect()),
         col("end_time_s", runs.iter().map(|r| r.times.last().copied().unwrap_or(f64::NAN)).collect::<Vec<_>>()),
-        col("aggregates", runs.iter().map(|r| if r.completed() { r.last.len() as f64 } else { f64::NAN }).collect::<Vec<_>>()),
-        col("mean_length_um", runs.iter().map(|r| if r.completed() { r.mean_length_um() } else { f64::NAN }).collect::<Vec<_>>()),
-        col("pop_std_um", runs.iter().map(|r| if r.completed() { summary(&r.lengths_um()).population_std } else { f64::NAN }).collect::<Vec<_>>()),
-        col("sample_std_um", runs.iter().map(|r| if r.completed() { summary(&r.lengths_um()).sample_std } else { f64::NAN }).collect::<Vec<_>>()),
-        col("box_limited_fraction", runs.iter().map(|r| if r.completed() { r.box_limited_fraction() } else { f64::NAN }).collect::<Vec<_>>()),
+        col(
+            "aggregates",
+            runs.iter().map(|r| if r.completed() { r.last.len() as f64 } else { f64::NAN }).collect::<Vec<_>>(),
+        ),
+        col(
+            "mean_length_um",
+            runs.iter().map(|r| if r.completed() { r.mean_length_um() } else { f64::NAN }).collect::<Vec<_>>(),
+        ),
+        col(
+            "pop_std_um",
+            runs.iter()
+                .map(|r| if r.completed() { summary(&r.lengths_um()).population_std } else { f64::NAN })
+                .collect::<Vec<_>>(),
+        ),
+        col(
+            "sample_std_um",
+            runs.iter()
+                .map(|r| if r.completed() { summary(&r.lengths_um()).sample_std } else { f64::NAN })
+                .collect::<Vec<_>>(),
+        ),
+        col(
+            "box_limited_fraction",
+            runs.iter().map(|r| if r.completed() { r.box_limited_fraction() } else { f64::NAN }).collect::<Vec<_>>(),
+        ),
         ucol("percolating", runs.iter().map(|r| r.percolating() as u64).collect()),
         col("wall_time_s", runs.iter().map(|r| r.wall_time).collect::<Vec<_>>()),
     ])?;

@@ -97,14 +97,21 @@ pub fn experiment_files(dir: &Path, opt_in: bool) -> std::io::Result<Vec<PathBuf
         if !d.is_dir() {
             continue;
         }
-        let mut here: Vec<PathBuf> = std::fs::read_dir(d)?.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|x| x == "toml")).collect();
+        let mut here: Vec<PathBuf> = std::fs::read_dir(d)?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+            .collect();
         here.sort();
         files.extend(here);
     }
     Ok(files)
 }
 
-fn load(experiment: &Experiment, point: &crate::scene::experiment::Point, gap: f64) -> Result<Run, Box<dyn std::error::Error + Send + Sync>> {
+fn load(
+    experiment: &Experiment,
+    point: &crate::scene::experiment::Point,
+    gap: f64,
+) -> Result<Run, Box<dyn std::error::Error + Send + Sync>> {
     let spec = &point.scene.spec;
     let file = experiment.output.join(format!("{}.h5", point.id));
     let mut run = Run {
@@ -112,7 +119,12 @@ fn load(experiment: &Experiment, point: &crate::scene::experiment::Point, gap: f
         id: point.id.clone(),
         scene: point.base.file_stem().map_or(String::new(), |s| s.to_string_lossy().to_string()),
         variant: point.variant.clone().unwrap_or_default(),
-        variant_overrides: point.overrides.iter().take(point.overrides.len().saturating_sub(sweep_keys(experiment))).map(|(k, v)| format!("{k} = {v}")).collect(),
+        variant_overrides: point
+            .overrides
+            .iter()
+            .take(point.overrides.len().saturating_sub(sweep_keys(experiment)))
+            .map(|(k, v)| format!("{k} = {v}"))
+            .collect(),
         seed: spec.seed,
         engine: point.engine.clone(),
         concentration: spec.particles.first().and_then(|g| g.concentration).unwrap_or(f64::NAN),
@@ -145,7 +157,12 @@ fn load(experiment: &Experiment, point: &crate::scene::experiment::Point, gap: f
 }
 
 /// Fills `run` from its trajectory `file`.
-fn read_run(run: &mut Run, point: &crate::scene::experiment::Point, file: &Path, gap: f64) -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
+fn read_run(
+    run: &mut Run,
+    point: &crate::scene::experiment::Point,
+    file: &Path,
+    gap: f64,
+) -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let t = Trajectory::open(file).map_err(|e| e.to_string())?;
     if t.attr_string("scene_sha256").ok().as_deref() != Some(point.scene.hash.as_str()) {
         run.status = "stale (another scene)".into();
@@ -162,7 +179,8 @@ fn read_run(run: &mut Run, point: &crate::scene::experiment::Point, file: &Path,
             let (time, aggs) = reader.aggregates(k as isize, gap).map_err(|e| e.to_string())?;
             run.times.push(time);
             run.mean_length.push(summary(&finite_lengths(&aggs)).mean);
-            run.box_limited.push(aggs.iter().filter(|a| a.box_limited(run.box_extent)).count() as f64 / aggs.len() as f64);
+            run.box_limited
+                .push(aggs.iter().filter(|a| a.box_limited(run.box_extent)).count() as f64 / aggs.len() as f64);
             if k + 1 == frames {
                 run.last = aggs;
             }
@@ -170,19 +188,30 @@ fn read_run(run: &mut Run, point: &crate::scene::experiment::Point, file: &Path,
         let times = &reader.times;
         let end = frames - 1;
         let start = times.iter().position(|&x| x >= 0.9 * times[end]).unwrap_or(0).min(end.saturating_sub(1));
-        let (now, then) = (t.frame_vectors("position", end).map_err(|e| e.to_string())?, t.frame_vectors("position", start).map_err(|e| e.to_string())?);
+        let (now, then) = (
+            t.frame_vectors("position", end).map_err(|e| e.to_string())?,
+            t.frame_vectors("position", start).map_err(|e| e.to_string())?,
+        );
         let span = times[end] - times[start];
         let domain = reader.domain();
         run.tracked_vx = run
             .last
             .iter()
-            .map(|a| a.members.iter().map(|&i| domain.displacement(&now[i], &then[i]).x).sum::<f64>() / (a.members.len() as f64 * span))
+            .map(|a| {
+                a.members.iter().map(|&i| domain.displacement(&now[i], &then[i]).x).sum::<f64>()
+                    / (a.members.len() as f64 * span)
+            })
             .collect();
         let radius = &point.scene.initial.radius;
         run.at_x_wall = run
             .last
             .iter()
-            .map(|a| !domain.periodic[0] && a.members.iter().any(|&i| now[i].x - domain.lo.x < 3.0 * radius[i] || domain.hi.x - now[i].x < 3.0 * radius[i]))
+            .map(|a| {
+                !domain.periodic[0]
+                    && a.members
+                        .iter()
+                        .any(|&i| now[i].x - domain.lo.x < 3.0 * radius[i] || domain.hi.x - now[i].x < 3.0 * radius[i])
+            })
             .collect();
     }
     Ok(())
@@ -206,7 +235,10 @@ fn sweep_keys(experiment: &Experiment) -> usize {
 /// Every point of the experiments in `files`, analysed at aggregate gap tolerance `gap`.
 pub fn load_runs(files: &[PathBuf], gap: f64) -> Result<Vec<Run>, Box<dyn std::error::Error>> {
     let mut jobs = vec![];
-    let experiments: Vec<Experiment> = files.iter().map(|f| Experiment::from_file(f).map_err(|e| format!("{}: {e}", f.display()))).collect::<Result<_, _>>()?;
+    let experiments: Vec<Experiment> = files
+        .iter()
+        .map(|f| Experiment::from_file(f).map_err(|e| format!("{}: {e}", f.display())))
+        .collect::<Result<_, _>>()?;
     for e in &experiments {
         jobs.extend(e.points.iter().map(move |p| (e, p)));
     }

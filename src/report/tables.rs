@@ -53,7 +53,8 @@ pub fn markdown(df: &DataFrame, headers: &[&str], digits: &[usize]) -> PolarsRes
     }
     let mut out = format!("| {} |\n|{}\n", headers.join(" | "), "---|".repeat(headers.len()));
     for row in 0..df.height() {
-        let cells: Vec<String> = columns.iter().zip(digits).map(|(c, &d)| c.get(row).map(|v| cell(v, d))).collect::<PolarsResult<_>>()?;
+        let cells: Vec<String> =
+            columns.iter().zip(digits).map(|(c, &d)| c.get(row).map(|v| cell(v, d))).collect::<PolarsResult<_>>()?;
         out += &format!("| {} |\n", cells.join(" | "));
     }
     Ok(out)

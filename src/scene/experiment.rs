@@ -79,7 +79,8 @@ fn set_path(table: &mut toml::Table, path: &str, value: toml::Value) -> Result<(
                     t.entry(part.to_string()).or_insert_with(|| toml::Value::Table(toml::Table::new()))
                 }
                 toml::Value::Array(a) => {
-                    let i: usize = part.parse().map_err(|_| format!("`{part}` indexes an array: it must be a number"))?;
+                    let i: usize =
+                        part.parse().map_err(|_| format!("`{part}` indexes an array: it must be a number"))?;
                     let len = a.len();
                     let slot = a.get_mut(i).ok_or_else(|| format!("index {i} beyond the {len} entries"))?;
                     if last {
@@ -110,7 +111,8 @@ fn slug(value: &toml::Value) -> String {
 
 impl Experiment {
     pub fn from_file(path: &Path) -> Result<Self, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read { path: path.display().to_string(), source })?;
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| SceneError::Read { path: path.display().to_string(), source })?;
         let spec: ExperimentSpec = toml::from_str(&text).map_err(|e| SceneError::Syntax {
             origin: path.display().to_string(),
             line: e.span().map_or(0, |s| text[..s.start.min(text.len())].lines().count().max(1)),
@@ -176,10 +178,15 @@ impl Experiment {
                 }
                 for (key, value) in fixed {
                     if key == "engine" {
-                        return Err(invalid(&format!("variants.{}.engine", variant.as_deref().unwrap_or("")), value, "sweep engines with `sweep.engine`"));
+                        return Err(invalid(
+                            &format!("variants.{}.engine", variant.as_deref().unwrap_or("")),
+                            value,
+                            "sweep engines with `sweep.engine`",
+                        ));
                     }
-                    set_path(&mut table, key, value.clone())
-                        .map_err(|why| invalid(&format!("variants.{}.{key}", variant.as_deref().unwrap_or("")), value, why))?;
+                    set_path(&mut table, key, value.clone()).map_err(|why| {
+                        invalid(&format!("variants.{}.{key}", variant.as_deref().unwrap_or("")), value, why)
+                    })?;
                 }
                 for (key, value) in combo {
                     id += &format!("__{}-{}", key.rsplit('.').next().unwrap_or(key), slug(value));
@@ -187,14 +194,19 @@ impl Experiment {
                         engine = value.as_str().unwrap_or("magdem").to_string();
                         continue;
                     }
-                    set_path(&mut table, key, value.clone()).map_err(|why| invalid(&format!("sweep.{key}"), value, why))?;
+                    set_path(&mut table, key, value.clone())
+                        .map_err(|why| invalid(&format!("sweep.{key}"), value, why))?;
                 }
                 let overrides: Vec<(String, toml::Value)> = fixed.iter().chain(combo).cloned().collect();
                 let text = format!(
                     "# Experiment {} point {id}: {} with {}\n{}",
                     spec.name,
                     base.display(),
-                    if overrides.is_empty() { "no overrides".to_string() } else { overrides.iter().map(|(k, v)| format!("{k} = {v}")).collect::<Vec<_>>().join(", ") },
+                    if overrides.is_empty() {
+                        "no overrides".to_string()
+                    } else {
+                        overrides.iter().map(|(k, v)| format!("{k} = {v}")).collect::<Vec<_>>().join(", ")
+                    },
                     toml::to_string(&table).map_err(|e| invalid("sweep", "…", e.to_string()))?
                 );
                 let scene = Scene::parse(&text, &format!("{} ({id})", path.display()))?;

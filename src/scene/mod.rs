@@ -94,7 +94,8 @@ impl Scene {
             positive("fluid.viscosity", f.viscosity)?;
             non_negative("fluid.density", f.density)?;
         }
-        let species = spec.species.iter().enumerate().map(|(k, s)| check_species(k, s)).collect::<Result<Vec<_>, _>>()?;
+        let species =
+            spec.species.iter().enumerate().map(|(k, s)| check_species(k, s)).collect::<Result<Vec<_>, _>>()?;
         if species.is_empty() {
             return Err(invalid("species", "[]", "at least one [[species]] is needed"));
         }
@@ -138,7 +139,11 @@ impl Scene {
             return Err(invalid(
                 "integration.slow_every",
                 k,
-                format!("must divide the steps per frame ({}) and the run ({})", scene.steps_per_frame(), scene.total_steps()),
+                format!(
+                    "must divide the steps per frame ({}) and the run ({})",
+                    scene.steps_per_frame(),
+                    scene.total_steps()
+                ),
             ));
         }
         Ok(scene)
@@ -181,14 +186,22 @@ impl Scene {
             Some(d) => match d.induction {
                 InductionSpec::None => Induction::None,
                 InductionSpec::Paper => Induction::Paper { radius: d.paper_radius_diameters * self.largest_diameter() },
-                InductionSpec::Exact => {
-                    Induction::Exact { tolerance: d.tolerance, max_iterations: d.max_iterations, dense_max: d.dense_max }
-                }
+                InductionSpec::Exact => Induction::Exact {
+                    tolerance: d.tolerance,
+                    max_iterations: d.max_iterations,
+                    dense_max: d.dense_max,
+                },
             },
         };
-        let mut terms: Vec<Box<dyn ForceTerm>> = vec![Box::new(Magnetisation::new(induction, b0, gradient, &self.species, skins))];
+        let mut terms: Vec<Box<dyn ForceTerm>> =
+            vec![Box::new(Magnetisation::new(induction, b0, gradient, &self.species, skins))];
         if let Some(d) = &f.dipole {
-            terms.push(Box::new(DipoleForce::new(d.cutoff_diameters.map(|c| c * self.largest_diameter()), b0, gradient, skins)));
+            terms.push(Box::new(DipoleForce::new(
+                d.cutoff_diameters.map(|c| c * self.largest_diameter()),
+                b0,
+                gradient,
+                skins,
+            )));
         }
         if f.gradient.is_some() {
             terms.push(Box::new(GradientForce { gradient }));
@@ -209,7 +222,11 @@ impl Scene {
         let p = &self.initial;
         Box::new(integrators::ExponentialVerlet {
             gamma: p.radius.iter().map(|&a| Drag::stokes_coefficient(mu, a)).collect(),
-            gamma_rotational: p.radius.iter().map(|&a| if rotational { 8.0 * std::f64::consts::PI * mu * a.powi(3) } else { 0.0 }).collect(),
+            gamma_rotational: p
+                .radius
+                .iter()
+                .map(|&a| if rotational { 8.0 * std::f64::consts::PI * mu * a.powi(3) } else { 0.0 })
+                .collect(),
             fluid_velocity: fluid.map_or(Vec3::zeros(), |f| Vec3::from(f.velocity)),
         })
     }
@@ -242,7 +259,16 @@ impl Scene {
                 ShieldingSpec::None => Shielding::None,
                 ShieldingSpec::Paper => Shielding::Paper,
             };
-            let mut drag = Drag::new(law, shielding, d.rotational, fluid.density, fluid.viscosity, Vec3::from(fluid.velocity), d.touch_tolerance, near);
+            let mut drag = Drag::new(
+                law,
+                shielding,
+                d.rotational,
+                fluid.density,
+                fluid.viscosity,
+                Vec3::from(fluid.velocity),
+                d.touch_tolerance,
+                near,
+            );
             drag.exclude_linear = spec.integration.scheme.integrates_linear_drag();
             terms.push(Box::new(drag));
         }
@@ -258,7 +284,10 @@ impl Scene {
             field,
             integrator: self.integrator(),
             dt: spec.integration.dt,
-            monitor: Monitor { max_overlap: spec.stability.max_overlap, max_step_fraction: spec.stability.max_step_fraction },
+            monitor: Monitor {
+                max_overlap: spec.stability.max_overlap,
+                max_step_fraction: spec.stability.max_step_fraction,
+            },
             estimate: self.estimate.clone(),
         }
     }
@@ -289,8 +318,15 @@ fn non_negative(key: &str, v: f64) -> Result<(), SceneError> {
 
 fn check_domain(d: &DomainSpec) -> Result<Domain, SceneError> {
     for k in 0..3 {
-        if d.hi[k].partial_cmp(&d.lo[k]) != Some(std::cmp::Ordering::Greater) || !d.lo[k].is_finite() || !d.hi[k].is_finite() {
-            return Err(invalid("domain.hi", fmt3(&d.hi), format!("must exceed domain.lo = {} on every axis", fmt3(&d.lo))));
+        if d.hi[k].partial_cmp(&d.lo[k]) != Some(std::cmp::Ordering::Greater)
+            || !d.lo[k].is_finite()
+            || !d.hi[k].is_finite()
+        {
+            return Err(invalid(
+                "domain.hi",
+                fmt3(&d.hi),
+                format!("must exceed domain.lo = {} on every axis", fmt3(&d.lo)),
+            ));
         }
     }
     let b = &d.boundary;
@@ -315,7 +351,11 @@ fn check_species(k: usize, s: &SpeciesSpec) -> Result<Species, SceneError> {
     }
     let chi = match (s.relative_permeability, s.susceptibility) {
         (Some(_), Some(_)) => {
-            return Err(invalid(key("susceptibility"), s.susceptibility.unwrap(), "give relative_permeability or susceptibility, not both"))
+            return Err(invalid(
+                key("susceptibility"),
+                s.susceptibility.unwrap(),
+                "give relative_permeability or susceptibility, not both",
+            ))
         }
         (Some(mu_r), None) if mu_r >= 1.0 && mu_r.is_finite() => mu_r - 1.0,
         (Some(mu_r), None) => return Err(invalid(key("relative_permeability"), mu_r, "must be ≥ 1 (paramagnetic)")),
@@ -354,7 +394,12 @@ fn check_species(k: usize, s: &SpeciesSpec) -> Result<Species, SceneError> {
     })
 }
 
-fn check_forces(spec: &SceneSpec, domain: &Domain, species: &[Species], warnings: &mut Vec<String>) -> Result<(), SceneError> {
+fn check_forces(
+    spec: &SceneSpec,
+    domain: &Domain,
+    species: &[Species],
+    warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
     let f = &spec.forces;
     if (f.dipole.is_some() || f.gradient.is_some()) && spec.field.is_none() {
         return Err(invalid("forces", "dipole/gradient", "magnetic terms need a [field] table"));
@@ -392,7 +437,11 @@ fn check_forces(spec: &SceneSpec, domain: &Domain, species: &[Species], warnings
                     return Err(invalid(
                         key,
                         diameters,
-                        format!("{:e} m is not below half the periodic box length {half:e} m along {}", diameters * largest_diameter, ["x", "y", "z"][k]),
+                        format!(
+                            "{:e} m is not below half the periodic box length {half:e} m along {}",
+                            diameters * largest_diameter,
+                            ["x", "y", "z"][k]
+                        ),
                     ));
                 }
             }
@@ -404,9 +453,15 @@ fn check_forces(spec: &SceneSpec, domain: &Domain, species: &[Species], warnings
     if let Some(c) = &f.contact {
         match (c.normal, c.stiffness) {
             (NormalSpec::Hooke, Some(k)) => positive("forces.contact.stiffness", k)?,
-            (NormalSpec::Hooke, None) => return Err(invalid("forces.contact.normal", "hooke", "needs forces.contact.stiffness (N/m)")),
+            (NormalSpec::Hooke, None) => {
+                return Err(invalid("forces.contact.normal", "hooke", "needs forces.contact.stiffness (N/m)"))
+            }
             (NormalSpec::Hertz, Some(k)) => {
-                return Err(invalid("forces.contact.stiffness", k, "applies to normal = \"hooke\" only (Hertz's stiffness follows from the species)"))
+                return Err(invalid(
+                    "forces.contact.stiffness",
+                    k,
+                    "applies to normal = \"hooke\" only (Hertz's stiffness follows from the species)",
+                ))
             }
             (NormalSpec::Hertz, None) => {}
         }
@@ -416,7 +471,8 @@ fn check_forces(spec: &SceneSpec, domain: &Domain, species: &[Species], warnings
         let div = g[0][0] + g[1][1] + g[2][2];
         let scale = g.iter().flatten().fold(0.0_f64, |a, v| a.max(v.abs()));
         if scale > 0.0 && div.abs() > 1e-12 * scale {
-            warnings.push(format!("field.gradient has divergence {div:e} T/m: the applied field does not satisfy ∇·B = 0"));
+            warnings
+                .push(format!("field.gradient has divergence {div:e} T/m: the applied field does not satisfy ∇·B = 0"));
         }
         if (0..3).any(|a| (0..3).any(|b| (g[a][b] - g[b][a]).abs() > 1e-12 * scale)) {
             warnings.push("field.gradient is not symmetric: the applied field is not curl-free".into());
@@ -441,11 +497,17 @@ fn contact_law(c: &ContactSpec) -> ContactLaw {
 fn check_integration(spec: &SceneSpec) -> Result<(), SceneError> {
     let i = &spec.integration;
     if i.slow_every == 0 || (i.slow_every > 1 && !i.scheme.multiple_time_stepping()) {
-        return Err(invalid("integration.slow_every", i.slow_every, "must be 1, or larger with scheme = \"respa\" or \"subcycled-euler\""));
+        return Err(invalid(
+            "integration.slow_every",
+            i.slow_every,
+            "must be 1, or larger with scheme = \"respa\" or \"subcycled-euler\"",
+        ));
     }
     positive("integration.dt", i.dt)?;
     positive("integration.end_time", i.end_time)?;
-    if i.scheme == integrators::Scheme::AdaptiveVerlet && spec.forces.dipole.as_ref().is_some_and(|d| matches!(d.induction, InductionSpec::Paper)) {
+    if i.scheme == integrators::Scheme::AdaptiveVerlet
+        && spec.forces.dipole.as_ref().is_some_and(|d| matches!(d.induction, InductionSpec::Paper))
+    {
         return Err(invalid(
             "integration.scheme",
             i.scheme,
@@ -454,7 +516,11 @@ fn check_integration(spec: &SceneSpec) -> Result<(), SceneError> {
         ));
     }
     if !(i.tolerance > 0.0 && i.tolerance < 1.0) {
-        return Err(invalid("integration.tolerance", i.tolerance, "must lie in (0, 1): a fraction of a particle radius"));
+        return Err(invalid(
+            "integration.tolerance",
+            i.tolerance,
+            "must lie in (0, 1): a fraction of a particle radius",
+        ));
     }
     if i.dt > i.end_time {
         return Err(invalid("integration.dt", i.dt, format!("is longer than integration.end_time = {:e}", i.end_time)));
@@ -505,22 +571,38 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
         let key = |name: &str| format!("particles[{g}].{name}");
         let Some(si) = species.iter().position(|s| s.name == group.species) else {
             let names: Vec<_> = species.iter().map(|s| s.name.as_str()).collect();
-            return Err(invalid(key("species"), &group.species, format!("no such species; defined: {}", names.join(", "))));
+            return Err(invalid(
+                key("species"),
+                &group.species,
+                format!("no such species; defined: {}", names.join(", ")),
+            ));
         };
         let s = &species[si];
         let given = [group.positions.is_some(), group.count.is_some(), group.concentration.is_some()];
         if given.iter().filter(|&&b| b).count() != 1 {
-            return Err(invalid(format!("particles[{g}]"), &group.species, "give exactly one of positions, count, concentration"));
+            return Err(invalid(
+                format!("particles[{g}]"),
+                &group.species,
+                "give exactly one of positions, count, concentration",
+            ));
         }
         if let Some(positions) = &group.positions {
             if group.order != ParticleOrder::Placement {
-                return Err(invalid(key("order"), "spatial", "explicit positions keep their given order; order applies to count or concentration"));
+                return Err(invalid(
+                    key("order"),
+                    "spatial",
+                    "explicit positions keep their given order; order applies to count or concentration",
+                ));
             }
             let velocities = group.velocities.clone().unwrap_or_else(|| vec![[0.0; 3]; positions.len()]);
             let spins = group.angular_velocities.clone().unwrap_or_else(|| vec![[0.0; 3]; positions.len()]);
             for (name, len) in [("velocities", velocities.len()), ("angular_velocities", spins.len())] {
                 if len != positions.len() {
-                    return Err(invalid(key(name), format!("{len} entries"), format!("must match the {} positions", positions.len())));
+                    return Err(invalid(
+                        key(name),
+                        format!("{len} entries"),
+                        format!("must match the {} positions", positions.len()),
+                    ));
                 }
             }
             for (k, (x, v)) in positions.iter().zip(&velocities).enumerate() {
@@ -549,8 +631,15 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
         let (lo, hi) = match &group.region {
             Some(r) => {
                 for k in 0..3 {
-                    if r.hi[k].partial_cmp(&r.lo[k]) != Some(std::cmp::Ordering::Greater) || r.lo[k] < domain.lo[k] || r.hi[k] > domain.hi[k] {
-                        return Err(invalid(key("region"), format!("{} .. {}", fmt3(&r.lo), fmt3(&r.hi)), "must be a non-empty box inside the domain"));
+                    if r.hi[k].partial_cmp(&r.lo[k]) != Some(std::cmp::Ordering::Greater)
+                        || r.lo[k] < domain.lo[k]
+                        || r.hi[k] > domain.hi[k]
+                    {
+                        return Err(invalid(
+                            key("region"),
+                            format!("{} .. {}", fmt3(&r.lo), fmt3(&r.hi)),
+                            "must be a non-empty box inside the domain",
+                        ));
                     }
                 }
                 (Vec3::from(r.lo), Vec3::from(r.hi))
@@ -571,12 +660,19 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
             (Some(n), _) => invalid(key("count"), n, why),
             (None, c) => {
                 let c = c.unwrap_or_default();
-                invalid(key("concentration"), if (1e-3..1e6).contains(&c.abs()) { c.to_string() } else { format!("{c:e}") }, why)
+                invalid(
+                    key("concentration"),
+                    if (1e-3..1e6).contains(&c.abs()) { c.to_string() } else { format!("{c:e}") },
+                    why,
+                )
             }
         };
         // Pairs index particles with 32 bits.
         if particles.len() as f64 + count > u32::MAX as f64 {
-            return Err(refuse_count(format!("gives {count:.3e} particles; magdem holds at most {} (32-bit particle indices)", u32::MAX)));
+            return Err(refuse_count(format!(
+                "gives {count:.3e} particles; magdem holds at most {} (32-bit particle indices)",
+                u32::MAX
+            )));
         }
         let count = count as usize;
         // Checked before anything is allocated: what the region can hold at random.
@@ -601,7 +697,8 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
                 ),
             ));
         }
-        let existing: Vec<(Vec3, f64)> = (0..particles.len()).map(|j| (particles.position[j], particles.radius[j])).collect();
+        let existing: Vec<(Vec3, f64)> =
+            (0..particles.len()).map(|j| (particles.position[j], particles.radius[j])).collect();
         let seed = spec.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(g as u64);
         let placed = placement::place_random(count, s.radius, lo, hi, domain, &existing, seed).map_err(|k| {
             let l = hi - lo;
@@ -658,7 +755,9 @@ const VECTOR_LIST_KEYS: [&str; 4] = ["positions", "velocities", "angular_velocit
 /// than three components, naming the dotted key.
 fn check_shapes(value: &toml::Value, key: &str, name: &str) -> Result<(), SceneError> {
     let three = |key: &str, v: &toml::Value| match v {
-        toml::Value::Array(a) if a.len() != 3 => Err(invalid(key, v.to_string(), format!("must have 3 components, not {}", a.len()))),
+        toml::Value::Array(a) if a.len() != 3 => {
+            Err(invalid(key, v.to_string(), format!("must have 3 components, not {}", a.len())))
+        }
         _ => Ok(()),
     };
     match value {
@@ -691,10 +790,12 @@ fn check_shapes(value: &toml::Value, key: &str, name: &str) -> Result<(), SceneE
 fn first_non_finite(value: &toml::Value, key: String) -> Option<(String, f64)> {
     match value {
         toml::Value::Float(f) if !f.is_finite() => Some((key, *f)),
-        toml::Value::Array(items) => items.iter().enumerate().find_map(|(k, v)| first_non_finite(v, format!("{key}[{k}]"))),
-        toml::Value::Table(table) => {
-            table.iter().find_map(|(name, v)| first_non_finite(v, if key.is_empty() { name.clone() } else { format!("{key}.{name}") }))
+        toml::Value::Array(items) => {
+            items.iter().enumerate().find_map(|(k, v)| first_non_finite(v, format!("{key}[{k}]")))
         }
+        toml::Value::Table(table) => table.iter().find_map(|(name, v)| {
+            first_non_finite(v, if key.is_empty() { name.clone() } else { format!("{key}.{name}") })
+        }),
         _ => None,
     }
 }
@@ -745,10 +846,18 @@ fn check_inside(key: &str, raw: &[f64; 3], x: Vec3, radius: f64, domain: &Domain
     for k in 0..3 {
         let axis = ["x", "y", "z"][k];
         if !(x[k] >= domain.lo[k] && x[k] <= domain.hi[k]) {
-            return Err(invalid(key, fmt3(raw), format!("{axis} is outside the box [{:e}, {:e}]", domain.lo[k], domain.hi[k])));
+            return Err(invalid(
+                key,
+                fmt3(raw),
+                format!("{axis} is outside the box [{:e}, {:e}]", domain.lo[k], domain.hi[k]),
+            ));
         }
         if !domain.periodic[k] && (x[k] - domain.lo[k] < radius || domain.hi[k] - x[k] < radius) {
-            return Err(invalid(key, fmt3(raw), format!("the sphere (radius {radius:e} m) overlaps a wall normal to {axis}")));
+            return Err(invalid(
+                key,
+                fmt3(raw),
+                format!("the sphere (radius {radius:e} m) overlaps a wall normal to {axis}"),
+            ));
         }
     }
     Ok(())

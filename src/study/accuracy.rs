@@ -11,15 +11,21 @@
 //!   dt = 1e-10 s (second order, checked in tests/integrators.rs), relative to the distance
 //!   travelled.
 
-use crate::plot::{line_chart_with_legend, Series};
-use plotters::prelude::SeriesLabelPosition;
 use crate::core::integrators::Scheme;
+use crate::plot::{line_chart_with_legend, Series};
 use crate::scene::Scene;
+use plotters::prelude::SeriesLabelPosition;
 use plotters::style::RGBColor;
 use std::fmt::Write as _;
 use std::path::Path;
 
-pub const SCHEMES: [Scheme; 5] = [Scheme::ExplicitEuler, Scheme::SemiImplicitEuler, Scheme::VelocityVerlet, Scheme::ExponentialVerlet, Scheme::Respa];
+pub const SCHEMES: [Scheme; 5] = [
+    Scheme::ExplicitEuler,
+    Scheme::SemiImplicitEuler,
+    Scheme::VelocityVerlet,
+    Scheme::ExponentialVerlet,
+    Scheme::Respa,
+];
 
 fn colour(scheme: Scheme) -> RGBColor {
     match scheme {
@@ -63,7 +69,8 @@ fn terminal_scene(scheme: Scheme, dt: f64) -> String {
 }
 
 fn terminal_error(sim: &crate::core::simulation::Simulation) -> f64 {
-    let vt = 4.0 / 3.0 * std::f64::consts::PI * 5.5e-6_f64.powi(3) * 1.0e4 * 1.4 / (6.0 * std::f64::consts::PI * 1.0e-3 * 5.5e-6);
+    let vt = 4.0 / 3.0 * std::f64::consts::PI * 5.5e-6_f64.powi(3) * 1.0e4 * 1.4
+        / (6.0 * std::f64::consts::PI * 1.0e-3 * 5.5e-6);
     let exact = vt * (1.0 - (-sim.state.time / TAU).exp());
     (sim.state.particles.velocity[0].x - exact).abs() / vt
 }
@@ -104,7 +111,8 @@ pub fn problems() -> Vec<Problem> {
         },
         Problem {
             name: "dipoles",
-            description: "two dipoles closing (exact induction) for 96 µs, error of the separation / distance travelled",
+            description:
+                "two dipoles closing (exact induction) for 96 µs, error of the separation / distance travelled",
             dts: (0..6).map(|k| 6.4e-8 / f64::powi(2.0, k)).collect(),
             scene: dipoles_scene,
         },
@@ -128,7 +136,8 @@ fn run_problem(problem: &Problem, scheme: Scheme, dt: f64, reference: Option<f64
     Ok(match problem.name {
         "hertz" => {
             let s = &scene.species[0];
-            let (m_eff, r_eff, e_star, v) = (s.mass() / 2.0, s.radius / 2.0, s.youngs_modulus / (2.0 * (1.0 - s.poisson_ratio.powi(2))), 0.1);
+            let (m_eff, r_eff, e_star, v) =
+                (s.mass() / 2.0, s.radius / 2.0, s.youngs_modulus / (2.0 * (1.0 - s.poisson_ratio.powi(2))), 0.1);
             let delta = (15.0 * m_eff * v * v / (16.0 * e_star * r_eff.sqrt())).powf(0.4);
             (max_overlap - delta).abs() / delta
         }
@@ -188,7 +197,8 @@ fn work_precision(dir: &Path, problem: &Problem, reference: f64) -> Result<Strin
         for (label, value) in settings {
             let (result, median, lo, hi) = timed(5, || {
                 if scheme == adaptive {
-                    let text = dipoles_scene(adaptive, 6.4e-8).replace("dt = ", &format!("tolerance = {value:e}\ndt = "));
+                    let text =
+                        dipoles_scene(adaptive, 6.4e-8).replace("dt = ", &format!("tolerance = {value:e}\ndt = "));
                     run_text(&text, adaptive.name()).map(|sim| dipoles_error(&sim, reference))
                 } else {
                     run_problem(problem, scheme, value, Some(reference))
@@ -205,7 +215,14 @@ fn work_precision(dir: &Path, problem: &Problem, reference: f64) -> Result<Strin
         series.push(Series::markers(scheme.name(), line.clone(), color, 4));
         series.push(Series::line("", line, color));
     }
-    line_chart_with_legend(&dir.join("work-precision-dipoles.png"), "Work–precision: two-dipole approach", "log10 run time (s, median of 5)", "log10 error", &series, SeriesLabelPosition::UpperRight)?;
+    line_chart_with_legend(
+        &dir.join("work-precision-dipoles.png"),
+        "Work–precision: two-dipole approach",
+        "log10 run time (s, median of 5)",
+        "log10 error",
+        &series,
+        SeriesLabelPosition::UpperRight,
+    )?;
     md += "\n![Work–precision](work-precision-dipoles.png)\n\n";
     Ok(md)
 }
@@ -288,19 +305,31 @@ fn observable_section(dir: &Path, o: &Observable) -> Result<String, Box<dyn std:
         let done: Vec<_> = mine.iter().filter(|r| r.completed()).collect();
         let setting = mine.first().map_or(String::new(), |r| r.variant_overrides.join(", "));
         if done.is_empty() {
-            let why = mine.iter().find(|r| !r.message.is_empty()).map_or(mine.first().map_or("missing".into(), |r| r.status.clone()), |r| r.message.clone());
+            let why = mine
+                .iter()
+                .find(|r| !r.message.is_empty())
+                .map_or(mine.first().map_or("missing".into(), |r| r.status.clone()), |r| r.message.clone());
             let _ = writeln!(md, "| {variant} | {setting} | 0 of {} | – | – | – | – | {why} |", mine.len());
             continue;
         }
         let values: Vec<f64> = done.iter().map(|r| (o.value)(r)).collect();
         let paired: Vec<f64> = done
             .iter()
-            .filter_map(|r| reference.iter().find(|q| q.seed == r.seed).map(|q| 100.0 * ((o.value)(r) - (o.value)(q)) / (o.value)(q)))
+            .filter_map(|r| {
+                reference
+                    .iter()
+                    .find(|q| q.seed == r.seed)
+                    .map(|q| 100.0 * ((o.value)(r) - (o.value)(q)) / (o.value)(q))
+            })
             .collect();
         let times: Vec<f64> = done.iter().map(|r| r.wall_time).filter(|t| t.is_finite()).collect();
         let wall = crate::bench::Spread::of(&times);
         let (diff, ci) = (summary(&paired).mean, ci95_half_width(&paired));
-        let needed = if variant == "reference" { "–".to_string() } else { format!("{:.0}", (1.96 * summary(&paired).sample_std / 1.0).powi(2).ceil()) };
+        let needed = if variant == "reference" {
+            "–".to_string()
+        } else {
+            format!("{:.0}", (1.96 * summary(&paired).sample_std / 1.0).powi(2).ceil())
+        };
         let _ = writeln!(
             md,
             "| {variant} | {setting} | {} of {} | {:.1} ± {:.1} | {} | {} | {needed} | {:.1} ({:.1}–{:.1}) |",
@@ -309,7 +338,11 @@ fn observable_section(dir: &Path, o: &Observable) -> Result<String, Box<dyn std:
             summary(&values).mean,
             ci95_half_width(&values),
             if variant == "reference" { "0 (by definition)".to_string() } else { format!("{diff:+.1} ± {ci:.1}") },
-            if variant == "reference" { "–".to_string() } else { paired.iter().map(|d| format!("{d:+.1}")).collect::<Vec<_>>().join(", ") },
+            if variant == "reference" {
+                "–".to_string()
+            } else {
+                paired.iter().map(|d| format!("{d:+.1}")).collect::<Vec<_>>().join(", ")
+            },
             wall.median,
             wall.min,
             wall.max
@@ -321,7 +354,9 @@ fn observable_section(dir: &Path, o: &Observable) -> Result<String, Box<dyn std:
     let series: Vec<Series> = points
         .iter()
         .enumerate()
-        .map(|(k, (v, t, d, ci))| Series::markers(v.clone(), vec![(t.log10(), *d)], crate::plot::palette(k), 6).with_errors(vec![*ci]))
+        .map(|(k, (v, t, d, ci))| {
+            Series::markers(v.clone(), vec![(t.log10(), *d)], crate::plot::palette(k), 6).with_errors(vec![*ci])
+        })
         .collect();
     line_chart_with_legend(
         &dir.join(o.figure),
@@ -352,8 +387,16 @@ pub fn study(dir: &Path) -> Result<String, Box<dyn std::error::Error>> {
     );
     let mut work = None;
     for problem in problems() {
-        let reference = if problem.name == "dipoles" { Some(separation(&run_text(&dipoles_scene(Scheme::ExponentialVerlet, 1e-10), "reference")?)) } else { None };
-        let _ = writeln!(md, "## {}: {}\n\n| scheme | observed order | errors (dt: error) |\n|---|---|---|", problem.name, problem.description);
+        let reference = if problem.name == "dipoles" {
+            Some(separation(&run_text(&dipoles_scene(Scheme::ExponentialVerlet, 1e-10), "reference")?))
+        } else {
+            None
+        };
+        let _ = writeln!(
+            md,
+            "## {}: {}\n\n| scheme | observed order | errors (dt: error) |\n|---|---|---|",
+            problem.name, problem.description
+        );
         let mut series = vec![];
         for scheme in SCHEMES {
             // Without a magnetic force respa is velocity Verlet (and would sample the overlap only
@@ -361,11 +404,19 @@ pub fn study(dir: &Path) -> Result<String, Box<dyn std::error::Error>> {
             if scheme == Scheme::Respa && problem.name == "hertz" {
                 continue;
             }
-            let points: Vec<(f64, f64)> = problem.dts.iter().filter_map(|&dt| run_problem(&problem, scheme, dt, reference).ok().map(|e| (dt, e))).collect();
+            let points: Vec<(f64, f64)> = problem
+                .dts
+                .iter()
+                .filter_map(|&dt| run_problem(&problem, scheme, dt, reference).ok().map(|e| (dt, e)))
+                .collect();
             // Errors at round-off level (the scheme is exact for the problem) carry no order.
             let fit: Vec<(f64, f64)> = points.iter().copied().filter(|p| p.1 > 1e-12).collect();
             let order = if fit.len() >= 3 { format!("{:.2}", fitted_order(&fit)) } else { "exact".into() };
-            let _ = writeln!(md, "| {scheme} | {order} | {} |", points.iter().map(|(dt, e)| format!("{dt:.2e}: {e:.2e}")).collect::<Vec<_>>().join(", "));
+            let _ = writeln!(
+                md,
+                "| {scheme} | {order} | {} |",
+                points.iter().map(|(dt, e)| format!("{dt:.2e}: {e:.2e}")).collect::<Vec<_>>().join(", ")
+            );
             series.push(Series {
                 label: format!("{scheme} ({order})"),
                 points: points.iter().filter(|p| p.1 > 0.0).map(|(dt, e)| (dt.log10(), e.log10())).collect(),

@@ -11,15 +11,21 @@
 //! (a dissipative collision cannot gain energy). dt is scanned on a grid of factor √2 upward
 //! from 1/32 of the estimate; the largest stable dt is the last one before the first failure.
 
-use crate::plot::{line_chart_with_legend, palette, RGBColor, Series, SeriesLabelPosition};
 use crate::core::integrators::Scheme;
+use crate::plot::{line_chart_with_legend, palette, RGBColor, Series, SeriesLabelPosition};
 use crate::scene::Scene;
 use std::fmt::Write as _;
 use std::path::Path;
 
 /// The fixed-step integrators. `adaptive-verlet` is not mapped: its dt is only a cap that its
 /// error control splits into substeps, so a largest stable dt is not a property of it.
-pub const SCHEMES: [Scheme; 5] = [Scheme::ExplicitEuler, Scheme::SemiImplicitEuler, Scheme::VelocityVerlet, Scheme::ExponentialVerlet, Scheme::Respa];
+pub const SCHEMES: [Scheme; 5] = [
+    Scheme::ExplicitEuler,
+    Scheme::SemiImplicitEuler,
+    Scheme::VelocityVerlet,
+    Scheme::ExponentialVerlet,
+    Scheme::Respa,
+];
 /// `respa` in the map evaluates the moments and dipole forces every `RESPA_K` steps (the
 /// paper-scene setting).
 const RESPA_K: u64 = 10;
@@ -105,7 +111,8 @@ pub fn map_point(scheme: Scheme, e: f64, b0: f64) -> Result<MapPoint, String> {
     // particles at that speed.
     let probe = Scene::parse(&collision(scheme, e, b0, 1e-9, 0.0, 1e-6), "stability map").map_err(|e| e.to_string())?;
     let speed = probe.estimate.impact_speed.max(1e-3);
-    let scene = Scene::parse(&collision(scheme, e, b0, 1e-9, speed, 1e-6), "stability map").map_err(|e| e.to_string())?;
+    let scene =
+        Scene::parse(&collision(scheme, e, b0, 1e-9, speed, 1e-6), "stability map").map_err(|e| e.to_string())?;
     let est = &scene.estimate;
     let contact = est.contact_duration.unwrap_or(est.rayleigh_time);
     let end = 1.1e-5 / speed + 20.0 * contact;
@@ -116,14 +123,27 @@ pub fn map_point(scheme: Scheme, e: f64, b0: f64) -> Result<MapPoint, String> {
     let measured = match first_failure {
         Some(0) => {
             // Unstable already at 1/32 of the estimate: scan down.
-            (1..12).map(|k| start / 2f64.powf(k as f64 / 2.0)).find(|&dt| end / dt > 2e6 || stable(scheme, e, b0, dt, speed, end)).unwrap_or(f64::NAN)
+            (1..12)
+                .map(|k| start / 2f64.powf(k as f64 / 2.0))
+                .find(|&dt| end / dt > 2e6 || stable(scheme, e, b0, dt, speed, end))
+                .unwrap_or(f64::NAN)
         }
         Some(k) => grid[k - 1],
         None => grid.last().copied().unwrap_or(f64::NAN),
     };
     let non_monotonic = first_failure.is_some_and(|k| results[k..].iter().any(|&ok| ok));
     let at_grid_top = first_failure.is_none();
-    Ok(MapPoint { scheme, youngs_modulus: e, b0, impact_speed: speed, estimate: est.stable_dt, rayleigh: est.rayleigh_time, measured, non_monotonic, at_grid_top })
+    Ok(MapPoint {
+        scheme,
+        youngs_modulus: e,
+        b0,
+        impact_speed: speed,
+        estimate: est.stable_dt,
+        rayleigh: est.rayleigh_time,
+        measured,
+        non_monotonic,
+        at_grid_top,
+    })
 }
 
 /// One stiff or extreme case and what the solver did with it.
@@ -133,7 +153,14 @@ pub struct Extreme {
     pub outcome: String,
 }
 
-fn crowd(youngs_modulus: f64, b0: f64, extra_species: &str, particles: &str, forces: &str, integration: &str) -> String {
+fn crowd(
+    youngs_modulus: f64,
+    b0: f64,
+    extra_species: &str,
+    particles: &str,
+    forces: &str,
+    integration: &str,
+) -> String {
     format!(
         "version = 1\nseed = 3\n[domain]\nlo = [0.0, 0.0, 0.0]\nhi = [1.5e-4, 1.5e-4, 1.5e-4]\n{WATER}[field]\nb0 = [{b0:e}, 0.0, 0.0]\n{}\
          {particles}[forces.contact]\nwalls = true\n{forces}[forces.drag]\nlaw = \"stokes\"\nshielding = \"none\"\n{integration}",
@@ -143,7 +170,8 @@ fn crowd(youngs_modulus: f64, b0: f64, extra_species: &str, particles: &str, for
 
 const CROWD: &str = "[[particles]]\nspecies = \"p\"\ncount = 60\n";
 const PAPER_DIPOLE: &str = "[forces.dipole]\ninduction = \"paper\"\ncutoff_diameters = 15.0\n";
-const VERLET_1E8: &str = "[integration]\nscheme = \"velocity-verlet\"\ndt = 1.0e-8\nend_time = 2.0e-4\n[output]\ninterval = 2.0e-5\n";
+const VERLET_1E8: &str =
+    "[integration]\nscheme = \"velocity-verlet\"\ndt = 1.0e-8\nend_time = 2.0e-4\n[output]\ninterval = 2.0e-5\n";
 
 fn run_case(name: &'static str, setting: &str, text: &str) -> Extreme {
     let outcome = match Scene::parse(text, name) {
@@ -202,24 +230,39 @@ pub fn extremes() -> Vec<Extreme> {
         run_case(
             "strong induction",
             "μr = 1000 (χ_eff → 3, the induction limit), exact induction",
-            &crowd(1e9, 0.4, "", CROWD, "[forces.dipole]\ninduction = \"exact\"\n", VERLET_1E8).replace("relative_permeability = 12.3", "relative_permeability = 1000.0"),
+            &crowd(1e9, 0.4, "", CROWD, "[forces.dipole]\ninduction = \"exact\"\n", VERLET_1E8)
+                .replace("relative_permeability = 12.3", "relative_permeability = 1000.0"),
         ),
         run_case("starting in contact", "two spheres touching at t = 0", &pair(0.0)),
         run_case("starting overlapped", "two spheres overlapping by 5% of a diameter at t = 0", &pair(0.05)),
         run_case(
             "dense packing",
             "250 particles in a 100 µm box (solid fraction 0.17)",
-            &base(1e9, 0.4).replace("count = 60", "count = 250").replace("hi = [1.5e-4, 1.5e-4, 1.5e-4]", "hi = [1.0e-4, 1.0e-4, 1.0e-4]"),
+            &base(1e9, 0.4)
+                .replace("count = 60", "count = 250")
+                .replace("hi = [1.5e-4, 1.5e-4, 1.5e-4]", "hi = [1.0e-4, 1.0e-4, 1.0e-4]"),
         ),
-        run_case("tiny particles, Verlet", "10 spheres of 0.2 µm settling under gravity (drag relaxation 2.4e-9 s), velocity Verlet at 1e-8 s", &tiny("velocity-verlet")),
-        run_case("tiny particles, exponential", "the same with exponential Verlet at 1e-8 s (drag exact)", &tiny("exponential-verlet")),
+        run_case(
+            "tiny particles, Verlet",
+            "10 spheres of 0.2 µm settling under gravity (drag relaxation 2.4e-9 s), velocity Verlet at 1e-8 s",
+            &tiny("velocity-verlet"),
+        ),
+        run_case(
+            "tiny particles, exponential",
+            "the same with exponential Verlet at 1e-8 s (drag exact)",
+            &tiny("exponential-verlet"),
+        ),
         run_case("very large step", "Verlet at dt = 1e-5 s", &base(1e9, 0.4).replace("dt = 1.0e-8", "dt = 1.0e-5")),
     ]
 }
 
 /// Dipole forces of one configuration under an induction level and cut-off, with the moments
 /// iterated to the level's own fixed point (the paper's scheme converges over steps).
-fn dipole_forces(positions: &[[f64; 3]], induction: &str, cutoff: Option<f64>) -> Result<Vec<nalgebra::Vector3<f64>>, Error> {
+fn dipole_forces(
+    positions: &[[f64; 3]],
+    induction: &str,
+    cutoff: Option<f64>,
+) -> Result<Vec<nalgebra::Vector3<f64>>, Error> {
     let list = positions.iter().map(|x| format!("[{:e}, {:e}, {:e}]", x[0], x[1], x[2])).collect::<Vec<_>>().join(", ");
     let cut = cutoff.map_or(String::new(), |c| format!("cutoff_diameters = {c}\n"));
     let text = format!(
@@ -242,19 +285,34 @@ fn dipole_forces(positions: &[[f64; 3]], induction: &str, cutoff: Option<f64>) -
 /// all pairs, on the case-1 box at 4.5 mg/ml: random placement, and the same particles gathered
 /// into chains along the field.
 pub fn cutoff_errors() -> Result<Vec<(String, &'static str, f64, f64)>, Error> {
-    let scene = Scene::parse(&std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/scenes/case1-c4.5.toml"))?, "case1-c4.5")?;
+    let scene = Scene::parse(
+        &std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/scenes/case1-c4.5.toml"))?,
+        "case1-c4.5",
+    )?;
     let random: Vec<[f64; 3]> = scene.initial.position.iter().map(|x| [x.x, x.y, x.z]).collect();
     // Chains of 10 touching spheres along x from the first tenth of the random positions.
     let d = 11.0e-6;
     let chained: Vec<[f64; 3]> = random
         .iter()
         .take(random.len() / 10)
-        .flat_map(|x| (0..10).map(move |k| [(x[0] % (3.96e-4 - 11.0 * d)) + d + k as f64 * d * 1.0001, x[1].clamp(d, 3.96e-4 - d), x[2].clamp(d, 3.3e-4 - d)]))
+        .flat_map(|x| {
+            (0..10).map(move |k| {
+                [
+                    (x[0] % (3.96e-4 - 11.0 * d)) + d + k as f64 * d * 1.0001,
+                    x[1].clamp(d, 3.96e-4 - d),
+                    x[2].clamp(d, 3.3e-4 - d),
+                ]
+            })
+        })
         .collect();
     let chained: Vec<[f64; 3]> = chained
         .iter()
         .enumerate()
-        .filter(|(i, x)| chained[..*i].iter().all(|y| ((x[0] - y[0]).powi(2) + (x[1] - y[1]).powi(2) + (x[2] - y[2]).powi(2)).sqrt() > d * 1.00005))
+        .filter(|(i, x)| {
+            chained[..*i]
+                .iter()
+                .all(|y| ((x[0] - y[0]).powi(2) + (x[1] - y[1]).powi(2) + (x[2] - y[2]).powi(2)).sqrt() > d * 1.00005)
+        })
         .map(|(_, x)| *x)
         .collect();
     let mut rows = vec![];
@@ -282,8 +340,15 @@ pub fn cutoff_errors() -> Result<Vec<(String, &'static str, f64, f64)>, Error> {
 pub fn study(dir: &Path) -> Result<String, Error> {
     use rayon::prelude::*;
     std::fs::create_dir_all(dir)?;
-    let jobs: Vec<(Scheme, f64, f64)> = SCHEMES.iter().flat_map(|&s| MODULI.iter().flat_map(move |&e| FIELDS.iter().map(move |&b| (s, e, b)))).collect();
-    let points: Vec<MapPoint> = jobs.par_iter().map(|&(s, e, b)| map_point(s, e, b)).collect::<Result<_, String>>().map_err(|e| e.to_string())?;
+    let jobs: Vec<(Scheme, f64, f64)> = SCHEMES
+        .iter()
+        .flat_map(|&s| MODULI.iter().flat_map(move |&e| FIELDS.iter().map(move |&b| (s, e, b))))
+        .collect();
+    let points: Vec<MapPoint> = jobs
+        .par_iter()
+        .map(|&(s, e, b)| map_point(s, e, b))
+        .collect::<Result<_, String>>()
+        .map_err(|e| e.to_string())?;
     let mut md = format!(
         "# Stability: the largest stable time step, stiff and extreme cases\n\n\
          Generated by `magdem study stability` (magdem {}, commit {}).\n\n## Stability map\n\n{}\n\n",
@@ -314,7 +379,12 @@ pub fn study(dir: &Path) -> Result<String, Error> {
                 let measured = if p.measured.is_nan() {
                     "none: no dt kept the overlap physical (soft spheres at this speed)".to_string()
                 } else {
-                    format!("{}{:.2e}{}", if p.at_grid_top { "≥ " } else { "" }, p.measured, if p.non_monotonic { " ✱" } else { "" })
+                    format!(
+                        "{}{:.2e}{}",
+                        if p.at_grid_top { "≥ " } else { "" },
+                        p.measured,
+                        if p.non_monotonic { " ✱" } else { "" }
+                    )
                 };
                 let _ = writeln!(
                     md,
@@ -329,19 +399,37 @@ pub fn study(dir: &Path) -> Result<String, Error> {
             }
             series.push(Series::markers(
                 format!("measured, {b} T"),
-                here.iter().filter(|p| p.measured.is_finite()).map(|p| (p.youngs_modulus.log10(), p.measured.log10())).collect(),
+                here.iter()
+                    .filter(|p| p.measured.is_finite())
+                    .map(|p| (p.youngs_modulus.log10(), p.measured.log10()))
+                    .collect(),
                 palette(k),
                 5,
             ));
-            series.push(Series::line(format!("estimate, {b} T"), here.iter().map(|p| (p.youngs_modulus.log10(), p.estimate.log10())).collect(), palette(k)));
+            series.push(Series::line(
+                format!("estimate, {b} T"),
+                here.iter().map(|p| (p.youngs_modulus.log10(), p.estimate.log10())).collect(),
+                palette(k),
+            ));
         }
-        let rayleigh: Vec<(f64, f64)> = points.iter().filter(|p| p.scheme == scheme && p.b0 == FIELDS[0]).map(|p| (p.youngs_modulus.log10(), p.rayleigh.log10())).collect();
+        let rayleigh: Vec<(f64, f64)> = points
+            .iter()
+            .filter(|p| p.scheme == scheme && p.b0 == FIELDS[0])
+            .map(|p| (p.youngs_modulus.log10(), p.rayleigh.log10()))
+            .collect();
         series.push(Series::line("Rayleigh time", rayleigh, palette(6)));
         if scheme == Scheme::ExplicitEuler {
             series.push(Series::markers("the paper: E = 1e9 Pa, dt = 1e-6 s", vec![(9.0, -6.0)], RGBColor(0, 0, 0), 8));
         }
         let figure = format!("stability-{scheme}.png");
-        line_chart_with_legend(&dir.join(&figure), &format!("Largest stable dt: {scheme}"), "log10 Young's modulus (Pa)", "log10 dt (s)", &series, SeriesLabelPosition::LowerLeft)?;
+        line_chart_with_legend(
+            &dir.join(&figure),
+            &format!("Largest stable dt: {scheme}"),
+            "log10 Young's modulus (Pa)",
+            "log10 dt (s)",
+            &series,
+            SeriesLabelPosition::LowerLeft,
+        )?;
         let _ = writeln!(md, "\n![{scheme}]({figure})\n");
     }
     let ratio: Vec<f64> = points.iter().map(|p| p.measured / p.estimate).filter(|r| r.is_finite()).collect();

@@ -150,7 +150,15 @@ pub fn cases() -> Vec<Case> {
     let a = 0.5 * DIAMETER;
     v.push(base("spin, normal".into(), "5 spin, sphere-wall", Geometry::Wall, 0.5, 0.1, 0.0, 0.5 * 0.1 / a));
     v.push(base("spin, oblique 45°".into(), "5 spin, sphere-wall", Geometry::Wall, 0.5, 0.0707, 0.0707, -0.0707 / a));
-    v.push(base("unequal 1:2, elastic".into(), "6 unequal sizes", Geometry::Pair { d1: DIAMETER, d2: 2.0 * DIAMETER }, 1.0, 0.05, 0.0, 0.0));
+    v.push(base(
+        "unequal 1:2, elastic".into(),
+        "6 unequal sizes",
+        Geometry::Pair { d1: DIAMETER, d2: 2.0 * DIAMETER },
+        1.0,
+        0.05,
+        0.0,
+        0.0,
+    ));
     v
 }
 

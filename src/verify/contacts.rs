@@ -24,7 +24,10 @@ pub fn measure(case: &Case, path: &Path) -> hdf5::Result<(Metrics, Vec<(f64, f64
     let frames = times.len();
     let overlap = |k: usize| match case.geometry {
         Geometry::Pair { .. } => {
-            let d = ((x[[k, 1, 0]] - x[[k, 0, 0]]).powi(2) + (x[[k, 1, 1]] - x[[k, 0, 1]]).powi(2) + (x[[k, 1, 2]] - x[[k, 0, 2]]).powi(2)).sqrt();
+            let d = ((x[[k, 1, 0]] - x[[k, 0, 0]]).powi(2)
+                + (x[[k, 1, 1]] - x[[k, 0, 1]]).powi(2)
+                + (x[[k, 1, 2]] - x[[k, 0, 2]]).powi(2))
+            .sqrt();
             a1 + a2 - d
         }
         Geometry::Wall => a1 - (x[[k, 0, 2]] + 4.0 * DIAMETER),

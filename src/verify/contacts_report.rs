@@ -39,19 +39,53 @@ fn quantities(case: &Case) -> Vec<Quantity> {
     let elastic = case.restitution == 1.0;
     let speed = case.normal_speed.hypot(case.tangential_speed);
     let a = 0.5 * DIAMETER;
-    let mut q = vec![
-        Quantity { name: "restitution", normal: true, get: |m| m.restitution, closed: Some(case.restitution), scale: 1.0 },
-    ];
+    let mut q = vec![Quantity {
+        name: "restitution",
+        normal: true,
+        get: |m| m.restitution,
+        closed: Some(case.restitution),
+        scale: 1.0,
+    }];
     let tangential = case.tangential_speed != 0.0 || case.spin != 0.0;
     if !tangential {
-        q.push(Quantity { name: "duration (s)", normal: true, get: |m| m.duration, closed: elastic.then_some(t_c), scale: t_c });
-        q.push(Quantity { name: "max overlap (m)", normal: true, get: |m| m.max_overlap, closed: elastic.then_some(delta), scale: delta });
+        q.push(Quantity {
+            name: "duration (s)",
+            normal: true,
+            get: |m| m.duration,
+            closed: elastic.then_some(t_c),
+            scale: t_c,
+        });
+        q.push(Quantity {
+            name: "max overlap (m)",
+            normal: true,
+            get: |m| m.max_overlap,
+            closed: elastic.then_some(delta),
+            scale: delta,
+        });
     }
     if tangential {
-        q.push(Quantity { name: "rebound v_t (m/s)", normal: false, get: |m| m.rebound_tangential, closed: None, scale: speed });
-        q.push(Quantity { name: "rebound ω_y (rad/s)", normal: false, get: |m| m.rebound_spin, closed: None, scale: speed / a });
+        q.push(Quantity {
+            name: "rebound v_t (m/s)",
+            normal: false,
+            get: |m| m.rebound_tangential,
+            closed: None,
+            scale: speed,
+        });
+        q.push(Quantity {
+            name: "rebound ω_y (rad/s)",
+            normal: false,
+            get: |m| m.rebound_spin,
+            closed: None,
+            scale: speed / a,
+        });
         if matches!(case.geometry, Geometry::Wall) && case.spin == 0.0 {
-            q.push(Quantity { name: "rebound angle (°)", normal: false, get: |m| m.rebound_angle, closed: None, scale: 90.0 });
+            q.push(Quantity {
+                name: "rebound angle (°)",
+                normal: false,
+                get: |m| m.rebound_angle,
+                closed: None,
+                scale: 90.0,
+            });
         }
     }
     q
@@ -122,8 +156,16 @@ scale). Target: 0.5% on normal quantities, 1% on tangential ones against LIGGGHT
         let magdem = runs.iter().find(|o| o.engine == "magdem").expect("magdem ran every case");
         for q in quantities(case) {
             let mv = (q.get)(&magdem.metrics);
-            let mut row = format!("| {} | {} | {} | {} |", case.name, q.name, q.closed.map_or("–".into(), sci), sci(mv));
-            let _ = writeln!(csv, "\"{}\",\"{}\",\"{}\",magdem,{mv:e},{}", case.name, case.group, q.name, q.closed.map_or(String::new(), |c| format!("{c:e}")));
+            let mut row =
+                format!("| {} | {} | {} | {} |", case.name, q.name, q.closed.map_or("–".into(), sci), sci(mv));
+            let _ = writeln!(
+                csv,
+                "\"{}\",\"{}\",\"{}\",magdem,{mv:e},{}",
+                case.name,
+                case.group,
+                q.name,
+                q.closed.map_or(String::new(), |c| format!("{c:e}"))
+            );
             for n in &names {
                 match runs.iter().find(|o| o.engine == *n) {
                     Some(o) => {
@@ -166,7 +208,13 @@ scale). Target: 0.5% on normal quantities, 1% on tangential ones against LIGGGHT
         series.push(Series { label, points, color: engine_colour(o.engine), markers, errors: vec![] });
     }
     let fig1 = dir.join("contact-force-overlap.png");
-    line_chart(&fig1, "Normal force against overlap, sphere–sphere, e = 0.3, 0.5, 0.7, 0.9", "overlap δ (nm)", "normal force (µN)", &series)?;
+    line_chart(
+        &fig1,
+        "Normal force against overlap, sphere–sphere, e = 0.3, 0.5, 0.7, 0.9",
+        "overlap δ (nm)",
+        "normal force (µN)",
+        &series,
+    )?;
     figures.push(fig1);
     // Figure 2: rebound angle against incident angle.
     let mut series = vec![];
@@ -176,10 +224,22 @@ scale). Target: 0.5% on normal quantities, 1% on tangential ones against LIGGGHT
             .filter(|o| o.engine == engine && o.case.group.starts_with('4'))
             .map(|o| (o.case.incident_angle(), o.metrics.rebound_angle))
             .collect();
-        series.push(Series { label: engine.to_string(), points, color: engine_colour(engine), markers: marker_size(engine), errors: vec![] });
+        series.push(Series {
+            label: engine.to_string(),
+            points,
+            color: engine_colour(engine),
+            markers: marker_size(engine),
+            errors: vec![],
+        });
     }
     let fig2 = dir.join("contact-oblique.png");
-    line_chart(&fig2, "Oblique sphere–wall impact, 0.1 m/s, e = 0.5, μ = 0.5", "incident angle (°)", "rebound angle (°)", &series)?;
+    line_chart(
+        &fig2,
+        "Oblique sphere–wall impact, 0.1 m/s, e = 0.5, μ = 0.5",
+        "incident angle (°)",
+        "rebound angle (°)",
+        &series,
+    )?;
     figures.push(fig2);
     md += "![Normal force against overlap](contact-force-overlap.png)\n\n";
     md += "Force–overlap loops of the restitution cases (line: magdem; large circles: LIGGGHTS; small circles: \

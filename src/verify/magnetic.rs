@@ -58,9 +58,17 @@ pub fn case1_scene(end_time: f64) -> Result<String, String> {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/scenes/case1-c4.5.toml");
     let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
     let replace = |text: String, from: &str, to: &str| -> Result<String, String> {
-        if text.contains(from) { Ok(text.replacen(from, to, 1)) } else { Err(format!("{} lacks {from:?}", path.display())) }
+        if text.contains(from) {
+            Ok(text.replacen(from, to, 1))
+        } else {
+            Err(format!("{} lacks {from:?}", path.display()))
+        }
     };
-    let text = replace(text, "law = \"schiller-naumann\"\nshielding = \"paper\"", "law = \"stokes\"\nshielding = \"none\"\nrotational = false")?;
+    let text = replace(
+        text,
+        "law = \"schiller-naumann\"\nshielding = \"paper\"",
+        "law = \"stokes\"\nshielding = \"none\"\nrotational = false",
+    )?;
     let text = replace(text, "end_time = 5.0e-3", &format!("end_time = {end_time:e}"))?;
     let text = replace(text, "interval = 5.0e-5", &format!("interval = {:e}", end_time / 50.0))?;
     let text = replace(text, "name = \"case1-c4.5\"", "name = \"case1-c4.5-stokes\"")?;
@@ -83,7 +91,8 @@ fn difference(engine: &'static str, native: &Path, other: &Path) -> hdf5::Result
     let (frames, n) = (x.shape()[0], x.shape()[1]);
     let (mut max, mut median) = (vec![], vec![]);
     for k in 0..frames {
-        let mut d: Vec<f64> = (0..n).map(|i| (0..3).map(|c| (x[[k, i, c]] - y[[k, i, c]]).powi(2)).sum::<f64>().sqrt()).collect();
+        let mut d: Vec<f64> =
+            (0..n).map(|i| (0..3).map(|c| (x[[k, i, c]] - y[[k, i, c]]).powi(2)).sum::<f64>().sqrt()).collect();
         d.sort_by(f64::total_cmp);
         max.push(d[n - 1]);
         median.push(d[n / 2]);
@@ -95,7 +104,12 @@ fn difference(engine: &'static str, native: &Path, other: &Path) -> hdf5::Result
 pub type Comparison = (Vec<Difference>, Vec<(String, f64)>);
 
 /// Runs one scene in magdem and the engines; returns the differences and the wall times.
-pub fn compare(text: &str, name: &str, work: &Path, engines: &[Engine]) -> Result<Comparison, Box<dyn std::error::Error>> {
+pub fn compare(
+    text: &str,
+    name: &str,
+    work: &Path,
+    engines: &[Engine],
+) -> Result<Comparison, Box<dyn std::error::Error>> {
     let scene = Scene::parse(text, name)?;
     std::fs::create_dir_all(work)?;
     let native = work.join(format!("{name}.magdem.h5"));
@@ -123,14 +137,22 @@ pub fn pair_before_contact(scheme: crate::core::integrators::Scheme, dt: f64, sl
 
 /// The pair approach run for 9e-5 s at dt = 1e-8 s (before contact), for the files-route study.
 pub fn files_route_scene() -> String {
-    PAIR.replace("dt = 1.0e-9", "dt = 1.0e-8").replace("end_time = 2.0e-4", "end_time = 9.0e-5").replace("interval = 2.0e-6", "interval = 1.0e-6")
+    PAIR.replace("dt = 1.0e-9", "dt = 1.0e-8")
+        .replace("end_time = 2.0e-4", "end_time = 9.0e-5")
+        .replace("interval = 2.0e-6", "interval = 1.0e-6")
 }
 
 /// One exchange interval K: (K, largest position difference to the in-process route (m), wall time (s)).
 pub type LagRow = (u64, f64, f64);
 
 /// The files route against the in-process route for exchange intervals `ks`.
-pub fn files_route_lag(engine: Engine, text: &str, work: &Path, magdem: &Path, ks: &[u64]) -> Result<Vec<LagRow>, Box<dyn std::error::Error>> {
+pub fn files_route_lag(
+    engine: Engine,
+    text: &str,
+    work: &Path,
+    magdem: &Path,
+    ks: &[u64],
+) -> Result<Vec<LagRow>, Box<dyn std::error::Error>> {
     let scene = Scene::parse(text, "files-route")?;
     std::fs::create_dir_all(work)?;
     let callback = work.join(format!("callback.{}.h5", engine.name()));
@@ -140,7 +162,14 @@ pub fn files_route_lag(engine: Engine, text: &str, work: &Path, magdem: &Path, k
     for &k in ks {
         let out = work.join(format!("files-{k}.{}.h5", engine.name()));
         let coupling = reference::deck::Coupling::Files { magdem: magdem.to_path_buf(), every: k };
-        let r = reference::run_binary(engine, &scene, &work.join(format!("files-{k}.{}", engine.name())), &out, &coupling, 1)?;
+        let r = reference::run_binary(
+            engine,
+            &scene,
+            &work.join(format!("files-{k}.{}", engine.name())),
+            &out,
+            &coupling,
+            1,
+        )?;
         let x = Trajectory::open(&out)?.all_vectors("position")?;
         let worst = x.iter().zip(reference_positions.iter()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
         rows.push((k, worst, r.wall_time.as_secs_f64()));
@@ -148,9 +177,14 @@ pub fn files_route_lag(engine: Engine, text: &str, work: &Path, magdem: &Path, k
     Ok(rows)
 }
 
-
 /// Runs both scenes and writes `dir/magnetic-verification.md` with one figure per scene.
-pub fn verify(dir: &Path, work: &Path, engines: &[Engine], case1_end: f64, magdem: &Path) -> Result<String, Box<dyn std::error::Error>> {
+pub fn verify(
+    dir: &Path,
+    work: &Path,
+    engines: &[Engine],
+    case1_end: f64,
+    magdem: &Path,
+) -> Result<String, Box<dyn std::error::Error>> {
     std::fs::create_dir_all(dir)?;
     let mut md = String::from("# Magnetic forces in lock step: magdem, LIGGGHTS and LAMMPS\n\n");
     let _ = writeln!(
@@ -169,7 +203,11 @@ pub fn verify(dir: &Path, work: &Path, engines: &[Engine], case1_end: f64, magde
         ("case1-c4.5-stokes", case1, "Case 1, 4.5 mg/ml, 307 particles, Stokes drag"),
     ] {
         let (diffs, times) = compare(&text, name, work, engines)?;
-        let _ = writeln!(md, "## {title}\n\nScene `{name}` (its TOML is stored in each trajectory). Wall time: {}.\n", times.iter().map(|(e, t)| format!("{e} {t:.1} s")).collect::<Vec<_>>().join(", "));
+        let _ = writeln!(
+            md,
+            "## {title}\n\nScene `{name}` (its TOML is stored in each trajectory). Wall time: {}.\n",
+            times.iter().map(|(e, t)| format!("{e} {t:.1} s")).collect::<Vec<_>>().join(", ")
+        );
         md += "| time (s) |";
         let mut rule = String::from("|---|");
         for d in &diffs {
@@ -192,8 +230,20 @@ pub fn verify(dir: &Path, work: &Path, engines: &[Engine], case1_end: f64, magde
             .iter()
             .flat_map(|d| {
                 [
-                    Series { label: format!("{} max", d.engine), points: d.times.iter().zip(&d.max).map(|(t, v)| (t * 1e3, floor(*v))).collect(), color: engine_colour(d.engine), markers: None, errors: vec![] },
-                    Series { label: format!("{} median", d.engine), points: d.times.iter().zip(&d.median).map(|(t, v)| (t * 1e3, floor(*v))).collect(), color: engine_colour(d.engine), markers: Some(3), errors: vec![] },
+                    Series {
+                        label: format!("{} max", d.engine),
+                        points: d.times.iter().zip(&d.max).map(|(t, v)| (t * 1e3, floor(*v))).collect(),
+                        color: engine_colour(d.engine),
+                        markers: None,
+                        errors: vec![],
+                    },
+                    Series {
+                        label: format!("{} median", d.engine),
+                        points: d.times.iter().zip(&d.median).map(|(t, v)| (t * 1e3, floor(*v))).collect(),
+                        color: engine_colour(d.engine),
+                        markers: Some(3),
+                        errors: vec![],
+                    },
                 ]
             })
             .collect();
@@ -206,7 +256,8 @@ pub fn verify(dir: &Path, work: &Path, engines: &[Engine], case1_end: f64, magde
         let rows = files_route_lag(engine, &files_route_scene(), &work.join("files-route"), magdem, &ks)?;
         let (lx, ly): (Vec<f64>, Vec<f64>) = rows.iter().map(|r| ((r.0 as f64).ln(), r.1.ln())).unzip();
         let (mx, my) = (lx.iter().sum::<f64>() / lx.len() as f64, ly.iter().sum::<f64>() / ly.len() as f64);
-        let slope = lx.iter().zip(&ly).map(|(x, y)| (x - mx) * (y - my)).sum::<f64>() / lx.iter().map(|x| (x - mx).powi(2)).sum::<f64>();
+        let slope = lx.iter().zip(&ly).map(|(x, y)| (x - mx) * (y - my)).sum::<f64>()
+            / lx.iter().map(|x| (x - mx).powi(2)).sum::<f64>();
         let _ = writeln!(
             md,
             "## The files route: lag error against the exchange interval\n\n\
@@ -233,7 +284,13 @@ pub fn verify(dir: &Path, work: &Path, engines: &[Engine], case1_end: f64, magde
             markers: Some(5),
             errors: vec![],
         }];
-        line_chart(&dir.join("magnetic-files-route.png"), "Files route: lag error against exchange interval", "log10 K (steps)", "log10 max |x_files − x_callback| (m)", &series)?;
+        line_chart(
+            &dir.join("magnetic-files-route.png"),
+            "Files route: lag error against exchange interval",
+            "log10 K (steps)",
+            "log10 max |x_files − x_callback| (m)",
+            &series,
+        )?;
         md += "![Files route lag error](magnetic-files-route.png)\n\n";
     }
     if engines.contains(&Engine::Lammps) {
@@ -241,12 +298,18 @@ pub fn verify(dir: &Path, work: &Path, engines: &[Engine], case1_end: f64, magde
 LAMMPS' `lj/cut/dipole/cut` (ε = 0; electric dipoles p = m √(1e-7/k_e), k_e = 8.9876e9) evaluates the dipole–dipole \
 forces between the same moments (magdem's, at the initial positions of the shipped scenes) independently of magdem's \
 code (`src/reference/dipole_check.rs`).\n\n| scene | pair sum | particles | largest force (N) | max ‖F_lammps − F_magdem‖ / max ‖F‖ |\n|---|---|---|---|---|\n";
-        for (name, cutoff, label) in [("case1-c4.5", "cutoff_diameters = 15.0", "15 diameters"), ("case1-c0.563", "", "all pairs")] {
+        for (name, cutoff, label) in
+            [("case1-c4.5", "cutoff_diameters = 15.0", "15 diameters"), ("case1-c0.563", "", "all pairs")]
+        {
             let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("experiments/scenes/{name}.toml"));
             let text = std::fs::read_to_string(&path)?.replace("cutoff_diameters = 15.0", cutoff);
             let scene = Scene::parse(&text, name)?;
             let c = reference::dipole_check::check(&scene, &work.join(format!("dipole-{name}")))?;
-            let _ = writeln!(md, "| {name} | {label} | {} | {:.4e} | {:.2e} |", c.particles, c.largest_force, c.max_relative_error);
+            let _ = writeln!(
+                md,
+                "| {name} | {label} | {} | {:.4e} | {:.2e} |",
+                c.particles, c.largest_force, c.max_relative_error
+            );
         }
         md += "\n";
     }

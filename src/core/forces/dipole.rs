@@ -64,7 +64,9 @@ fn fill_particle_blocks(blocks: &mut Vec<ParticleBlock>, position: &[Vec3], mome
             set_lane(&mut block.m, lane, &moment[i]);
         }
     };
-    parallel::for_each_share(&mut blocks[..], |first, blocks| blocks.iter_mut().enumerate().for_each(|(k, b)| fill(first + k, b)));
+    parallel::for_each_share(&mut blocks[..], |first, blocks| {
+        blocks.iter_mut().enumerate().for_each(|(k, b)| fill(first + k, b))
+    });
 }
 
 /// `blocks` = `vectors` in blocks of four, the last one padded with zeros.
@@ -230,7 +232,14 @@ struct Band {
 
 /// Adds Σ_j F_ij to `force` with partners from `rows` (`None` = all other particles) within
 /// `cutoff2`, by half rows with F_ji = −F_ij in `bands` (see [`BANDS`]).
-fn add_row_sums(particles: &[ParticleBlock], image: &Image, rows: Option<&Rows>, cutoff2: f64, force: &mut [Vec3], bands: &mut Vec<Band>) {
+fn add_row_sums(
+    particles: &[ParticleBlock],
+    image: &Image,
+    rows: Option<&Rows>,
+    cutoff2: f64,
+    force: &mut [Vec3],
+    bands: &mut Vec<Band>,
+) {
     // Without periodic axes the image term is d − 0 = d: the same bits without its arithmetic.
     if image.length == [0.0; 3] {
         add_row_sums_in::<false>(particles, image, rows, cutoff2, force, bands)
@@ -239,7 +248,14 @@ fn add_row_sums(particles: &[ParticleBlock], image: &Image, rows: Option<&Rows>,
     }
 }
 
-fn add_row_sums_in<const PERIODIC: bool>(particles: &[ParticleBlock], image: &Image, rows: Option<&Rows>, cutoff2: f64, force: &mut [Vec3], bands: &mut Vec<Band>) {
+fn add_row_sums_in<const PERIODIC: bool>(
+    particles: &[ParticleBlock],
+    image: &Image,
+    rows: Option<&Rows>,
+    cutoff2: f64,
+    force: &mut [Vec3],
+    bands: &mut Vec<Band>,
+) {
     use rayon::prelude::*;
     let n = force.len();
     let blocks = n.div_ceil(BLOCK);
@@ -275,7 +291,9 @@ fn add_row_sums_in<const PERIODIC: bool>(particles: &[ParticleBlock], image: &Im
             let row = Row::new(particles, i, cutoff2);
             let sum = match rows {
                 Some(rows) => row_sum::<PERIODIC>(particles, image, &row, rows.row(i), reactions, band.first_block),
-                None => row_sum::<PERIODIC>(particles, image, &row, (i + 1) / BLOCK..blocks, reactions, band.first_block),
+                None => {
+                    row_sum::<PERIODIC>(particles, image, &row, (i + 1) / BLOCK..blocks, reactions, band.first_block)
+                }
             };
             for k in 0..3 {
                 reactions[i / BLOCK - band.first_block][k].as_mut_array()[i % BLOCK] += sum[k];
@@ -307,7 +325,9 @@ fn add_row_sums_in<const PERIODIC: bool>(particles: &[ParticleBlock], image: &Im
 
 /// Adds F_ij to i and −F_ij to j for each listed pair, in list order.
 fn add_listed_pairs(pairs: &[Pair], moment: &[Vec3], force: &mut [Vec3], buffer: &mut Vec<Vec3>) {
-    let pair_force = |k: usize| dipole_pair_force(&moment[pairs[k].i as usize], &moment[pairs[k].j as usize], &pairs[k].r, pairs[k].dist);
+    let pair_force = |k: usize| {
+        dipole_pair_force(&moment[pairs[k].i as usize], &moment[pairs[k].j as usize], &pairs[k].r, pairs[k].dist)
+    };
     parallel::add_in_order(pairs.len(), buffer, pair_force, |k, f| {
         force[pairs[k].i as usize] += f;
         force[pairs[k].j as usize] -= f;
@@ -332,7 +352,18 @@ pub struct DipoleForce {
 
 impl DipoleForce {
     pub fn new(cutoff: Option<f64>, b0: Vec3, gradient: Matrix3<f64>, skins: Skins) -> Self {
-        Self { cutoff, skin: skins.magnetic, b0, gradient, verlet: VerletList::default(), pairs: vec![], buffer: vec![], particle_blocks: vec![], rows: Rows::default(), bands: vec![] }
+        Self {
+            cutoff,
+            skin: skins.magnetic,
+            b0,
+            gradient,
+            verlet: VerletList::default(),
+            pairs: vec![],
+            buffer: vec![],
+            particle_blocks: vec![],
+            rows: Rows::default(),
+            bands: vec![],
+        }
     }
 }
 
@@ -355,11 +386,25 @@ impl ForceTerm for DipoleForce {
                     self.rows.build(n, self.verlet.candidates());
                 }
                 fill_particle_blocks(&mut self.particle_blocks, &p.position, out.moment);
-                add_row_sums(&self.particle_blocks, &Image::of(ctx.domain), Some(&self.rows), c * c, out.force, &mut self.bands);
+                add_row_sums(
+                    &self.particle_blocks,
+                    &Image::of(ctx.domain),
+                    Some(&self.rows),
+                    c * c,
+                    out.force,
+                    &mut self.bands,
+                );
             }
             (None, None) => {
                 fill_particle_blocks(&mut self.particle_blocks, &p.position, out.moment);
-                add_row_sums(&self.particle_blocks, &Image::of(ctx.domain), None, f64::INFINITY, out.force, &mut self.bands);
+                add_row_sums(
+                    &self.particle_blocks,
+                    &Image::of(ctx.domain),
+                    None,
+                    f64::INFINITY,
+                    out.force,
+                    &mut self.bands,
+                );
             }
         }
         if p.has_permanent_moments {

@@ -55,7 +55,19 @@ impl Drag {
         touch_tolerance: f64,
         near: PairRange,
     ) -> Self {
-        Self { law, shielding, rotational, fluid_density, viscosity, fluid_velocity, touch_tolerance, exclude_linear: false, near, shadow: vec![], flow_direction: vec![] }
+        Self {
+            law,
+            shielding,
+            rotational,
+            fluid_density,
+            viscosity,
+            fluid_velocity,
+            touch_tolerance,
+            exclude_linear: false,
+            near,
+            shadow: vec![],
+            flow_direction: vec![],
+        }
     }
 
     /// Linear drag coefficient 6π μ a (kg/s) of an unshielded sphere in Stokes flow.
@@ -70,7 +82,11 @@ impl Drag {
         self.flow_direction.extend(p.velocity.iter().map(|v| {
             let u = v - self.fluid_velocity;
             let speed = u.norm();
-            if speed > 0.0 { u / speed } else { Vec3::zeros() }
+            if speed > 0.0 {
+                u / speed
+            } else {
+                Vec3::zeros()
+            }
         }));
         self.shadow.clear();
         self.shadow.resize(p.len(), 0.0);
@@ -122,9 +138,7 @@ impl ForceTerm for Drag {
             let u = velocity[i] - self.fluid_velocity;
             let correction = match self.law {
                 DragLaw::Stokes => 1.0,
-                DragLaw::SchillerNaumann => {
-                    schiller_naumann(self.fluid_density * u.norm() * 2.0 * a / self.viscosity)
-                }
+                DragLaw::SchillerNaumann => schiller_naumann(self.fluid_density * u.norm() * 2.0 * a / self.viscosity),
             };
             let linear = if self.exclude_linear { Self::stokes_coefficient(self.viscosity, a) } else { 0.0 };
             *f -= (12.0 * self.viscosity * area / (2.0 * a) * correction - linear) * u;
@@ -149,7 +163,11 @@ mod tests {
         assert_eq!(schiller_naumann(0.0), 1.0);
         for re in [1e-9, 1e-6, 1e-3, 0.1, 1.0, 10.0, 100.0, 800.0] {
             let power = 1.0 + 0.15 * f64::powf(re, 0.687);
-            assert!((schiller_naumann(re) - power).abs() <= 4e-15 * power, "Re = {re}: {} vs {power}", schiller_naumann(re));
+            assert!(
+                (schiller_naumann(re) - power).abs() <= 4e-15 * power,
+                "Re = {re}: {} vs {power}",
+                schiller_naumann(re)
+            );
         }
     }
 }

@@ -49,6 +49,8 @@ impl ForceTerm for GravityBuoyancy {
     }
     fn apply(&mut self, _ctx: &Context, p: &Particles, out: &mut Forces) {
         self.weigh(p);
-        parallel::for_each_share((&mut *out.force, &self.weights[..]), |_, (f, w)| f.iter_mut().zip(w).for_each(|(f, w)| *f += w));
+        parallel::for_each_share((&mut *out.force, &self.weights[..]), |_, (f, w)| {
+            f.iter_mut().zip(w).for_each(|(f, w)| *f += w)
+        });
     }
 }

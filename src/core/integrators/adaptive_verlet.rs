@@ -15,8 +15,8 @@
 //! for all particles (the step is global). The forces must be functions of the state: the scene
 //! layer refuses the paper's lagged induction, which advances one sweep per evaluation.
 
-use super::{kick, kick_drift, Evaluate, Integrator};
 use super::ForceGroup;
+use super::{kick, kick_drift, Evaluate, Integrator};
 use crate::core::state::State;
 
 pub struct AdaptiveVerlet {
@@ -47,7 +47,10 @@ fn verlet(state: &mut State, h: f64, evaluate: &mut Evaluate) {
 fn scaled_error(a: &State, b: &State, h: f64, tolerance: f64) -> f64 {
     let (p, q) = (&a.particles, &b.particles);
     (0..p.len())
-        .map(|i| ((p.position[i] - q.position[i]).norm() + h * (p.velocity[i] - q.velocity[i]).norm()) / (3.0 * tolerance * p.radius[i]))
+        .map(|i| {
+            ((p.position[i] - q.position[i]).norm() + h * (p.velocity[i] - q.velocity[i]).norm())
+                / (3.0 * tolerance * p.radius[i])
+        })
         .fold(0.0, f64::max)
 }
 

@@ -1,8 +1,8 @@
 //! Explicit (forward) Euler, the paper's scheme: x' = x + v dt, v' = v + F(x, v)/m dt.
 //! First order; unconditionally unstable for an undamped oscillator.
 
-use super::{drift, kick, tick, Evaluate, Integrator};
 use super::ForceGroup;
+use super::{drift, kick, tick, Evaluate, Integrator};
 use crate::core::state::State;
 
 pub struct ExplicitEuler;

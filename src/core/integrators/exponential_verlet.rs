@@ -8,8 +8,8 @@
 //! for the terminal velocity at any dt, so the drag relaxation time m/γ no longer limits dt
 //! (contact still does) — what sub-micron particles need. At γ = 0 it is velocity Verlet.
 
-use super::{advance, drift, tick, Evaluate, Integrator, Kick};
 use super::ForceGroup;
+use super::{advance, drift, tick, Evaluate, Integrator, Kick};
 use crate::core::state::{State, Vec3};
 
 pub struct ExponentialVerlet {
@@ -22,7 +22,12 @@ pub struct ExponentialVerlet {
 
 impl ExponentialVerlet {
     fn half_kick(&self, state: &mut State, h: f64) {
-        let kick = Kick::Exponential { h, gamma: &self.gamma, gamma_rotational: &self.gamma_rotational, fluid_velocity: self.fluid_velocity };
+        let kick = Kick::Exponential {
+            h,
+            gamma: &self.gamma,
+            gamma_rotational: &self.gamma_rotational,
+            fluid_velocity: self.fluid_velocity,
+        };
         advance(&mut state.particles, &state.fields.force, &state.fields.torque, kick, 0.0);
     }
 }

@@ -174,7 +174,8 @@ fn advance(p: &mut Particles, force: &[Vec3], torque: &[Vec3], kick: Kick, drift
             let (c, ci) = (kick * mass, kick * inertia);
             // Component by component (SIMD across particles).
             parallel::for_each_share((x, v, w, force, torque), |_, (x, v, w, f, t)| {
-                let (x, v, w, f, t) = (components_mut(x), components_mut(v), components_mut(w), components(f), components(t));
+                let (x, v, w, f, t) =
+                    (components_mut(x), components_mut(v), components_mut(w), components(f), components(t));
                 match (kick != 0.0, drift != 0.0) {
                     (true, true) => x.iter_mut().zip(v).zip(f).for_each(|((x, v), f)| {
                         *v += f * c;
@@ -191,7 +192,9 @@ fn advance(p: &mut Particles, force: &[Vec3], torque: &[Vec3], kick: Kick, drift
         }
         (Kick::Plain(kick), InverseMasses::PerParticle { mass, inertia }) => {
             parallel::for_each_share((x, v, w, force, torque, &mass[..], &inertia[..]), |_, (x, v, w, f, t, m, i)| {
-                for ((((x, v), w), (f, t)), (m, i)) in x.iter_mut().zip(v).zip(w).zip(f.iter().zip(t)).zip(m.iter().zip(i)) {
+                for ((((x, v), w), (f, t)), (m, i)) in
+                    x.iter_mut().zip(v).zip(w).zip(f.iter().zip(t)).zip(m.iter().zip(i))
+                {
                     if kick != 0.0 {
                         *v += f * (kick * m);
                         *w += t * (kick * i);
@@ -204,17 +207,20 @@ fn advance(p: &mut Particles, force: &[Vec3], torque: &[Vec3], kick: Kick, drift
         }
         (Kick::Exponential { h, gamma, gamma_rotational, fluid_velocity: u }, _) => {
             let (mass, inertia) = (&p.mass[..], &p.inertia[..]);
-            parallel::for_each_share((x, v, w, force, torque, (mass, inertia), (gamma, gamma_rotational)), |_, (x, v, w, f, t, (m, i), (g, gr))| {
-                for k in 0..x.len() {
-                    let e = g[k] * h / m[k];
-                    v[k] = u + (v[k] - u) * (-e).exp() + f[k] * (h / m[k] * phi(e));
-                    let er = gr[k] * h / i[k];
-                    w[k] = w[k] * (-er).exp() + t[k] * (h / i[k] * phi(er));
-                    if drift != 0.0 {
-                        x[k] += v[k] * drift;
+            parallel::for_each_share(
+                (x, v, w, force, torque, (mass, inertia), (gamma, gamma_rotational)),
+                |_, (x, v, w, f, t, (m, i), (g, gr))| {
+                    for k in 0..x.len() {
+                        let e = g[k] * h / m[k];
+                        v[k] = u + (v[k] - u) * (-e).exp() + f[k] * (h / m[k] * phi(e));
+                        let er = gr[k] * h / i[k];
+                        w[k] = w[k] * (-er).exp() + t[k] * (h / i[k] * phi(er));
+                        if drift != 0.0 {
+                            x[k] += v[k] * drift;
+                        }
                     }
-                }
-            });
+                },
+            );
         }
     }
     if p.has_permanent_moments && drift != 0.0 {
@@ -250,9 +256,11 @@ mod tests {
     /// Particles with pseudo-random state and one shared (or per-particle) 1/m and 1/I.
     fn particles(n: usize, per_particle: bool) -> State {
         let value = |k: usize| ((k as f64 * 0.618_033_988_75).fract() - 0.5) * 1e-3;
-        let vectors = |offset: usize| (0..n).map(|i| Vec3::from_fn(|c, _| value(3 * (i + offset * n) + c))).collect::<Vec<_>>();
+        let vectors =
+            |offset: usize| (0..n).map(|i| Vec3::from_fn(|c, _| value(3 * (i + offset * n) + c))).collect::<Vec<_>>();
         let (mut p, mut f) = (Particles::default(), crate::core::state::Fields::default());
-        (p.position, p.velocity, p.angular_velocity, f.force, f.torque) = (vectors(0), vectors(1), vectors(2), vectors(3), vectors(4));
+        (p.position, p.velocity, p.angular_velocity, f.force, f.torque) =
+            (vectors(0), vectors(1), vectors(2), vectors(3), vectors(4));
         let (inv_m, inv_i) = (3.7e11, 2.9e21);
         p.inverse_masses = if per_particle {
             InverseMasses::PerParticle { mass: vec![inv_m; n], inertia: vec![inv_i; n] }

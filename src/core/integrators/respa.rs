@@ -5,8 +5,8 @@
 //! time-reversible for smooth slow forces; like every impulse scheme it can resonate when K·dt
 //! approaches half the period of a fast oscillation, which the stability studies measure.
 
-use super::{kick, kick_drift, slow_kick, tick, Evaluate, Integrator};
 use super::ForceGroup;
+use super::{kick, kick_drift, slow_kick, tick, Evaluate, Integrator};
 use crate::core::state::State;
 
 pub struct Respa {

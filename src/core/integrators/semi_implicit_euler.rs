@@ -1,8 +1,8 @@
 //! Semi-implicit (symplectic) Euler: v' = v + F(x, v)/m dt, x' = x + v' dt. First order,
 //! stable for an oscillator while ω dt < 2.
 
-use super::{kick_drift, tick, Evaluate, Integrator};
 use super::ForceGroup;
+use super::{kick_drift, tick, Evaluate, Integrator};
 use crate::core::state::State;
 
 pub struct SemiImplicitEuler;

@@ -6,8 +6,8 @@
 //! K·dt = 1e-6 s this is the paper's explicit-Euler step with its collisions sub-cycled, as
 //! OpenFOAM's colliding clouds do.
 
-use super::{kick, kick_drift, slow_kick, tick, Evaluate, Integrator};
 use super::ForceGroup;
+use super::{kick, kick_drift, slow_kick, tick, Evaluate, Integrator};
 use crate::core::state::State;
 
 pub struct SubcycledEuler {

@@ -2,8 +2,8 @@
 //! dependent ones see the half-step velocity), half kick. Second order for position-dependent
 //! forces; stable for an oscillator while ω dt < 2.
 
-use super::{kick, kick_drift, tick, Evaluate, Integrator};
 use super::ForceGroup;
+use super::{kick, kick_drift, tick, Evaluate, Integrator};
 use crate::core::state::State;
 
 pub struct VelocityVerlet;

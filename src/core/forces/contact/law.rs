@@ -65,7 +65,9 @@ impl Normal {
     #[inline(always)]
     fn stiffness_and_damping(self, m: &PairMaterial, sq: f64, m_eff: f64) -> (f64, f64) {
         match self {
-            Normal::Hertz => (4.0 / 3.0 * m.e_star * sq, -2.0 * SQRT_5_6 * m.beta * (2.0 * m.e_star * sq * m_eff).sqrt()),
+            Normal::Hertz => {
+                (4.0 / 3.0 * m.e_star * sq, -2.0 * SQRT_5_6 * m.beta * (2.0 * m.e_star * sq * m_eff).sqrt())
+            }
             Normal::Hooke { stiffness } => (stiffness, -2.0 * m.beta * (stiffness * m_eff).sqrt()),
         }
     }

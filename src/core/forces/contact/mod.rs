@@ -7,12 +7,12 @@ pub mod law;
 mod walls;
 
 use super::{Context, ForceTerm, Forces};
-pub use law::PairMaterial;
-use law::{ContactLaw, ContactPoint};
-use walls::{WallScan, WallTouch};
 use crate::core::neighbours::{Pair, PairRange};
 use crate::core::parallel;
 use crate::core::state::{ContactDiagnostics, Particles, Species, Vec3, WallFace};
+pub use law::PairMaterial;
+use law::{ContactLaw, ContactPoint};
+use walls::{WallScan, WallTouch};
 
 /// What one contact gives: the force on i (j receives −force), the torques on i and j, the
 /// updated spring and the overlap as a fraction of the smaller diameter.
@@ -120,7 +120,13 @@ impl Contact {
         };
         let force = self.law.force(&point, self.material(p.species[i], p.species[i]), &mut shear, dt);
         let ft = force - force.dot(&normal) * normal;
-        ContactOutcome { force, torque_i: -cr * normal.cross(&ft), torque_j: Vec3::zeros(), shear, overlap_ratio: touch.overlap / (2.0 * a) }
+        ContactOutcome {
+            force,
+            torque_i: -cr * normal.cross(&ft),
+            torque_j: Vec3::zeros(),
+            shear,
+            overlap_ratio: touch.overlap / (2.0 * a),
+        }
     }
 
     fn apply_pairs(&mut self, ctx: &Context, p: &Particles, out: &mut Forces, diag: &mut ContactDiagnostics) {
@@ -150,7 +156,8 @@ impl Contact {
             out.torque[j] += o.torque_j;
             next.push(((pair.i, pair.j), o.shear));
             if o.overlap_ratio > diag.max_overlap_ratio {
-                *diag = ContactDiagnostics { max_overlap_ratio: o.overlap_ratio, max_overlap_pair: (pair.i, Some(pair.j)) };
+                *diag =
+                    ContactDiagnostics { max_overlap_ratio: o.overlap_ratio, max_overlap_pair: (pair.i, Some(pair.j)) };
             }
         }
         out.contacts.pairs = next;
@@ -167,7 +174,9 @@ impl Contact {
         self.wall_found = found;
         let mut outcomes = std::mem::take(&mut self.outcomes);
         let touching = &self.wall_touching;
-        parallel::map_ordered(touching.len(), &mut outcomes, |c| self.wall_contact(p, &touching[c].0, touching[c].1, ctx.dt));
+        parallel::map_ordered(touching.len(), &mut outcomes, |c| {
+            self.wall_contact(p, &touching[c].0, touching[c].1, ctx.dt)
+        });
         let mut next = std::mem::replace(&mut self.spare_walls, history);
         next.clear();
         for ((t, _), o) in self.wall_touching.iter().zip(&outcomes) {
@@ -229,7 +238,8 @@ mod tests {
         }
         let (range, skin, dt) = (2.0 * a, 0.4 * a, 1e-8);
         let near = PairRange::Within { range, skin };
-        let (mut neighbours, mut contact) = (Neighbours::new([near]), Contact::new(std::slice::from_ref(&species), ContactLaw::default(), true, near));
+        let (mut neighbours, mut contact) =
+            (Neighbours::new([near]), Contact::new(std::slice::from_ref(&species), ContactLaw::default(), true, near));
         let (mut found, mut rebuilds) = (0, 0);
         state.fields.fit(state.particles.len());
         for step in 0..400 {
@@ -252,7 +262,12 @@ mod tests {
             let (p, mut out) = Forces::of(&mut state, ForceGroup::All);
             contact.apply(&ctx, p, &mut out);
             let (kept, all) = (&state.contacts.walls, &every_particle.contacts.walls);
-            assert!(kept == all, "step {step}: {} wall contacts among the candidates, {} testing every particle", kept.len(), all.len());
+            assert!(
+                kept == all,
+                "step {step}: {} wall contacts among the candidates, {} testing every particle",
+                kept.len(),
+                all.len()
+            );
             assert!(state.fields.force == every_particle.fields.force, "step {step}: forces differ");
             found += state.contacts.walls.len();
         }

@@ -47,7 +47,12 @@ impl WallScan {
         let hi = Vec3::from_fn(|k, _| if domain.periodic[k] { f64::INFINITY } else { domain.hi[k] });
         let near = |i: usize, margin: f64| {
             let (a, x) = (p.radius[i] + margin, p.position[i]);
-            (x.x - lo.x < a) | (x.y - lo.y < a) | (x.z - lo.z < a) | (hi.x - x.x < a) | (hi.y - x.y < a) | (hi.z - x.z < a)
+            (x.x - lo.x < a)
+                | (x.y - lo.y < a)
+                | (x.z - lo.z < a)
+                | (hi.x - x.x < a)
+                | (hi.y - x.y < a)
+                | (hi.z - x.z < a)
         };
         if let Some(skin) = rebuilt {
             let mut candidates = self.candidates.take().unwrap_or_default();
@@ -73,9 +78,9 @@ impl WallScan {
             }
         };
         match &self.candidates {
-            Some(candidates) => {
-                parallel::collect_ordered(candidates.len(), found, &mut self.found_pieces, |k, out| touches(candidates[k] as usize, out))
-            }
+            Some(candidates) => parallel::collect_ordered(candidates.len(), found, &mut self.found_pieces, |k, out| {
+                touches(candidates[k] as usize, out)
+            }),
             None => parallel::collect_ordered(p.len(), found, &mut self.found_pieces, touches),
         }
     }
