@@ -3,7 +3,7 @@ CARGO ?= cargo
 # The LIGGGHTS callback shim is built when LIGGGHTS' headers are installed (after setup).
 FEATURES = $$(test -f /usr/include/liggghts/fix_external.h && echo --features liggghts-shim)
 
-.PHONY: setup build reproduce test clean
+.PHONY: setup build reproduce test lint clean
 
 setup:
 	@bash scripts/setup.sh
@@ -12,8 +12,9 @@ setup:
 # dev-dependencies, `cargo test` with them (criterion and tempfile turn on bitflags/std,
 # either/use_std and zerocopy/derive: compare `cargo tree -e features -e normal,build` with
 # `-e normal,build,dev`), so the 35 crates above those (polars, faer, hdf5, rayon among them)
-# got different hashes and the second command rebuilt them. `cargo test --no-run` builds target/release/magdem too (cargo builds the
-# binaries for the integration tests, which run it) with the test resolution, so `make test`
+# got different hashes and the second command rebuilt them. `cargo test --no-run` builds
+# target/release/magdem too (cargo builds the binaries for the integration tests, which run it)
+# with the test resolution, so `make test`
 # after `make build` (or the other way round) compiles nothing new. The price: `make build`
 # also compiles the test binaries. The extra features add trait impls and derives, no code
 # the solver runs, so the binary computes the same results either way.
@@ -25,6 +26,12 @@ reproduce: build
 
 test: setup
 	$(CARGO) test --release $(FEATURES)
+
+# Formatting and lints (CI runs this before the tests): rustfmt.toml's layout, clippy's
+# warnings as errors.
+lint: setup
+	$(CARGO) fmt --check
+	$(CARGO) clippy --release --all-targets $(FEATURES) -- -D warnings
 
 clean:
 	$(CARGO) clean

@@ -46,3 +46,8 @@ fi
 if [ "${MAGDEM_NO_REFERENCE:-0}" != 1 ] && command -v python3 >/dev/null && ! python3 -c "import ovito" 2>/dev/null; then
     python3 -m pip install --quiet ovito 2>/dev/null || echo "setup: ovito not installed; its test is skipped"
 fi
+
+# `make lint` (run by CI before the tests) needs rustfmt and clippy.
+if command -v rustup >/dev/null && ! (cargo fmt --version && cargo clippy --version) >/dev/null 2>&1; then
+    rustup component add rustfmt clippy >/dev/null 2>&1 || echo "setup: rustfmt/clippy not installed; make lint will fail"
+fi

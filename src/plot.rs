@@ -210,7 +210,7 @@ impl Scale {
                 // Ticks sit at integer multiples of 10^k: one significant digit names them.
                 let x = 10f64.powf(*v);
                 let digits = (-x.log10().floor()).max(0.0) as usize;
-                if x >= 1e5 || x < 1e-3 {
+                if !(1e-3..1e5).contains(&x) {
                     format!("{x:.0e}")
                 } else {
                     format!("{x:.digits$}")
@@ -244,7 +244,8 @@ pub fn chart(
     register_font()?;
     let legend = legend.into();
     // Points and error-bar ends on the axes' own scales.
-    let mapped: Vec<(Vec<(f64, f64)>, Vec<(f64, f64)>)> = series
+    type Points = Vec<(f64, f64)>;
+    let mapped: Vec<(Points, Points)> = series
         .iter()
         .map(|s| {
             let pts: Vec<(f64, f64)> = s.points.iter().map(|&(x, y)| (sx.to_axis(x), sy.to_axis(y))).collect();
@@ -397,7 +398,7 @@ pub fn bar_panels(
             .x_labels(n.min(40))
             .x_label_formatter(&|x| {
                 let k = x.round();
-                if (x - k).abs() < 1e-6 && k >= 0.0 && (k as usize) < names.len() && (k as usize) % step == 0 {
+                if (x - k).abs() < 1e-6 && k >= 0.0 && (k as usize) < names.len() && (k as usize).is_multiple_of(step) {
                     names[k as usize].clone()
                 } else {
                     String::new()

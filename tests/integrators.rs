@@ -154,7 +154,7 @@ fn exponential_verlet_converges_at_second_order() {
 fn accuracy_study_observes_the_orders() {
     let work = tempfile::Builder::new().prefix("magdem-accuracy-").tempdir().unwrap();
     let dir = work.path();
-    let md = magdem::study::accuracy::study(&dir).unwrap();
+    let md = magdem::study::accuracy::study(dir).unwrap();
     let order = |section: &str, scheme: &str| -> String {
         let part = md.split("## ").find(|s| s.starts_with(section)).unwrap();
         let row = part.lines().find(|l| l.starts_with(&format!("| {scheme} |"))).unwrap();

@@ -1,6 +1,6 @@
 //! Physics verification against closed forms and independent solutions (docs/model.md §11).
 
-use magdem::core::forces::drag::{Drag, DragLaw, Shielding};
+use magdem::core::forces::drag::{Drag, DragLaw, Fluid, Shielding};
 use magdem::core::forces::shielding::lens_area;
 use magdem::core::forces::ForceTerm;
 use magdem::core::magnetisation::{Induction, Magnetisation, MU0};
@@ -361,9 +361,11 @@ fn chain_moving_along_its_axis_has_drag_only_on_its_leading_sphere() {
     p.velocity.iter_mut().for_each(|v| *v = u);
     let domain = magdem::core::domain::Domain { lo: Vec3::repeat(-1e-3), hi: Vec3::repeat(1e-3), periodic: [false; 3] };
     let near = PairRange::Within { range: 11.0e-6 * 1.001, skin: 0.0 };
-    for (shielding, expect_shielded) in [(Shielding::Paper, true), (Shielding::None, false)] {
+    let paper = Shielding::Paper { touch_tolerance: 1e-3, near };
+    for (shielding, expect_shielded) in [(paper, true), (Shielding::None, false)] {
         let mut state = State::new(p.clone());
-        let drag = Drag::new(DragLaw::Stokes, shielding, false, 1000.0, 1.0e-3, Vec3::zeros(), 1e-3, near);
+        let water = Fluid { density: 1000.0, viscosity: 1.0e-3, velocity: Vec3::zeros() };
+        let drag = Drag::new(DragLaw::Stokes, shielding, false, water);
         ForceField::new(domain.clone(), vec![Box::new(drag)]).evaluate(&mut state, 1e-8);
         let stokes = -6.0 * PI * 1.0e-3 * 5.5e-6 * u.x;
         let f: Vec<f64> = state.fields.force.iter().map(|f| f.x).collect();

@@ -40,7 +40,7 @@ fn single_contacts_agree_with_liggghts_and_lammps() {
         "unequal 1:2, elastic",
     ];
     for case in cases().into_iter().filter(|c| wanted.contains(&c.name.as_str())) {
-        let outcomes = run_case(&case, &dir, &engines).unwrap();
+        let outcomes = run_case(&case, dir, &engines).unwrap();
         let get = |engine: &str| outcomes.iter().find(|o| o.engine == engine).unwrap().metrics;
         let (m, l, p) = (get("magdem"), get("liggghts"), get("lammps"));
         println!("{}: magdem {m:?}\n  liggghts {l:?}\n  lammps {p:?}", case.name);
@@ -174,7 +174,7 @@ fn decks_carry_the_magnetic_fix_and_refuse_what_the_codes_cannot_express() {
         // Magnetic terms are not refused: the deck carries the fix external magdem drives.
         let work = workdir(&format!("magnetic-{}", engine.name()));
         let dir = work.path();
-        let deck = reference::deck::write(engine, &scene, &dir).unwrap();
+        let deck = reference::deck::write(engine, &scene, dir).unwrap();
         let text = std::fs::read_to_string(dir.join(deck.input)).unwrap();
         assert!(text.contains("include fix.magnetic") && text.contains("include fix.contact"), "{text}");
         let fix = std::fs::read_to_string(dir.join("fix.magnetic")).unwrap();

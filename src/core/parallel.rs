@@ -112,6 +112,9 @@ pub fn map_ordered<T: Send>(n: usize, out: &mut Vec<T>, f: impl Fn(usize) -> T +
 /// in contiguous shares by [`for_each_share`].
 pub trait Split: Sized + Send {
     fn len(&self) -> usize;
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
     fn split_at(self, k: usize) -> (Self, Self);
 }
 

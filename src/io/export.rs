@@ -78,13 +78,13 @@ pub fn write_lammps_dump(h5: &Path, out: &Path) -> Result<(), Error> {
     let species: Vec<u16> = t.file.dataset("particles/species")?.read_raw()?;
     let bounds: Vec<&str> = d.periodic.iter().map(|&p| if p { "pp" } else { "ff" }).collect();
     let mut text = String::new();
-    for k in 0..frames {
+    for (k, step) in steps.iter().enumerate().take(frames) {
         let (x, v, m) =
             (t.frame_vectors("position", k)?, t.frame_vectors("velocity", k)?, t.frame_vectors("moment", k)?);
         let _ = writeln!(
             text,
             "ITEM: TIMESTEP\n{}\nITEM: NUMBER OF ATOMS\n{}\nITEM: BOX BOUNDS {}",
-            steps[k],
+            step,
             x.len(),
             bounds.join(" ")
         );

@@ -283,7 +283,7 @@ pub fn write_with(
     check(engine, scene)?;
     std::fs::create_dir_all(dir)?;
     if let Coupling::Files { every, .. } = coupling {
-        if *every == 0 || scene.total_steps() % every != 0 {
+        if *every == 0 || !scene.total_steps().is_multiple_of(*every) {
             return Err(unsupported(
                 engine,
                 "the files route",

@@ -17,10 +17,10 @@ const GREEN: RGBColor = RGBColor(30, 150, 60);
 const RED: RGBColor = RGBColor(200, 30, 30);
 
 /// Positions of frames `frames` (indices) and the radii and box of a trajectory.
-fn read(
-    file: &Path,
-    frames: &[usize],
-) -> Result<(Vec<Vec<Vec3>>, Vec<f64>, crate::core::domain::Domain, Vec<f64>), Error> {
+/// Positions per frame, radii, box, times.
+type Frames = (Vec<Vec<Vec3>>, Vec<f64>, crate::core::domain::Domain, Vec<f64>);
+
+fn read(file: &Path, frames: &[usize]) -> Result<Frames, Error> {
     let t = Trajectory::open(file)?;
     let reader = crate::analysis::trajectory::FrameReader::new(&t)?;
     let positions = frames.iter().map(|&k| t.frame_vectors("position", k)).collect::<Result<Vec<_>, _>>()?;

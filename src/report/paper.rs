@@ -1059,15 +1059,13 @@ fn reference_section(runs: &[Run], out: &Path, tables: &Path) -> Result<String, 
         col("wall_time_s", here.iter().map(|r| r.wall_time).collect::<Vec<_>>()),
     ])?;
     write(&mut df, tables, "reference_engines")?;
-    md += &format!(
-        "`experiments/paper/reference.toml`: the case-1 scene with the forces all three engines can express (Stokes drag, no \
+    md += "`experiments/paper/reference.toml`: the case-1 scene with the forces all three engines can express (Stokes drag, no \
          A_eff shielding, no rotational drag — neither LIGGGHTS nor LAMMPS has Schiller–Naumann or shielded drag), velocity \
          Verlet at dt = 1e-8 s in all three, magdem's moments and dipole forces handed to LIGGGHTS and LAMMPS through `fix \
          external` every step. Δx is the largest distance between a particle's position in that engine and in magdem, at the \
          last frame and over all frames. Aggregation is chaotic in general (contacts amplify round-off), so agreement of the \
          statistics is the requirement and agreement of trajectories a bonus; LAMMPS' tangential contact model differs from \
-         LIGGGHTS' and magdem's by design (see the contact verification report). Engines not installed show as missing.\n\n"
-    );
+         LIGGGHTS' and magdem's by design (see the contact verification report). Engines not installed show as missing.\n\n";
     md += &markdown(
         &df,
         &[

@@ -138,7 +138,8 @@ impl Experiment {
             }
             axes.push((key.clone(), list));
         }
-        let mut variants: Vec<(Option<String>, Vec<(String, toml::Value)>)> = vec![];
+        type Edits = Vec<(String, toml::Value)>;
+        let mut variants: Vec<(Option<String>, Edits)> = vec![];
         for (name, table) in &spec.variants {
             let toml::Value::Table(table) = table else {
                 return Err(invalid(&format!("variants.{name}"), table, "must be a table of dotted scene keys"));

@@ -9,7 +9,7 @@ use crate::core::domain::Domain;
 use crate::core::forces::contact::law::{ContactLaw, Normal, Tangential};
 use crate::core::forces::contact::Contact;
 use crate::core::forces::dipole::DipoleForce;
-use crate::core::forces::drag::{Drag, DragLaw, Shielding};
+use crate::core::forces::drag::{Drag, DragLaw, Fluid, Shielding};
 use crate::core::forces::gradient::GradientForce;
 use crate::core::forces::gravity::GravityBuoyancy;
 use crate::core::forces::ForceTerm;
@@ -135,7 +135,7 @@ impl Scene {
         }
         let scene = Self { spec, text, hash, domain, species, initial, estimate, warnings };
         let k = scene.spec.integration.slow_every;
-        if scene.steps_per_frame() % k != 0 || scene.total_steps() % k != 0 {
+        if !scene.steps_per_frame().is_multiple_of(k) || !scene.total_steps().is_multiple_of(k) {
             return Err(invalid(
                 "integration.slow_every",
                 k,
@@ -257,18 +257,11 @@ impl Scene {
             };
             let shielding = match d.shielding {
                 ShieldingSpec::None => Shielding::None,
-                ShieldingSpec::Paper => Shielding::Paper,
+                ShieldingSpec::Paper => Shielding::Paper { touch_tolerance: d.touch_tolerance, near },
             };
-            let mut drag = Drag::new(
-                law,
-                shielding,
-                d.rotational,
-                fluid.density,
-                fluid.viscosity,
-                Vec3::from(fluid.velocity),
-                d.touch_tolerance,
-                near,
-            );
+            let medium =
+                Fluid { density: fluid.density, viscosity: fluid.viscosity, velocity: Vec3::from(fluid.velocity) };
+            let mut drag = Drag::new(law, shielding, d.rotational, medium);
             drag.exclude_linear = spec.integration.scheme.integrates_linear_drag();
             terms.push(Box::new(drag));
         }

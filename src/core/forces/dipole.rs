@@ -168,8 +168,8 @@ fn block_forces<const PERIODIC: bool>(block: &ParticleBlock, image: &Image, row:
     let (xi, mi, mj) = (&row.x, &row.m, &block.m);
     let mut d = [xi[0] - block.x[0], xi[1] - block.x[1], xi[2] - block.x[2]];
     if PERIODIC {
-        for k in 0..3 {
-            d[k] -= f64x4::splat(image.length[k]) * (d[k] * f64x4::splat(image.inverse[k])).round_ties_even();
+        for (dk, (length, inverse)) in d.iter_mut().zip(image.length.iter().zip(&image.inverse)) {
+            *dk -= f64x4::splat(*length) * (*dk * f64x4::splat(*inverse)).round_ties_even();
         }
     }
     let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
@@ -182,7 +182,7 @@ fn block_forces<const PERIODIC: bool>(block: &ParticleBlock, image: &Image, row:
     let radial = mimj - f64x4::splat(5.0) * mid * mjd * inv2;
     let mut partner = r2.simd_lt(row.cutoff2);
     if b == row.own_block {
-        partner = partner & row.own_lanes;
+        partner &= row.own_lanes;
     }
     // A selection, not a product: the lanes left out (i itself, padding) may hold NaN.
     let component = |k: usize| partner.select(scale * (mid * mj[k] + mjd * mi[k] + radial * d[k]), f64x4::ZERO);

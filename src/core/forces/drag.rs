@@ -18,11 +18,27 @@ pub enum DragLaw {
     SchillerNaumann,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Shielding {
     None,
-    /// The paper's A_eff from the touching upstream neighbour.
-    Paper,
+    /// The paper's A_eff from the touching upstream neighbour: pairs count as touching when their
+    /// gap is below `touch_tolerance` times the smaller radius, found through the `near` search
+    /// (contact range times 1 + touch tolerance).
+    Paper {
+        touch_tolerance: f64,
+        near: PairRange,
+    },
+}
+
+/// The fluid the particles move in.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fluid {
+    /// ρ_f (kg/m³).
+    pub density: f64,
+    /// μ (Pa s).
+    pub viscosity: f64,
+    /// u_f (m/s), uniform.
+    pub velocity: Vec3,
 }
 
 #[derive(Debug, Clone)]
@@ -30,44 +46,17 @@ pub struct Drag {
     pub law: DragLaw,
     pub shielding: Shielding,
     pub rotational: bool,
-    pub fluid_density: f64,
-    pub viscosity: f64,
-    pub fluid_velocity: Vec3,
-    /// Pairs count as touching when their gap is below this fraction of the smaller radius.
-    pub touch_tolerance: f64,
+    pub fluid: Fluid,
     /// Leave out the linear Stokes parts −6π μ a (v − u_f) and −8π μ a³ ω, which an exponential
     /// integrator applies exactly; only the shielding and Schiller–Naumann corrections remain.
     pub exclude_linear: bool,
-    /// The touching-pair search of the shielding (contact range times 1 + touch tolerance).
-    pub near: PairRange,
     shadow: Vec<f64>,
     flow_direction: Vec<Vec3>,
 }
 
 impl Drag {
-    pub fn new(
-        law: DragLaw,
-        shielding: Shielding,
-        rotational: bool,
-        fluid_density: f64,
-        viscosity: f64,
-        fluid_velocity: Vec3,
-        touch_tolerance: f64,
-        near: PairRange,
-    ) -> Self {
-        Self {
-            law,
-            shielding,
-            rotational,
-            fluid_density,
-            viscosity,
-            fluid_velocity,
-            touch_tolerance,
-            exclude_linear: false,
-            near,
-            shadow: vec![],
-            flow_direction: vec![],
-        }
+    pub fn new(law: DragLaw, shielding: Shielding, rotational: bool, fluid: Fluid) -> Self {
+        Self { law, shielding, rotational, fluid, exclude_linear: false, shadow: vec![], flow_direction: vec![] }
     }
 
     /// Linear drag coefficient 6π μ a (kg/s) of an unshielded sphere in Stokes flow.
@@ -77,10 +66,10 @@ impl Drag {
 
     /// Largest shadow each particle receives from a touching upstream neighbour, with each
     /// particle's flow direction computed once (not once per touching pair).
-    fn compute_shadows(&mut self, ctx: &Context, p: &Particles) {
+    fn compute_shadows(&mut self, ctx: &Context, p: &Particles, touch_tolerance: f64, near: PairRange) {
         self.flow_direction.clear();
         self.flow_direction.extend(p.velocity.iter().map(|v| {
-            let u = v - self.fluid_velocity;
+            let u = v - self.fluid.velocity;
             let speed = u.norm();
             if speed > 0.0 {
                 u / speed
@@ -90,10 +79,10 @@ impl Drag {
         }));
         self.shadow.clear();
         self.shadow.resize(p.len(), 0.0);
-        for pair in ctx.neighbours.pairs(self.near) {
+        for pair in ctx.neighbours.pairs(near) {
             let (i, j) = (pair.i as usize, pair.j as usize);
             let (a_i, a_j) = (p.radius[i], p.radius[j]);
-            if pair.dist - a_i - a_j > self.touch_tolerance * a_i.min(a_j) {
+            if pair.dist - a_i - a_j > touch_tolerance * a_i.min(a_j) {
                 continue;
             }
             // pair.r = x_i − x_j: offset of j seen from i is −r, of i seen from j is +r. A zero
@@ -120,11 +109,14 @@ impl ForceTerm for Drag {
         "drag"
     }
     fn pairs(&self) -> Option<PairRange> {
-        (self.shielding == Shielding::Paper).then_some(self.near)
+        match self.shielding {
+            Shielding::None => None,
+            Shielding::Paper { near, .. } => Some(near),
+        }
     }
     fn apply(&mut self, ctx: &Context, p: &Particles, out: &mut Forces) {
-        if self.shielding == Shielding::Paper {
-            self.compute_shadows(ctx, p);
+        if let Shielding::Paper { touch_tolerance, near } = self.shielding {
+            self.compute_shadows(ctx, p, touch_tolerance, near);
         }
         let Particles { velocity, angular_velocity, radius, .. } = p;
         let (force, torque) = (&mut *out.force, &mut *out.torque);
@@ -133,17 +125,19 @@ impl ForceTerm for Drag {
             let full = PI * a * a;
             let area = match self.shielding {
                 Shielding::None => full,
-                Shielding::Paper => full - self.shadow[i],
+                Shielding::Paper { .. } => full - self.shadow[i],
             };
-            let u = velocity[i] - self.fluid_velocity;
+            let u = velocity[i] - self.fluid.velocity;
             let correction = match self.law {
                 DragLaw::Stokes => 1.0,
-                DragLaw::SchillerNaumann => schiller_naumann(self.fluid_density * u.norm() * 2.0 * a / self.viscosity),
+                DragLaw::SchillerNaumann => {
+                    schiller_naumann(self.fluid.density * u.norm() * 2.0 * a / self.fluid.viscosity)
+                }
             };
-            let linear = if self.exclude_linear { Self::stokes_coefficient(self.viscosity, a) } else { 0.0 };
-            *f -= (12.0 * self.viscosity * area / (2.0 * a) * correction - linear) * u;
+            let linear = if self.exclude_linear { Self::stokes_coefficient(self.fluid.viscosity, a) } else { 0.0 };
+            *f -= (12.0 * self.fluid.viscosity * area / (2.0 * a) * correction - linear) * u;
             if self.rotational && !self.exclude_linear {
-                *t -= 8.0 * PI * self.viscosity * a.powi(3) * angular_velocity[i];
+                *t -= 8.0 * PI * self.fluid.viscosity * a.powi(3) * angular_velocity[i];
             }
         };
         parallel::for_each_share((force, torque), |first, (f, t)| {
