@@ -262,10 +262,35 @@ fn table3_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Res
         ],
         &[3, 0, 0, 0, 1, 1, 1, 1, 3, 1, 1, 0, 0],
     )?;
+    table3_figures(&ens, paper, &conc, out)?;
+    md += "\n![Table 3](table3.png)\n\n![Spread of the lengths](table3-spread.png)\n\n";
+    // Honest reading of the comparison.
+    let within: Vec<String> = ens
+        .iter()
+        .zip(floats(&paper.table3, "exp_mean_length_um")?)
+        .zip(floats(&paper.table3, "sim_mean_length_um")?)
+        .map(|((e, x), s)| {
+            format!(
+                "{} mg/ml: {:+.0}% against the experiment, {:+.0}% against the paper's simulation",
+                e.concentration,
+                100.0 * (mean(&e.runs) / x - 1.0),
+                100.0 * (mean(&e.runs) / s - 1.0)
+            )
+        })
+        .collect();
+    md += &format!("magdem's mean length: {}.\n\n", within.join("; "));
+    md += &gap_sensitivity(runs)?;
+    md += "The paper's own tables disagree in places (Table 4's columns hold 318/375/417/293 particles against Table 6's \
+           311/385/336/307; Table 4 reproduces Table 3's mean and population std only at 4.5 mg/ml): the audit is in \
+           [reference/paper/README.md](../../reference/paper/README.md) and is checked by `tests/analysis.rs`.\n\n";
+    Ok(md)
+}
+
+/// Table 3's figures: the means (magdem with its CI95 over seeds; the paper's and the
+/// experiment's means carry no CI) and, apart, the intrinsic spread of the lengths.
+fn table3_figures(ens: &[Ensemble], paper: &Paper, conc: &[f64], out: &Path) -> Result<(), Error> {
     let offset = |k: f64| conc.iter().map(move |&c| c * (1.0 + k)).collect::<Vec<f64>>();
     let pts = |x: Vec<f64>, y: Vec<f64>| x.into_iter().zip(y).collect::<Vec<_>>();
-    // Means (magdem with its CI95 over seeds; the paper's and the experiment's means carry no CI)
-    // and the intrinsic spread (population std of the lengths) in separate figures.
     let series = vec![
         Series::markers(
             "magdem (mean ± CI95 over seeds)",
@@ -323,27 +348,7 @@ fn table3_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Res
         &spread,
         SeriesLabelPosition::UpperLeft,
     )?;
-    md += "\n![Table 3](table3.png)\n\n![Spread of the lengths](table3-spread.png)\n\n";
-    // Honest reading of the comparison.
-    let within: Vec<String> = ens
-        .iter()
-        .zip(floats(&paper.table3, "exp_mean_length_um")?)
-        .zip(floats(&paper.table3, "sim_mean_length_um")?)
-        .map(|((e, x), s)| {
-            format!(
-                "{} mg/ml: {:+.0}% against the experiment, {:+.0}% against the paper's simulation",
-                e.concentration,
-                100.0 * (mean(&e.runs) / x - 1.0),
-                100.0 * (mean(&e.runs) / s - 1.0)
-            )
-        })
-        .collect();
-    md += &format!("magdem's mean length: {}.\n\n", within.join("; "));
-    md += &gap_sensitivity(runs)?;
-    md += "The paper's own tables disagree in places (Table 4's columns hold 318/375/417/293 particles against Table 6's \
-           311/385/336/307; Table 4 reproduces Table 3's mean and population std only at 4.5 mg/ml): the audit is in \
-           [reference/paper/README.md](../../reference/paper/README.md) and is checked by `tests/analysis.rs`.\n\n";
-    Ok(md)
+    Ok(())
 }
 
 /// Mean length of the seed-1 Table 3 runs at several aggregate gap tolerances: the definition
@@ -384,6 +389,33 @@ fn gap_sensitivity(runs: &[Run]) -> Result<String, Error> {
         ))
 }
 
+/// Aggregate-size histograms of an ensemble, sizes 1..=largest.
+struct Histograms {
+    /// Mean count over the runs.
+    magdem: Vec<f64>,
+    /// Mean over the runs of each size's fraction of the run's aggregates, and its std over runs.
+    fraction: Vec<f64>,
+    fraction_std: Vec<f64>,
+}
+
+fn histograms(here: &[&&Run], largest: usize) -> Histograms {
+    let per_run: Vec<Vec<f64>> = here
+        .iter()
+        .map(|r| {
+            let mut h = vec![0.0; largest];
+            r.last.iter().for_each(|a| h[a.size() - 1] += 1.0);
+            h
+        })
+        .collect();
+    let magdem: Vec<f64> = (0..largest).map(|s| mean(&per_run.iter().map(|h| h[s]).collect::<Vec<_>>())).collect();
+    let fractions: Vec<Vec<f64>> =
+        per_run.iter().map(|h| h.iter().map(|n| n / h.iter().sum::<f64>()).collect()).collect();
+    let fraction: Vec<f64> = (0..largest).map(|s| mean(&fractions.iter().map(|f| f[s]).collect::<Vec<_>>())).collect();
+    let fraction_std: Vec<f64> =
+        (0..largest).map(|s| summary(&fractions.iter().map(|f| f[s]).collect::<Vec<_>>()).sample_std).collect();
+    Histograms { magdem, fraction, fraction_std }
+}
+
 fn table4_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Result<String, Error> {
     let conc = floats(&paper.table3, "concentration_mg_per_ml")?;
     let paper_sizes: Vec<usize> =
@@ -398,26 +430,11 @@ fn table4_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Res
     let (mut c_col, mut size_col, mut magdem_col, mut paper_col) = (vec![], vec![], vec![], vec![]);
     let (mut frac_col, mut frac_std_col, mut paper_frac_col) = (vec![], vec![], vec![]);
     let mut panels = vec![];
-    let mut summary_rows: Vec<(f64, f64, f64, f64, f64, f64, f64)> = vec![];
+    let mut summary_rows: Vec<SizeSummary> = vec![];
     for &c in &conc {
         let here: Vec<&&Run> = table3.iter().filter(|r| same(r.concentration, c)).collect();
         let paper_counts = floats(&paper.table4, &format!("count_c{c}"))?;
-        // Each run's histogram as counts and as fractions of its aggregates.
-        let per_run: Vec<Vec<f64>> = here
-            .iter()
-            .map(|r| {
-                let mut h = vec![0.0; largest];
-                r.last.iter().for_each(|a| h[a.size() - 1] += 1.0);
-                h
-            })
-            .collect();
-        let magdem: Vec<f64> = (0..largest).map(|s| mean(&per_run.iter().map(|h| h[s]).collect::<Vec<_>>())).collect();
-        let fractions: Vec<Vec<f64>> =
-            per_run.iter().map(|h| h.iter().map(|n| n / h.iter().sum::<f64>()).collect()).collect();
-        let fraction: Vec<f64> =
-            (0..largest).map(|s| mean(&fractions.iter().map(|f| f[s]).collect::<Vec<_>>())).collect();
-        let fraction_std: Vec<f64> =
-            (0..largest).map(|s| summary(&fractions.iter().map(|f| f[s]).collect::<Vec<_>>()).sample_std).collect();
+        let Histograms { magdem, fraction, fraction_std } = histograms(&here, largest);
         let mut paper_row = vec![0.0; largest];
         for (s, n) in paper_sizes.iter().zip(&paper_counts) {
             paper_row[s - 1] = *n;
@@ -483,6 +500,15 @@ fn table4_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Res
         2,
         (760, 420),
     )?;
+    table4_summary(&summary_rows, tables)
+}
+
+/// Per concentration: (c, paper aggregates, magdem aggregates per run, paper singles, magdem
+/// singles per run, paper largest, magdem largest mean over runs).
+type SizeSummary = (f64, f64, f64, f64, f64, f64, f64);
+
+/// Table 4's summary table and its prose.
+fn table4_summary(summary_rows: &[SizeSummary], tables: &Path) -> Result<String, Error> {
     let mut sdf = frame(vec![
         col("concentration_mg_per_ml", summary_rows.iter().map(|r| r.0).collect::<Vec<_>>()),
         col("paper_aggregates", summary_rows.iter().map(|r| r.1).collect::<Vec<_>>()),
