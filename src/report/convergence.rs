@@ -291,31 +291,7 @@ pub fn finite_size_section(
         series
             .push(Series::markers(format!("{c} mg/ml (mean ± CI95 over seeds)"), pts, palette(k), 6).with_errors(errs));
         series.push(level(format!("experiment, {c} mg/ml"), exp, (x_lo.min(300.0), x_hi.max(3.0e4)), palette(k)));
-        // The two largest boxes, and the walls-to-periodic change at the paper's box.
-        let sizes: Vec<(&u64, &Vec<&Run>)> = by_factor.iter().collect();
-        if sizes.len() >= 2 {
-            let (fa, a) = sizes[sizes.len() - 2];
-            let (fb, b) = sizes[sizes.len() - 1];
-            let d = unpaired(&lengths(a), &lengths(b));
-            let verdict = if d.mean.abs() <= 5.0 { "agree within 5 %" } else { "do not yet agree within 5 %" };
-            findings.push(format!(
-                "{c} mg/ml: {fb}× against {fa}× the particles {:+.1} ± {:.1} % — the two largest boxes {verdict} ({} and {} seeds)",
-                d.mean,
-                d.ci95,
-                b.len(),
-                a.len()
-            ));
-            if let Some(x1) = by_factor.get(&1) {
-                effects.push(Effect {
-                    concentration: c,
-                    explanation: "box",
-                    what: format!("periodic {fb}× the particles against the paper's box with walls"),
-                    change: unpaired(&lengths(&respa_runs(runs, c)), &lengths(b)),
-                });
-                let walls = paired(&respa_runs(runs, c), x1, |r| r.mean_length_um());
-                findings.push(format!("{c} mg/ml, the paper's box: periodic side faces against walls {:+.1} ± {:.1} % (paired over {} seeds)", walls.mean, walls.ci95, walls.n));
-            }
-        }
+        findings.extend(box_findings(runs, c, &by_factor, effects));
     }
     let mut df = DataFrame::new(vec![
         col("concentration_mg_per_ml", c_col),
@@ -365,6 +341,40 @@ pub fn finite_size_section(
     Ok(md)
 }
 
+/// The two largest boxes' agreement at concentration `c`, and the walls-to-periodic change at
+/// the paper's box (recorded in `effects` for the ranking).
+fn box_findings(runs: &[Run], c: f64, by_factor: &BTreeMap<u64, Vec<&Run>>, effects: &mut Vec<Effect>) -> Vec<String> {
+    let mut findings = vec![];
+    let sizes: Vec<(&u64, &Vec<&Run>)> = by_factor.iter().collect();
+    if sizes.len() >= 2 {
+        let (fa, a) = sizes[sizes.len() - 2];
+        let (fb, b) = sizes[sizes.len() - 1];
+        let d = unpaired(&lengths(a), &lengths(b));
+        let verdict = if d.mean.abs() <= 5.0 { "agree within 5 %" } else { "do not yet agree within 5 %" };
+        findings.push(format!(
+            "{c} mg/ml: {fb}× against {fa}× the particles {:+.1} ± {:.1} % — the two largest boxes {verdict} ({} and {} seeds)",
+            d.mean,
+            d.ci95,
+            b.len(),
+            a.len()
+        ));
+        if let Some(x1) = by_factor.get(&1) {
+            effects.push(Effect {
+                concentration: c,
+                explanation: "box",
+                what: format!("periodic {fb}× the particles against the paper's box with walls"),
+                change: unpaired(&lengths(&respa_runs(runs, c)), &lengths(b)),
+            });
+            let walls = paired(&respa_runs(runs, c), x1, |r| r.mean_length_um());
+            findings.push(format!(
+                "{c} mg/ml, the paper's box: periodic side faces against walls {:+.1} ± {:.1} % (paired over {} seeds)",
+                walls.mean, walls.ci95, walls.n
+            ));
+        }
+    }
+    findings
+}
+
 /// Least-squares slope of ln L against ln t over the frames with `from ≤ t ≤ to` (s).
 fn growth_exponent(r: &Run, from: f64, to: f64) -> f64 {
     let pts: Vec<(f64, f64)> = r
@@ -389,6 +399,73 @@ fn length_at(r: &Run, t: f64) -> f64 {
     r.times.iter().position(|&x| x >= t - 1e-12).map_or(f64::NAN, |k| r.mean_length[k] * 1e6)
 }
 
+/// One concentration's row of the growth table (NaN where the runs end at 5 ms).
+struct GrowthRow {
+    c: f64,
+    seeds: f64,
+    z_all: f64,
+    z_all_ci: f64,
+    z_early: f64,
+    z_late: f64,
+    l5: f64,
+    lend: f64,
+    growth: f64,
+    growth_ci: f64,
+    cap5: f64,
+    capend: f64,
+    reach: f64,
+}
+
+/// The growth row of the runs `here` at concentration `c` (experiment's mean `exp`, runs ending
+/// at `end`), and the paired growth after 5 ms (%).
+fn growth_row(here: &[&Run], c: f64, exp: f64, end: f64) -> (GrowthRow, Estimate) {
+    let z = |a: f64, b: f64| Estimate::of(&here.iter().map(|r| growth_exponent(r, a, b)).collect::<Vec<_>>());
+    // Quantities after 5 ms exist only for runs that go on past it.
+    let later = |v: f64| if end > 5.5e-3 { v } else { f64::NAN };
+    let zz = z(1e-3, end);
+    let g =
+        Estimate::of(&here.iter().map(|r| 100.0 * (length_at(r, end) / length_at(r, 5e-3) - 1.0)).collect::<Vec<_>>());
+    let crossing = mean_series(here).iter().find(|p| p.1 >= exp).map_or(f64::NAN, |p| p.0 * 1e3);
+    let cap_at = |time: f64| {
+        Estimate::of(
+            &here
+                .iter()
+                .map(|r| r.times.iter().position(|&x| x >= time - 1e-12).map_or(f64::NAN, |i| r.box_limited[i]))
+                .collect::<Vec<_>>(),
+        )
+        .mean
+    };
+    let row = GrowthRow {
+        c,
+        seeds: here.len() as f64,
+        z_all: zz.mean,
+        z_all_ci: zz.ci95,
+        z_early: z(1e-3, 5e-3).mean,
+        z_late: later(z(5e-3, end).mean),
+        l5: Estimate::of(&here.iter().map(|r| length_at(r, 5e-3)).collect::<Vec<_>>()).mean,
+        lend: later(Estimate::of(&here.iter().map(|r| length_at(r, end)).collect::<Vec<_>>()).mean),
+        growth: later(g.mean),
+        growth_ci: later(g.ci95),
+        cap5: cap_at(5e-3),
+        capend: later(cap_at(end)),
+        reach: crossing,
+    };
+    (row, g)
+}
+
+/// What is published on growth exponents, and why magdem's z belongs to another class.
+const GROWTH_LITERATURE: &str = "\nPublished growth exponents for field-induced chaining are not universal. For chains whose diffusivity falls as \
+           1/s, Smoluchowski kinetics give z = 1/2, which experiments on Brownian paramagnetic colloids approach but have \
+           not strictly matched (as reviewed in the microfluidics text quoted in the notes). Langevin simulations of dipolar \
+           particles find z from about 0.2, when the dipolar attraction dominates, to 0.5, when diffusion dominates (Suzuki, \
+           Kun & Ito, Phys. Rev. E 2009). Experiments on paramagnetic colloids (Fermigier & Gast 1992; Promislow, Gast & \
+           Fermigier 1995) are quoted at z ≈ 0.4–0.75, rising with concentration and field strength; this range is from \
+           memory of those papers, not checked against their text. magdem's particles are not Brownian: 11 µm beads at \
+           λ = μ0 m²/(2π d³ kT) ~ 10⁹. Their aggregation is deterministic and field-driven, which is a different universality \
+           class from the diffusion-limited experiments. Neither the paper nor the experiment states when the experiment's \
+           images were taken, so the report puts no experiment time on 5 ms: the dotted lines in the figure are the \
+           experiment's means at an unknown time.\n\n";
+
 /// Stopping time: L(t) to 20 ms on log–log axes and its growth exponent.
 pub fn growth_section(
     runs: &[Run],
@@ -409,84 +486,43 @@ pub fn growth_section(
         return Ok(md + "No runs.\n\n");
     }
     let end = long.iter().filter_map(|r| r.times.last().copied()).fold(f64::INFINITY, f64::min);
-    let (
-        mut c_col,
-        mut n_col,
-        mut z_all,
-        mut z_all_ci,
-        mut z_early,
-        mut z_late,
-        mut l5,
-        mut lend,
-        mut growth,
-        mut growth_ci,
-        mut cap5,
-        mut capend,
-        mut reach,
-    ) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
+    let mut rows: Vec<GrowthRow> = vec![];
     let mut series = vec![];
     for (k, (&c, &exp)) in t.concentration.iter().zip(&t.experiment).enumerate() {
         let here: Vec<&Run> = long.iter().copied().filter(|r| same(r.concentration, c)).collect();
         if here.is_empty() {
             continue;
         }
-        let z = |a: f64, b: f64| Estimate::of(&here.iter().map(|r| growth_exponent(r, a, b)).collect::<Vec<_>>());
-        // Quantities after 5 ms exist only for runs that go on past it.
-        let later = |v: f64| if end > 5.5e-3 { v } else { f64::NAN };
-        let zz = z(1e-3, end);
-        let g = Estimate::of(
-            &here.iter().map(|r| 100.0 * (length_at(r, end) / length_at(r, 5e-3) - 1.0)).collect::<Vec<_>>(),
-        );
-        let mean = mean_series(&here);
-        let crossing = mean.iter().find(|p| p.1 >= exp).map_or(f64::NAN, |p| p.0 * 1e3);
-        let cap_at = |time: f64| {
-            Estimate::of(
-                &here
-                    .iter()
-                    .map(|r| r.times.iter().position(|&x| x >= time - 1e-12).map_or(f64::NAN, |i| r.box_limited[i]))
-                    .collect::<Vec<_>>(),
-            )
-            .mean
-        };
-        c_col.push(c);
-        n_col.push(here.len() as f64);
-        z_all.push(zz.mean);
-        z_all_ci.push(zz.ci95);
-        z_early.push(z(1e-3, 5e-3).mean);
-        z_late.push(later(z(5e-3, end).mean));
-        l5.push(Estimate::of(&here.iter().map(|r| length_at(r, 5e-3)).collect::<Vec<_>>()).mean);
-        lend.push(later(Estimate::of(&here.iter().map(|r| length_at(r, end)).collect::<Vec<_>>()).mean));
-        growth.push(later(g.mean));
-        growth_ci.push(later(g.ci95));
-        cap5.push(cap_at(5e-3));
-        capend.push(later(cap_at(end)));
-        reach.push(crossing);
+        let (row, paired) = growth_row(&here, c, exp, end);
         if end > 5.5e-3 {
             effects.push(Effect {
                 concentration: c,
                 explanation: "stopping time",
-                what: format!("{:.0} ms against 5 ms, paired over {} seeds", end * 1e3, g.n),
-                change: g,
+                what: format!("{:.0} ms against 5 ms, paired over {} seeds", end * 1e3, paired.n),
+                change: paired,
             });
         }
-        let pts: Vec<(f64, f64)> = mean.iter().filter(|p| p.0 > 0.0).map(|&(t, l)| (t * 1e3, l)).collect();
+        let pts: Vec<(f64, f64)> =
+            mean_series(&here).iter().filter(|p| p.0 > 0.0).map(|&(t, l)| (t * 1e3, l)).collect();
         series.push(Series::line(format!("{c} mg/ml, mean of {} seeds", here.len()), pts, palette(k)));
         series.push(level("", exp, (0.05, end * 1e3), palette(k)));
+        rows.push(row);
     }
+    let column = |f: fn(&GrowthRow) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
     let mut df = DataFrame::new(vec![
-        col("concentration_mg_per_ml", c_col),
-        col("seeds", n_col),
-        col("z_1ms_to_end", z_all),
-        col("z_ci95", z_all_ci),
-        col("z_1_to_5ms", z_early),
-        col("z_5ms_to_end", z_late),
-        col("length_5ms_um", l5),
-        col("length_end_um", lend),
-        col("growth_after_5ms_percent", growth),
-        col("growth_ci95_percent", growth_ci),
-        col("box_limited_5ms", cap5),
-        col("box_limited_end", capend),
-        col("time_reaching_experiment_ms", reach),
+        col("concentration_mg_per_ml", column(|r| r.c)),
+        col("seeds", column(|r| r.seeds)),
+        col("z_1ms_to_end", column(|r| r.z_all)),
+        col("z_ci95", column(|r| r.z_all_ci)),
+        col("z_1_to_5ms", column(|r| r.z_early)),
+        col("z_5ms_to_end", column(|r| r.z_late)),
+        col("length_5ms_um", column(|r| r.l5)),
+        col("length_end_um", column(|r| r.lend)),
+        col("growth_after_5ms_percent", column(|r| r.growth)),
+        col("growth_ci95_percent", column(|r| r.growth_ci)),
+        col("box_limited_5ms", column(|r| r.cap5)),
+        col("box_limited_end", column(|r| r.capend)),
+        col("time_reaching_experiment_ms", column(|r| r.reach)),
     ])?;
     write(&mut df, tables, "growth")?;
     md += &format!(
@@ -516,17 +552,7 @@ pub fn growth_section(
         ],
         &[3, 0, 2, 2, 2, 2, 1, 1, 0, 0, 3, 3, 2],
     )?;
-    md += "\nPublished growth exponents for field-induced chaining are not universal. For chains whose diffusivity falls as \
-           1/s, Smoluchowski kinetics give z = 1/2, which experiments on Brownian paramagnetic colloids approach but have \
-           not strictly matched (as reviewed in the microfluidics text quoted in the notes). Langevin simulations of dipolar \
-           particles find z from about 0.2, when the dipolar attraction dominates, to 0.5, when diffusion dominates (Suzuki, \
-           Kun & Ito, Phys. Rev. E 2009). Experiments on paramagnetic colloids (Fermigier & Gast 1992; Promislow, Gast & \
-           Fermigier 1995) are quoted at z ≈ 0.4–0.75, rising with concentration and field strength; this range is from \
-           memory of those papers, not checked against their text. magdem's particles are not Brownian: 11 µm beads at \
-           λ = μ0 m²/(2π d³ kT) ~ 10⁹. Their aggregation is deterministic and field-driven, which is a different universality \
-           class from the diffusion-limited experiments. Neither the paper nor the experiment states when the experiment's \
-           images were taken, so the report puts no experiment time on 5 ms: the dotted lines in the figure are the \
-           experiment's means at an unknown time.\n\n";
+    md += GROWTH_LITERATURE;
     let legend = Legend { position: SeriesLabelPosition::UpperLeft, headroom: 0.35 };
     chart(
         &out.join("length-vs-time.png"),
@@ -642,32 +668,7 @@ pub fn magnetisation_section(
         if points.is_empty() {
             continue;
         }
-        // The saturation-cap curve: the Fröhlich–Kennelly point is another law, shown but not
-        // interpolated through.
-        let by_m: Vec<(f64, Vec<f64>)> = {
-            let mut p: Vec<(f64, Vec<f64>)> = points
-                .iter()
-                .filter(|(_, _, name)| !name.starts_with("fk-"))
-                .map(|(m, l, _)| (*m, l.clone()))
-                .collect();
-            p.sort_by(|a, b| a.0.total_cmp(&b.0));
-            p
-        };
-        for (label, target) in [("paper simulation", paper), ("experiment", exp)] {
-            let (best, lo, hi) = infer_m(&by_m, target);
-            let range = (by_m[0].0, by_m[by_m.len() - 1].0);
-            let below = by_m.iter().all(|p| summary(&p.1).mean > target);
-            let cell = best.map_or_else(
-                || if below { format!("below {:.1e}", range.0) } else { format!("above {:.1e}", range.1) },
-                |m| format!("{m:.2e}"),
-            );
-            let _ = writeln!(
-                inferred,
-                "| {c} | {label} | {target:.0} | {cell} | {} to {} |",
-                bound(lo, range),
-                bound(hi, range)
-            );
-        }
+        inferred += &inferred_rows(&points, c, exp, paper);
         if let (Some(bulk), Some(linear)) =
             (variants.iter().find(|v| v.0 == "ms-4.8e5"), variants.iter().find(|v| v.0 == "linear"))
         {
@@ -718,6 +719,31 @@ pub fn magnetisation_section(
            experiment's mean in the same colour.\n\n";
     md += &collapse(runs, &variants, out)?;
     Ok(md)
+}
+
+/// The rows of the inferred-M table at concentration `c`: the saturation-cap curve of `points`
+/// (magnetisation, the seeds' lengths, variant) met at the paper's and the experiment's means; the
+/// Fröhlich–Kennelly point is another law, shown but not interpolated through.
+fn inferred_rows(points: &[(f64, Vec<f64>, String)], c: f64, exp: f64, paper: f64) -> String {
+    let mut rows = String::new();
+    let by_m: Vec<(f64, Vec<f64>)> = {
+        let mut p: Vec<(f64, Vec<f64>)> =
+            points.iter().filter(|(_, _, name)| !name.starts_with("fk-")).map(|(m, l, _)| (*m, l.clone())).collect();
+        p.sort_by(|a, b| a.0.total_cmp(&b.0));
+        p
+    };
+    for (label, target) in [("paper simulation", paper), ("experiment", exp)] {
+        let (best, lo, hi) = infer_m(&by_m, target);
+        let range = (by_m[0].0, by_m[by_m.len() - 1].0);
+        let below = by_m.iter().all(|p| summary(&p.1).mean > target);
+        let cell = best.map_or_else(
+            || if below { format!("below {:.1e}", range.0) } else { format!("above {:.1e}", range.1) },
+            |m| format!("{m:.2e}"),
+        );
+        let _ =
+            writeln!(rows, "| {c} | {label} | {target:.0} | {cell} | {} to {} |", bound(lo, range), bound(hi, range));
+    }
+    rows
 }
 
 /// L(t) of each magnetisation at one concentration against t/τ, τ = μ/(μ0 M²): the

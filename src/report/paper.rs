@@ -687,10 +687,15 @@ fn case2_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Resu
     ];
     bar_panels(&out.join("case2.png"), "Case 2: aggregates at 1.25 s", &panels, 2, (760, 480))?;
     md += "\n![Case 2](case2.png)\n\n";
-    // Velocity against size, pooled over seeds: the paper's shielding lets only a chain's
-    // leading sphere feel drag, so a chain of n along the gradient moves about n times faster.
+    md += &case2_velocity_by_size(&here, out)?;
+    Ok(md)
+}
+
+/// Velocity against size, pooled over seeds: the paper's shielding lets only a chain's leading
+/// sphere feel drag, so a chain of n along the gradient moves about n times faster.
+fn case2_velocity_by_size(here: &[&Run], out: &Path) -> Result<String, Error> {
     let mut by_size: BTreeMap<usize, Vec<f64>> = BTreeMap::new();
-    for r in &here {
+    for r in here {
         for ((a, v), _) in r.last.iter().zip(&r.tracked_vx).zip(&r.at_x_wall).filter(|(_, &w)| !w) {
             by_size.entry(a.size()).or_default().push(v * 1e6);
         }
@@ -715,7 +720,7 @@ fn case2_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Resu
         ],
         SeriesLabelPosition::UpperLeft,
     )?;
-    md += &format!(
+    Ok(format!(
         "Why magdem's aggregates move faster than the experiment's: single particles move at {single:.1} µm/s on average (an \
          isolated one at 7.5–7.8 µm/s, the field growing along x; neighbours' attraction holds the others back), but under the paper's A_eff a chain aligned with the gradient hides all spheres but \
          the leading one, so its drag stays that of one sphere while its magnetic force grows n-fold: {}. In Stokes flow a \
@@ -723,8 +728,7 @@ fn case2_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Resu
          about the same speed; the shielding model overstates the speed-up, and the paper's own 8.3 µm/s suggests its \
          chains were not aligned with their motion.\n\n![Velocity by size](case2-velocity-by-size.png)\n\n",
         points.iter().map(|(n, v)| format!("n = {n:.0}: {v:.1} µm/s")).collect::<Vec<_>>().join(", ")
-    );
-    Ok(md)
+    ))
 }
 
 fn short_source(s: &str) -> String {
@@ -838,28 +842,11 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
         fastest.push(ok.iter().flat_map(|r| r.last.iter().map(|a| a.com_velocity.norm())).fold(f64::NAN, f64::max));
         deltas.push(d.mean);
         delta_cis.push(d.ci95);
-        let stopped: Vec<&&Run> = group.iter().filter(|r| r.status == "unstable").collect();
-        outcome.push(match stopped.first() {
-            Some(r) => format!(
-                "{} of {} stopped: {}",
-                stopped.len(),
-                group.len(),
-                r.message.split(';').next().unwrap_or(&r.message)
-            ),
-            None if ok.len() < group.len() => format!("{} of {} not run", group.len() - ok.len(), group.len()),
-            None => String::new(),
-        });
+        outcome.push(variant_outcome(group, ok.len()));
         cost.push(mean(&group.iter().map(|r| r.wall_time).collect::<Vec<_>>()));
         if d.n > 0 {
             bars.push((name.clone(), d));
-            let explanation = match name.as_str() {
-                "no-induction" => Some("induction"),
-                "no-shielding" => Some("shielding"),
-                "restitution-0.2" | "restitution-0.9" => Some("restitution"),
-                "paper-pipeline" => Some("the paper's pipeline"),
-                _ => None,
-            };
-            if let Some(explanation) = explanation {
+            if let Some(explanation) = sensitivity_explanation(name) {
                 effects.push(Effect {
                     concentration: first.concentration,
                     explanation,
@@ -911,6 +898,41 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
            1e-8 s. A contact closes and reopens within about 7e-8 s, so the held attraction keeps pulling on a pair that has already \
            rebounded. The fastest-aggregate column (the largest centre-of-mass speed of any aggregate in the last frame, collisions \
            under way included) shows whether that pumped energy into the particles; compare it across the variants.\n";
+    sensitivity_figure(&bars, first.concentration, out)?;
+    md += "\n![Sensitivity](sensitivity.png)\n\n";
+    Ok(md)
+}
+
+/// What a stopped or partly run variant's row says.
+fn variant_outcome(group: &[&Run], completed: usize) -> String {
+    let stopped: Vec<&&Run> = group.iter().filter(|r| r.status == "unstable").collect();
+    match stopped.first() {
+        Some(r) => {
+            format!(
+                "{} of {} stopped: {}",
+                stopped.len(),
+                group.len(),
+                r.message.split(';').next().unwrap_or(&r.message)
+            )
+        }
+        None if completed < group.len() => format!("{} of {} not run", group.len() - completed, group.len()),
+        None => String::new(),
+    }
+}
+
+/// The explanation of the "why the numbers differ" ranking a sensitivity variant measures.
+fn sensitivity_explanation(variant: &str) -> Option<&'static str> {
+    match variant {
+        "no-induction" => Some("induction"),
+        "no-shielding" => Some("shielding"),
+        "restitution-0.2" | "restitution-0.9" => Some("restitution"),
+        "paper-pipeline" => Some("the paper's pipeline"),
+        _ => None,
+    }
+}
+
+/// The sensitivity figure: each variant's paired change with its CI95 over seeds.
+fn sensitivity_figure(bars: &[(String, convergence::Estimate)], concentration: f64, out: &Path) -> Result<(), Error> {
     let series: Vec<Series> = bars
         .iter()
         .enumerate()
@@ -921,14 +943,13 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
     let zero = Series::line("", vec![(-0.5, 0.0), (bars.len() as f64 - 0.5, 0.0)], RGBColor(0, 0, 0));
     line_chart_with_legend(
         &out.join("sensitivity.png"),
-        &format!("Case 1, {} mg/ml: paired change of the mean length at 5 ms (± CI95 over seeds)", first.concentration),
+        &format!("Case 1, {} mg/ml: paired change of the mean length at 5 ms (± CI95 over seeds)", concentration),
         "variant (see legend)",
         "change against r-RESPA (%)",
         &series.into_iter().chain([zero]).collect::<Vec<_>>(),
         crate::plot::Legend { position: SeriesLabelPosition::UpperRight, headroom: 0.7 },
     )?;
-    md += "\n![Sensitivity](sensitivity.png)\n\n";
-    Ok(md)
+    Ok(())
 }
 
 fn box_effect_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Result<String, Error> {

@@ -555,6 +555,60 @@ fn isolated_moment(spec: &SceneSpec, domain: &Domain, s: &Species) -> f64 {
     m + s.permanent_moment.map_or(0.0, |p| p.norm())
 }
 
+/// Group `g`'s explicit positions (with their velocities and spins), checked inside the box and
+/// against the particles placed so far.
+fn place_explicit(
+    spec: &SceneSpec,
+    domain: &Domain,
+    (si, s): (usize, &Species),
+    g: usize,
+    group: &ParticleGroupSpec,
+    positions: &[[f64; 3]],
+    particles: &mut Particles,
+) -> Result<(), SceneError> {
+    let key = |name: &str| format!("particles[{g}].{name}");
+    if group.order != ParticleOrder::Placement {
+        return Err(invalid(
+            key("order"),
+            "spatial",
+            "explicit positions keep their given order; order applies to count or concentration",
+        ));
+    }
+    let velocities = group.velocities.clone().unwrap_or_else(|| vec![[0.0; 3]; positions.len()]);
+    let spins = group.angular_velocities.clone().unwrap_or_else(|| vec![[0.0; 3]; positions.len()]);
+    for (name, len) in [("velocities", velocities.len()), ("angular_velocities", spins.len())] {
+        if len != positions.len() {
+            return Err(invalid(
+                key(name),
+                format!("{len} entries"),
+                format!("must match the {} positions", positions.len()),
+            ));
+        }
+    }
+    for (k, (x, v)) in positions.iter().zip(&velocities).enumerate() {
+        let at = Vec3::from(*x);
+        check_inside(&key(&format!("positions[{k}]")), x, at, s.radius, domain)?;
+        for j in 0..particles.len() {
+            let gap = domain.displacement(&at, &particles.position[j]).norm() - s.radius - particles.radius[j];
+            // Overlaps the run monitor accepts are allowed (a pre-compressed start).
+            let limit = spec.stability.max_overlap * 2.0 * s.radius.min(particles.radius[j]);
+            if -gap > limit {
+                return Err(invalid(
+                    key(&format!("positions[{k}]")),
+                    fmt3(x),
+                    format!(
+                        "overlaps particle {j} by {:e} m, more than stability.max_overlap = {} of the smaller diameter",
+                        -gap, spec.stability.max_overlap
+                    ),
+                ));
+            }
+        }
+        particles.push(si as u16, s, at, Vec3::from(*v));
+        *particles.angular_velocity.last_mut().expect("just pushed") = Vec3::from(spins[k]);
+    }
+    Ok(())
+}
+
 fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Result<Particles, SceneError> {
     let mut particles = Particles::default();
     if spec.particles.is_empty() {
@@ -580,42 +634,7 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
             ));
         }
         if let Some(positions) = &group.positions {
-            if group.order != ParticleOrder::Placement {
-                return Err(invalid(
-                    key("order"),
-                    "spatial",
-                    "explicit positions keep their given order; order applies to count or concentration",
-                ));
-            }
-            let velocities = group.velocities.clone().unwrap_or_else(|| vec![[0.0; 3]; positions.len()]);
-            let spins = group.angular_velocities.clone().unwrap_or_else(|| vec![[0.0; 3]; positions.len()]);
-            for (name, len) in [("velocities", velocities.len()), ("angular_velocities", spins.len())] {
-                if len != positions.len() {
-                    return Err(invalid(
-                        key(name),
-                        format!("{len} entries"),
-                        format!("must match the {} positions", positions.len()),
-                    ));
-                }
-            }
-            for (k, (x, v)) in positions.iter().zip(&velocities).enumerate() {
-                let at = Vec3::from(*x);
-                check_inside(&key(&format!("positions[{k}]")), x, at, s.radius, domain)?;
-                for j in 0..particles.len() {
-                    let gap = domain.displacement(&at, &particles.position[j]).norm() - s.radius - particles.radius[j];
-                    // Overlaps the run monitor accepts are allowed (a pre-compressed start).
-                    let limit = spec.stability.max_overlap * 2.0 * s.radius.min(particles.radius[j]);
-                    if -gap > limit {
-                        return Err(invalid(
-                            key(&format!("positions[{k}]")),
-                            fmt3(x),
-                            format!("overlaps particle {j} by {:e} m, more than stability.max_overlap = {} of the smaller diameter", -gap, spec.stability.max_overlap),
-                        ));
-                    }
-                }
-                particles.push(si as u16, s, at, Vec3::from(*v));
-                *particles.angular_velocity.last_mut().expect("just pushed") = Vec3::from(spins[k]);
-            }
+            place_explicit(spec, domain, (si, s), g, group, positions, &mut particles)?;
             continue;
         }
         if group.velocities.is_some() || group.angular_velocities.is_some() {

@@ -109,6 +109,83 @@ fn pct(v: f64) -> String {
     }
 }
 
+/// The figures' captions and how to read the differences between the engines.
+const READING: &str = concat!(
+    "![Normal force against overlap](contact-force-overlap.png)\n\n",
+    "Force–overlap loops of the restitution cases (line: magdem; large circles: LIGGGHTS; small circles: \
+LAMMPS). The damping term is proportional to √δ and to the normal velocity, so each loop starts at zero \
+force, is open, and encloses the dissipated energy; the lower the restitution, the wider the loop. The \
+force turns attractive near separation because the viscous term is not clipped (LIGGGHTS' default).\n\n",
+    "![Rebound angle against incident angle](contact-oblique.png)\n\n",
+    "Rebound angle of the sphere's centre from the wall normal against the incident angle (constant speed \
+0.1 m/s, e = 0.5, μ = 0.5).\n\n",
+    "## Reading the differences\n\n",
+    "- **magdem against LIGGGHTS**: the same contact law in both, so every quantity agrees to the last printed \
+digit; the residual is floating-point rounding.\n",
+    "- **LAMMPS, normal quantities**: agree once its inputs are mapped: the tsuji input is solved from \
+α(e_in) = √5|β(e)|, and the wall's and unlike pairs' (E, ν) are solved so that LAMMPS' effective moduli equal \
+magdem's E* and G* — the 2021 build forms a wall's E* as E/(2(1 − ν)) instead of E/(2(1 − ν²)), and its \
+automatic mixing of unlike types is broken. For e = 1 magdem gives LAMMPS zero viscoelastic damping, because \
+tsuji's polynomial is 3e-4, not 0, at e = 1 (it would cost the elastic cases 0.04% of restitution).\n",
+    "- **LAMMPS, tangential quantities**: differ by several per cent up to a factor of several in the spin \
+cases. The inputs match (same kt = 8G*a, same damping ratio); the Mindlin implementations do not: after \
+projecting the shear history onto the new tangent plane LAMMPS rescales it to its old length (LIGGGHTS does \
+not), and LAMMPS tests the Coulomb limit on the elastic plus damping force and keeps the damping part in the \
+capped force and in the reset history, where LIGGGHTS tests the elastic part alone and applies no damping while \
+sliding. The differences are largest where a contact passes between sliding and sticking (small incident \
+angles, spin); which of the two causes dominates each case is not separated here.\n"
+);
+
+/// Figure 1: force–overlap loops of the restitution cases; figure 2: rebound angle against
+/// incident angle.
+fn figures(dir: &Path, all: &[Outcome], names: &[&str]) -> Result<Vec<std::path::PathBuf>, Box<dyn std::error::Error>> {
+    let mut figures = vec![];
+    let mut series = vec![];
+    let mut labelled: Vec<&str> = vec![];
+    for o in all.iter().filter(|o| o.case.group.starts_with('3')) {
+        let points: Vec<(f64, f64)> = o.force_overlap.iter().map(|&(d, f)| (d * 1e9, f * 1e6)).collect();
+        let markers = marker_size(o.engine);
+        let points = if markers.is_some() { points.iter().step_by(12).copied().collect() } else { points };
+        let label = if labelled.contains(&o.engine) { String::new() } else { o.engine.to_string() };
+        labelled.push(o.engine);
+        series.push(Series { label, points, color: engine_colour(o.engine), markers, errors: vec![] });
+    }
+    let fig1 = dir.join("contact-force-overlap.png");
+    line_chart(
+        &fig1,
+        "Normal force against overlap, sphere–sphere, e = 0.3, 0.5, 0.7, 0.9",
+        "overlap δ (nm)",
+        "normal force (µN)",
+        &series,
+    )?;
+    figures.push(fig1);
+    let mut series = vec![];
+    for engine in std::iter::once("magdem").chain(names.iter().copied()) {
+        let points: Vec<(f64, f64)> = all
+            .iter()
+            .filter(|o| o.engine == engine && o.case.group.starts_with('4'))
+            .map(|o| (o.case.incident_angle(), o.metrics.rebound_angle))
+            .collect();
+        series.push(Series {
+            label: engine.to_string(),
+            points,
+            color: engine_colour(engine),
+            markers: marker_size(engine),
+            errors: vec![],
+        });
+    }
+    let fig2 = dir.join("contact-oblique.png");
+    line_chart(
+        &fig2,
+        "Oblique sphere–wall impact, 0.1 m/s, e = 0.5, μ = 0.5",
+        "incident angle (°)",
+        "rebound angle (°)",
+        &series,
+    )?;
+    figures.push(fig2);
+    Ok(figures)
+}
+
 pub fn write(dir: &Path, all: &[Outcome], engines: &[Engine]) -> Result<Report, Box<dyn std::error::Error>> {
     let mut md = String::new();
     let names: Vec<&str> = engines.iter().map(|e| e.name()).collect();
@@ -195,75 +272,8 @@ scale). Target: 0.5% on normal quantities, 1% on tangential ones against LIGGGHT
         100.0 * worst_tangential
     );
 
-    // Figure 1: force–overlap loops of the restitution cases.
-    let mut figures = vec![];
-    let mut series = vec![];
-    let mut labelled: Vec<&str> = vec![];
-    for o in all.iter().filter(|o| o.case.group.starts_with('3')) {
-        let points: Vec<(f64, f64)> = o.force_overlap.iter().map(|&(d, f)| (d * 1e9, f * 1e6)).collect();
-        let markers = marker_size(o.engine);
-        let points = if markers.is_some() { points.iter().step_by(12).copied().collect() } else { points };
-        let label = if labelled.contains(&o.engine) { String::new() } else { o.engine.to_string() };
-        labelled.push(o.engine);
-        series.push(Series { label, points, color: engine_colour(o.engine), markers, errors: vec![] });
-    }
-    let fig1 = dir.join("contact-force-overlap.png");
-    line_chart(
-        &fig1,
-        "Normal force against overlap, sphere–sphere, e = 0.3, 0.5, 0.7, 0.9",
-        "overlap δ (nm)",
-        "normal force (µN)",
-        &series,
-    )?;
-    figures.push(fig1);
-    // Figure 2: rebound angle against incident angle.
-    let mut series = vec![];
-    for engine in std::iter::once("magdem").chain(names.iter().copied()) {
-        let points: Vec<(f64, f64)> = all
-            .iter()
-            .filter(|o| o.engine == engine && o.case.group.starts_with('4'))
-            .map(|o| (o.case.incident_angle(), o.metrics.rebound_angle))
-            .collect();
-        series.push(Series {
-            label: engine.to_string(),
-            points,
-            color: engine_colour(engine),
-            markers: marker_size(engine),
-            errors: vec![],
-        });
-    }
-    let fig2 = dir.join("contact-oblique.png");
-    line_chart(
-        &fig2,
-        "Oblique sphere–wall impact, 0.1 m/s, e = 0.5, μ = 0.5",
-        "incident angle (°)",
-        "rebound angle (°)",
-        &series,
-    )?;
-    figures.push(fig2);
-    md += "![Normal force against overlap](contact-force-overlap.png)\n\n";
-    md += "Force–overlap loops of the restitution cases (line: magdem; large circles: LIGGGHTS; small circles: \
-LAMMPS). The damping term is proportional to √δ and to the normal velocity, so each loop starts at zero \
-force, is open, and encloses the dissipated energy; the lower the restitution, the wider the loop. The \
-force turns attractive near separation because the viscous term is not clipped (LIGGGHTS' default).\n\n";
-    md += "![Rebound angle against incident angle](contact-oblique.png)\n\n";
-    md += "Rebound angle of the sphere's centre from the wall normal against the incident angle (constant speed \
-0.1 m/s, e = 0.5, μ = 0.5).\n\n";
-    md += "## Reading the differences\n\n";
-    md += "- **magdem against LIGGGHTS**: the same contact law in both, so every quantity agrees to the last printed \
-digit; the residual is floating-point rounding.\n";
-    md += "- **LAMMPS, normal quantities**: agree once its inputs are mapped: the tsuji input is solved from \
-α(e_in) = √5|β(e)|, and the wall's and unlike pairs' (E, ν) are solved so that LAMMPS' effective moduli equal \
-magdem's E* and G* — the 2021 build forms a wall's E* as E/(2(1 − ν)) instead of E/(2(1 − ν²)), and its \
-automatic mixing of unlike types is broken. For e = 1 magdem gives LAMMPS zero viscoelastic damping, because \
-tsuji's polynomial is 3e-4, not 0, at e = 1 (it would cost the elastic cases 0.04% of restitution).\n";
-    md += "- **LAMMPS, tangential quantities**: differ by several per cent up to a factor of several in the spin \
-cases. The inputs match (same kt = 8G*a, same damping ratio); the Mindlin implementations do not: after \
-projecting the shear history onto the new tangent plane LAMMPS rescales it to its old length (LIGGGHTS does \
-not), and LAMMPS tests the Coulomb limit on the elastic plus damping force and keeps the damping part in the \
-capped force and in the reset history, where LIGGGHTS tests the elastic part alone and applies no damping while \
-sliding. The differences are largest where a contact passes between sliding and sticking (small incident \
-angles, spin); which of the two causes dominates each case is not separated here.\n";
+    let figures = figures(dir, all, &names)?;
+    md += READING;
     std::fs::write(dir.join("contact-verification.md"), &md)?;
     Ok(Report { markdown: md, figures, worst_normal, worst_tangential })
 }
