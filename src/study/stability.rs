@@ -336,6 +336,72 @@ pub fn cutoff_errors() -> Result<Vec<(String, &'static str, f64, f64)>, Error> {
     Ok(rows)
 }
 
+/// One scheme's part of the stability map: its table and its figure.
+fn map_section(dir: &Path, points: &[MapPoint], scheme: Scheme) -> Result<String, Error> {
+    let mut md = String::new();
+    let _ = writeln!(md, "### {scheme}\n\n| E (Pa) | B0 (T) | impact speed (m/s) | Rayleigh time (s) | estimate (s) | measured (s) | measured / estimate |\n|---|---|---|---|---|---|---|");
+    let mut series = vec![];
+    for (k, &b) in FIELDS.iter().enumerate() {
+        let here: Vec<&MapPoint> = points.iter().filter(|p| p.scheme == scheme && p.b0 == b).collect();
+        for p in &here {
+            let measured = if p.measured.is_nan() {
+                "none: no dt kept the overlap physical (soft spheres at this speed)".to_string()
+            } else {
+                format!(
+                    "{}{:.2e}{}",
+                    if p.at_grid_top { "≥ " } else { "" },
+                    p.measured,
+                    if p.non_monotonic { " ✱" } else { "" }
+                )
+            };
+            let _ = writeln!(
+                md,
+                "| {:.0e} | {} | {:.2e} | {:.2e} | {:.2e} | {measured} | {:.2} |",
+                p.youngs_modulus,
+                p.b0,
+                p.impact_speed,
+                p.rayleigh,
+                p.estimate,
+                p.measured / p.estimate
+            );
+        }
+        series.push(Series::markers(
+            format!("measured, {b} T"),
+            here.iter()
+                .filter(|p| p.measured.is_finite())
+                .map(|p| (p.youngs_modulus.log10(), p.measured.log10()))
+                .collect(),
+            palette(k),
+            5,
+        ));
+        series.push(Series::line(
+            format!("estimate, {b} T"),
+            here.iter().map(|p| (p.youngs_modulus.log10(), p.estimate.log10())).collect(),
+            palette(k),
+        ));
+    }
+    let rayleigh: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|p| p.scheme == scheme && p.b0 == FIELDS[0])
+        .map(|p| (p.youngs_modulus.log10(), p.rayleigh.log10()))
+        .collect();
+    series.push(Series::line("Rayleigh time", rayleigh, palette(6)));
+    if scheme == Scheme::ExplicitEuler {
+        series.push(Series::markers("the paper: E = 1e9 Pa, dt = 1e-6 s", vec![(9.0, -6.0)], RGBColor(0, 0, 0), 8));
+    }
+    let figure = format!("stability-{scheme}.png");
+    line_chart_with_legend(
+        &dir.join(&figure),
+        &format!("Largest stable dt: {scheme}"),
+        "log10 Young's modulus (Pa)",
+        "log10 dt (s)",
+        &series,
+        SeriesLabelPosition::LowerLeft,
+    )?;
+    let _ = writeln!(md, "\n![{scheme}]({figure})\n");
+    Ok(md)
+}
+
 /// Runs the whole study and writes `dir/stability.md` with its figures.
 pub fn study(dir: &Path) -> Result<String, Error> {
     use rayon::prelude::*;
@@ -371,66 +437,7 @@ pub fn study(dir: &Path) -> Result<String, Error> {
          fixed-step bound)."
     );
     for scheme in SCHEMES {
-        let _ = writeln!(md, "### {scheme}\n\n| E (Pa) | B0 (T) | impact speed (m/s) | Rayleigh time (s) | estimate (s) | measured (s) | measured / estimate |\n|---|---|---|---|---|---|---|");
-        let mut series = vec![];
-        for (k, &b) in FIELDS.iter().enumerate() {
-            let here: Vec<&MapPoint> = points.iter().filter(|p| p.scheme == scheme && p.b0 == b).collect();
-            for p in &here {
-                let measured = if p.measured.is_nan() {
-                    "none: no dt kept the overlap physical (soft spheres at this speed)".to_string()
-                } else {
-                    format!(
-                        "{}{:.2e}{}",
-                        if p.at_grid_top { "≥ " } else { "" },
-                        p.measured,
-                        if p.non_monotonic { " ✱" } else { "" }
-                    )
-                };
-                let _ = writeln!(
-                    md,
-                    "| {:.0e} | {} | {:.2e} | {:.2e} | {:.2e} | {measured} | {:.2} |",
-                    p.youngs_modulus,
-                    p.b0,
-                    p.impact_speed,
-                    p.rayleigh,
-                    p.estimate,
-                    p.measured / p.estimate
-                );
-            }
-            series.push(Series::markers(
-                format!("measured, {b} T"),
-                here.iter()
-                    .filter(|p| p.measured.is_finite())
-                    .map(|p| (p.youngs_modulus.log10(), p.measured.log10()))
-                    .collect(),
-                palette(k),
-                5,
-            ));
-            series.push(Series::line(
-                format!("estimate, {b} T"),
-                here.iter().map(|p| (p.youngs_modulus.log10(), p.estimate.log10())).collect(),
-                palette(k),
-            ));
-        }
-        let rayleigh: Vec<(f64, f64)> = points
-            .iter()
-            .filter(|p| p.scheme == scheme && p.b0 == FIELDS[0])
-            .map(|p| (p.youngs_modulus.log10(), p.rayleigh.log10()))
-            .collect();
-        series.push(Series::line("Rayleigh time", rayleigh, palette(6)));
-        if scheme == Scheme::ExplicitEuler {
-            series.push(Series::markers("the paper: E = 1e9 Pa, dt = 1e-6 s", vec![(9.0, -6.0)], RGBColor(0, 0, 0), 8));
-        }
-        let figure = format!("stability-{scheme}.png");
-        line_chart_with_legend(
-            &dir.join(&figure),
-            &format!("Largest stable dt: {scheme}"),
-            "log10 Young's modulus (Pa)",
-            "log10 dt (s)",
-            &series,
-            SeriesLabelPosition::LowerLeft,
-        )?;
-        let _ = writeln!(md, "\n![{scheme}]({figure})\n");
+        md += &map_section(dir, &points, scheme)?;
     }
     let ratio: Vec<f64> = points.iter().map(|p| p.measured / p.estimate).filter(|r| r.is_finite()).collect();
     let (lo, hi) = (ratio.iter().copied().fold(f64::INFINITY, f64::min), ratio.iter().copied().fold(0.0, f64::max));

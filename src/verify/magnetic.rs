@@ -177,6 +177,142 @@ pub fn files_route_lag(
     Ok(rows)
 }
 
+/// One scene run in lock step by each engine: the position differences per frame and their figure.
+fn lock_step_section(
+    dir: &Path,
+    work: &Path,
+    engines: &[Engine],
+    name: &str,
+    text: &str,
+    title: &str,
+) -> Result<String, Box<dyn std::error::Error>> {
+    let mut md = String::new();
+    let (diffs, times) = compare(text, name, work, engines)?;
+    let _ = writeln!(
+        md,
+        "## {title}\n\nScene `{name}` (its TOML is stored in each trajectory). Wall time: {}.\n",
+        times.iter().map(|(e, t)| format!("{e} {t:.1} s")).collect::<Vec<_>>().join(", ")
+    );
+    md += "| time (s) |";
+    let mut rule = String::from("|---|");
+    for d in &diffs {
+        md += &format!(" {} max (m) | {} median (m) |", d.engine, d.engine);
+        rule += "---|---|";
+    }
+    let _ = writeln!(md, "\n{rule}");
+    let frames = diffs.first().map_or(0, |d| d.times.len());
+    let step = (frames / 10).max(1);
+    let rows = (0..frames).step_by(step).chain((frames > 0 && (frames - 1) % step != 0).then(|| frames - 1));
+    for k in rows {
+        let _ = write!(md, "| {:.3e} |", diffs[0].times[k]);
+        for d in &diffs {
+            let _ = write!(md, " {:.3e} | {:.3e} |", d.max[k], d.median[k]);
+        }
+        md += "\n";
+    }
+    let floor = |v: f64| v.max(1e-22).log10();
+    let series: Vec<Series> = diffs
+        .iter()
+        .flat_map(|d| {
+            [
+                Series {
+                    label: format!("{} max", d.engine),
+                    points: d.times.iter().zip(&d.max).map(|(t, v)| (t * 1e3, floor(*v))).collect(),
+                    color: engine_colour(d.engine),
+                    markers: None,
+                    errors: vec![],
+                },
+                Series {
+                    label: format!("{} median", d.engine),
+                    points: d.times.iter().zip(&d.median).map(|(t, v)| (t * 1e3, floor(*v))).collect(),
+                    color: engine_colour(d.engine),
+                    markers: Some(3),
+                    errors: vec![],
+                },
+            ]
+        })
+        .collect();
+    let figure = format!("magnetic-{name}.png");
+    line_chart(&dir.join(&figure), title, "time (ms)", "log10 |x_engine − x_magdem| (m)", &series)?;
+    let _ = writeln!(md, "\n![{title}]({figure})\n");
+    Ok(md)
+}
+
+/// The files route's lag error against the exchange interval K, in `engine`.
+fn files_route_section(
+    dir: &Path,
+    work: &Path,
+    engine: Engine,
+    magdem: &Path,
+) -> Result<String, Box<dyn std::error::Error>> {
+    let mut md = String::new();
+    let ks = [3, 10, 30, 100, 300];
+    let rows = files_route_lag(engine, &files_route_scene(), &work.join("files-route"), magdem, &ks)?;
+    let (lx, ly): (Vec<f64>, Vec<f64>) = rows.iter().map(|r| ((r.0 as f64).ln(), r.1.ln())).unzip();
+    let (mx, my) = (lx.iter().sum::<f64>() / lx.len() as f64, ly.iter().sum::<f64>() / ly.len() as f64);
+    let slope = lx.iter().zip(&ly).map(|(x, y)| (x - mx) * (y - my)).sum::<f64>()
+        / lx.iter().map(|x| (x - mx).powi(2)).sum::<f64>();
+    let _ = writeln!(
+        md,
+        "## The files route: lag error against the exchange interval\n\n\
+         Without the shared library (a bare binary, or an MPI run) the deck exchanges files with magdem every K steps \
+         (`magdem run --engine {e} --exchange-every K`): it writes the positions, calls `magdem magnetic-forces` through \
+         `shell`, reads the forces as atomfile variables and applies them with `fix addforce` until the next exchange, so \
+         they lag by up to K steps. Measured on the pair approach (dt = 1e-8 s, 9e-5 s, before contact) in {e}, against \
+         the in-process route (every step):\n\n| K (steps) | largest position difference (m) | wall time (s) |\n|---|---|---|",
+        e = engine.name()
+    );
+    for (k, err, wall) in &rows {
+        let _ = writeln!(md, "| {k} | {err:.3e} | {wall:.2} |");
+    }
+    let _ = writeln!(
+        md,
+        "\nThe error grows as K^{slope:.2} (least-squares slope of log error on log K): first order in the lag, as a force \
+         held constant over K steps predicts. The cost is about {:.0} ms per exchange (process start, scene parse, file I/O).\n",
+        1e3 * rows[0].2 / (9000.0 / rows[0].0 as f64)
+    );
+    let series = vec![Series {
+        label: format!("{} files route", engine.name()),
+        points: rows.iter().map(|r| ((r.0 as f64).log10(), r.1.log10())).collect(),
+        color: engine_colour(engine.name()),
+        markers: Some(5),
+        errors: vec![],
+    }];
+    line_chart(
+        &dir.join("magnetic-files-route.png"),
+        "Files route: lag error against exchange interval",
+        "log10 K (steps)",
+        "log10 max |x_files − x_callback| (m)",
+        &series,
+    )?;
+    md += "![Files route lag error](magnetic-files-route.png)\n\n";
+    Ok(md)
+}
+
+/// magdem's dipole forces against LAMMPS' `lj/cut/dipole/cut` on the shipped scenes.
+fn dipole_check_section(work: &Path) -> Result<String, Box<dyn std::error::Error>> {
+    let mut md = String::new();
+    md += "## The dipole force against LAMMPS' own\n\n\
+LAMMPS' `lj/cut/dipole/cut` (ε = 0; electric dipoles p = m √(1e-7/k_e), k_e = 8.9876e9) evaluates the dipole–dipole \
+forces between the same moments (magdem's, at the initial positions of the shipped scenes) independently of magdem's \
+code (`src/reference/dipole_check.rs`).\n\n| scene | pair sum | particles | largest force (N) | max ‖F_lammps − F_magdem‖ / max ‖F‖ |\n|---|---|---|---|---|\n";
+    for (name, cutoff, label) in
+        [("case1-c4.5", "cutoff_diameters = 15.0", "15 diameters"), ("case1-c0.563", "", "all pairs")]
+    {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("experiments/scenes/{name}.toml"));
+        let text = std::fs::read_to_string(&path)?.replace("cutoff_diameters = 15.0", cutoff);
+        let scene = Scene::parse(&text, name)?;
+        let c = reference::dipole_check::check(&scene, &work.join(format!("dipole-{name}")))?;
+        let _ = writeln!(
+            md,
+            "| {name} | {label} | {} | {:.4e} | {:.2e} |",
+            c.particles, c.largest_force, c.max_relative_error
+        );
+    }
+    md += "\n";
+    Ok(md)
+}
+
 /// Runs both scenes and writes `dir/magnetic-verification.md` with one figure per scene.
 pub fn verify(
     dir: &Path,
@@ -202,116 +338,13 @@ pub fn verify(
         ("pair-approach", PAIR.to_string(), "Two dipoles closing (exact induction), 0.4 T"),
         ("case1-c4.5-stokes", case1, "Case 1, 4.5 mg/ml, 307 particles, Stokes drag"),
     ] {
-        let (diffs, times) = compare(&text, name, work, engines)?;
-        let _ = writeln!(
-            md,
-            "## {title}\n\nScene `{name}` (its TOML is stored in each trajectory). Wall time: {}.\n",
-            times.iter().map(|(e, t)| format!("{e} {t:.1} s")).collect::<Vec<_>>().join(", ")
-        );
-        md += "| time (s) |";
-        let mut rule = String::from("|---|");
-        for d in &diffs {
-            md += &format!(" {} max (m) | {} median (m) |", d.engine, d.engine);
-            rule += "---|---|";
-        }
-        let _ = writeln!(md, "\n{rule}");
-        let frames = diffs.first().map_or(0, |d| d.times.len());
-        let step = (frames / 10).max(1);
-        let rows = (0..frames).step_by(step).chain((frames > 0 && (frames - 1) % step != 0).then(|| frames - 1));
-        for k in rows {
-            let _ = write!(md, "| {:.3e} |", diffs[0].times[k]);
-            for d in &diffs {
-                let _ = write!(md, " {:.3e} | {:.3e} |", d.max[k], d.median[k]);
-            }
-            md += "\n";
-        }
-        let floor = |v: f64| v.max(1e-22).log10();
-        let series: Vec<Series> = diffs
-            .iter()
-            .flat_map(|d| {
-                [
-                    Series {
-                        label: format!("{} max", d.engine),
-                        points: d.times.iter().zip(&d.max).map(|(t, v)| (t * 1e3, floor(*v))).collect(),
-                        color: engine_colour(d.engine),
-                        markers: None,
-                        errors: vec![],
-                    },
-                    Series {
-                        label: format!("{} median", d.engine),
-                        points: d.times.iter().zip(&d.median).map(|(t, v)| (t * 1e3, floor(*v))).collect(),
-                        color: engine_colour(d.engine),
-                        markers: Some(3),
-                        errors: vec![],
-                    },
-                ]
-            })
-            .collect();
-        let figure = format!("magnetic-{name}.png");
-        line_chart(&dir.join(&figure), title, "time (ms)", "log10 |x_engine − x_magdem| (m)", &series)?;
-        let _ = writeln!(md, "\n![{title}]({figure})\n");
+        md += &lock_step_section(dir, work, engines, name, &text, title)?;
     }
     if let Some(&engine) = engines.iter().find(|e| e.available()) {
-        let ks = [3, 10, 30, 100, 300];
-        let rows = files_route_lag(engine, &files_route_scene(), &work.join("files-route"), magdem, &ks)?;
-        let (lx, ly): (Vec<f64>, Vec<f64>) = rows.iter().map(|r| ((r.0 as f64).ln(), r.1.ln())).unzip();
-        let (mx, my) = (lx.iter().sum::<f64>() / lx.len() as f64, ly.iter().sum::<f64>() / ly.len() as f64);
-        let slope = lx.iter().zip(&ly).map(|(x, y)| (x - mx) * (y - my)).sum::<f64>()
-            / lx.iter().map(|x| (x - mx).powi(2)).sum::<f64>();
-        let _ = writeln!(
-            md,
-            "## The files route: lag error against the exchange interval\n\n\
-             Without the shared library (a bare binary, or an MPI run) the deck exchanges files with magdem every K steps \
-             (`magdem run --engine {e} --exchange-every K`): it writes the positions, calls `magdem magnetic-forces` through \
-             `shell`, reads the forces as atomfile variables and applies them with `fix addforce` until the next exchange, so \
-             they lag by up to K steps. Measured on the pair approach (dt = 1e-8 s, 9e-5 s, before contact) in {e}, against \
-             the in-process route (every step):\n\n| K (steps) | largest position difference (m) | wall time (s) |\n|---|---|---|",
-            e = engine.name()
-        );
-        for (k, err, wall) in &rows {
-            let _ = writeln!(md, "| {k} | {err:.3e} | {wall:.2} |");
-        }
-        let _ = writeln!(
-            md,
-            "\nThe error grows as K^{slope:.2} (least-squares slope of log error on log K): first order in the lag, as a force \
-             held constant over K steps predicts. The cost is about {:.0} ms per exchange (process start, scene parse, file I/O).\n",
-            1e3 * rows[0].2 / (9000.0 / rows[0].0 as f64)
-        );
-        let series = vec![Series {
-            label: format!("{} files route", engine.name()),
-            points: rows.iter().map(|r| ((r.0 as f64).log10(), r.1.log10())).collect(),
-            color: engine_colour(engine.name()),
-            markers: Some(5),
-            errors: vec![],
-        }];
-        line_chart(
-            &dir.join("magnetic-files-route.png"),
-            "Files route: lag error against exchange interval",
-            "log10 K (steps)",
-            "log10 max |x_files − x_callback| (m)",
-            &series,
-        )?;
-        md += "![Files route lag error](magnetic-files-route.png)\n\n";
+        md += &files_route_section(dir, work, engine, magdem)?;
     }
     if engines.contains(&Engine::Lammps) {
-        md += "## The dipole force against LAMMPS' own\n\n\
-LAMMPS' `lj/cut/dipole/cut` (ε = 0; electric dipoles p = m √(1e-7/k_e), k_e = 8.9876e9) evaluates the dipole–dipole \
-forces between the same moments (magdem's, at the initial positions of the shipped scenes) independently of magdem's \
-code (`src/reference/dipole_check.rs`).\n\n| scene | pair sum | particles | largest force (N) | max ‖F_lammps − F_magdem‖ / max ‖F‖ |\n|---|---|---|---|---|\n";
-        for (name, cutoff, label) in
-            [("case1-c4.5", "cutoff_diameters = 15.0", "15 diameters"), ("case1-c0.563", "", "all pairs")]
-        {
-            let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("experiments/scenes/{name}.toml"));
-            let text = std::fs::read_to_string(&path)?.replace("cutoff_diameters = 15.0", cutoff);
-            let scene = Scene::parse(&text, name)?;
-            let c = reference::dipole_check::check(&scene, &work.join(format!("dipole-{name}")))?;
-            let _ = writeln!(
-                md,
-                "| {name} | {label} | {} | {:.4e} | {:.2e} |",
-                c.particles, c.largest_force, c.max_relative_error
-            );
-        }
-        md += "\n";
+        md += &dipole_check_section(work)?;
     }
     md += "## Reading it\n\n\
 - **LIGGGHTS** uses the same contact law as magdem (`reports/contact-verification.md`), so with the same magnetic \
