@@ -555,6 +555,73 @@ fn isolated_moment(spec: &SceneSpec, domain: &Domain, s: &Species) -> f64 {
     m + s.permanent_moment.map_or(0.0, |p| p.norm())
 }
 
+/// How many particles group `g` places at random in its region `lo..hi` (after `existing`
+/// others), checked before anything is allocated: 32-bit indices, the random-placement packing
+/// limit, and the run's memory against the machine's.
+fn random_count(
+    spec: &SceneSpec,
+    domain: &Domain,
+    s: &Species,
+    g: usize,
+    group: &ParticleGroupSpec,
+    (lo, hi): (Vec3, Vec3),
+    existing: usize,
+) -> Result<usize, SceneError> {
+    let key = |name: &str| format!("particles[{g}].{name}");
+    let count = match (group.count, group.concentration) {
+        (Some(n), _) => n as f64,
+        (_, Some(c)) => {
+            positive(&key("concentration"), c)?;
+            let l = hi - lo;
+            (c * l.x * l.y * l.z / s.mass()).floor()
+        }
+        _ => unreachable!(),
+    };
+    // A count refused names the key that set it.
+    let refuse_count = |why: String| match (group.count, group.concentration) {
+        (Some(n), _) => invalid(key("count"), n, why),
+        (None, c) => {
+            let c = c.unwrap_or_default();
+            invalid(
+                key("concentration"),
+                if (1e-3..1e6).contains(&c.abs()) { c.to_string() } else { format!("{c:e}") },
+                why,
+            )
+        }
+    };
+    // Pairs index particles with 32 bits.
+    if existing as f64 + count > u32::MAX as f64 {
+        return Err(refuse_count(format!(
+            "gives {count:.3e} particles; magdem holds at most {} (32-bit particle indices)",
+            u32::MAX
+        )));
+    }
+    let count = count as usize;
+    // Checked before anything is allocated: what the region can hold at random.
+    let l = hi - lo;
+    let fraction = count as f64 * s.volume() / (l.x * l.y * l.z);
+    if fraction > MAX_RANDOM_SOLID_FRACTION {
+        return Err(refuse_count(
+            format!(
+                "{count} particles fill {fraction:.3e} of their region; random placement holds at most {MAX_RANDOM_SOLID_FRACTION} \
+                 (random sequential addition jams near 0.38); give explicit positions for denser packings"
+            ),
+        ));
+    }
+    let needed = memory_estimate(spec, domain, existing + count, s.radius);
+    if let Some(available) = available_memory().filter(|&a| needed > a) {
+        return Err(refuse_count(
+            format!(
+                "{} particles need about {:.2} GB (state, neighbour and dipole lists), more than the {:.2} GB of memory available",
+                existing + count,
+                needed as f64 / 1e9,
+                available as f64 / 1e9
+            ),
+        ));
+    }
+    Ok(count)
+}
+
 /// Group `g`'s explicit positions (with their velocities and spins), checked inside the box and
 /// against the particles placed so far.
 fn place_explicit(
@@ -658,57 +725,7 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
             }
             None => (domain.lo, domain.hi),
         };
-        let count = match (group.count, group.concentration) {
-            (Some(n), _) => n as f64,
-            (_, Some(c)) => {
-                positive(&key("concentration"), c)?;
-                let l = hi - lo;
-                (c * l.x * l.y * l.z / s.mass()).floor()
-            }
-            _ => unreachable!(),
-        };
-        // A count refused names the key that set it.
-        let refuse_count = |why: String| match (group.count, group.concentration) {
-            (Some(n), _) => invalid(key("count"), n, why),
-            (None, c) => {
-                let c = c.unwrap_or_default();
-                invalid(
-                    key("concentration"),
-                    if (1e-3..1e6).contains(&c.abs()) { c.to_string() } else { format!("{c:e}") },
-                    why,
-                )
-            }
-        };
-        // Pairs index particles with 32 bits.
-        if particles.len() as f64 + count > u32::MAX as f64 {
-            return Err(refuse_count(format!(
-                "gives {count:.3e} particles; magdem holds at most {} (32-bit particle indices)",
-                u32::MAX
-            )));
-        }
-        let count = count as usize;
-        // Checked before anything is allocated: what the region can hold at random.
-        let l = hi - lo;
-        let fraction = count as f64 * s.volume() / (l.x * l.y * l.z);
-        if fraction > MAX_RANDOM_SOLID_FRACTION {
-            return Err(refuse_count(
-                format!(
-                    "{count} particles fill {fraction:.3e} of their region; random placement holds at most {MAX_RANDOM_SOLID_FRACTION} \
-                     (random sequential addition jams near 0.38); give explicit positions for denser packings"
-                ),
-            ));
-        }
-        let needed = memory_estimate(spec, domain, particles.len() + count, s.radius);
-        if let Some(available) = available_memory().filter(|&a| needed > a) {
-            return Err(refuse_count(
-                format!(
-                    "{} particles need about {:.2} GB (state, neighbour and dipole lists), more than the {:.2} GB of memory available",
-                    particles.len() + count,
-                    needed as f64 / 1e9,
-                    available as f64 / 1e9
-                ),
-            ));
-        }
+        let count = random_count(spec, domain, s, g, group, (lo, hi), particles.len())?;
         let existing: Vec<(Vec3, f64)> =
             (0..particles.len()).map(|j| (particles.position[j], particles.radius[j])).collect();
         let seed = spec.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(g as u64);
