@@ -209,7 +209,7 @@ pub fn seeds_section(runs: &[Run], t: &Targets, tables: &Path, effects: &mut Vec
     write(&mut df, tables, "seeds_and_integration")?;
     md += "Table 3 is integrated with velocity Verlet at dt = 1e-8 s (magnetic forces every step: unbiased, the accuracy \
            study's converged reference). The CI95 of the mean over seeds, as a share of the mean, shrinks as the seeds grow; \
-           r-RESPA (magnetic forces every 10 steps, the earlier rounds' ensembles) is compared seed by seed with the same \
+           r-RESPA (magnetic forces every 10 steps, the integration of the opt-in sweeps) is compared seed by seed with the same \
            scenes under Verlet: its bias is each seed's difference over the Verlet mean, mean ± CI95 over the seeds both ran.\n\n";
     md += &markdown(
         &df,
