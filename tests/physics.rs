@@ -24,6 +24,28 @@ fn scene(body: &str) -> Scene {
     Scene::parse(&text, "test").unwrap_or_else(|e| panic!("{e}\n{text}"))
 }
 
+/// Steps a head-on impact of two spheres of radius `a` (particles 0 and 1 along x) through one
+/// contact: its largest overlap and its duration, between the linearly interpolated crossings
+/// of overlap = 0.
+fn head_on_contact(sim: &mut magdem::core::simulation::Simulation, a: f64) -> (f64, f64) {
+    let (mut max_overlap, mut t_start, mut t_end, mut prev_overlap) = (0.0_f64, None, None, 0.0);
+    while t_end.is_none() {
+        sim.step().unwrap();
+        let p = &sim.state.particles;
+        let overlap = 2.0 * a - (p.position[1] - p.position[0]).norm();
+        let crossing = sim.state.time - sim.dt * overlap / (overlap - prev_overlap);
+        if overlap > 0.0 && prev_overlap <= 0.0 {
+            t_start = Some(crossing);
+        }
+        if overlap <= 0.0 && prev_overlap > 0.0 {
+            t_end = Some(crossing);
+        }
+        max_overlap = max_overlap.max(overlap);
+        prev_overlap = overlap;
+    }
+    (max_overlap, t_end.unwrap() - t_start.unwrap())
+}
+
 /// Hertz elastic head-on impact of two equal spheres: max overlap and contact duration against
 /// δ = (15 m* v²/(16 E* √R*))^(2/5) and t_c = 2.87 (m*²/(R* E*² v))^(1/5).
 #[test]
@@ -37,30 +59,13 @@ fn hertz_elastic_impact_matches_closed_form() {
     ));
     let mut sim = s.simulation(None);
     sim.initialise().unwrap();
-    let (mut max_overlap, mut t_start, mut t_end) = (0.0_f64, None, None);
-    let mut prev_overlap = 0.0;
-    while t_end.is_none() {
-        sim.step().unwrap();
-        let p = &sim.state.particles;
-        let overlap = 2.0 * a - (p.position[1] - p.position[0]).norm();
-        // Linear interpolation of the crossings of overlap = 0.
-        let crossing = sim.state.time - sim.dt * overlap / (overlap - prev_overlap);
-        if overlap > 0.0 && prev_overlap <= 0.0 {
-            t_start = Some(crossing);
-        }
-        if overlap <= 0.0 && prev_overlap > 0.0 {
-            t_end = Some(crossing);
-        }
-        max_overlap = max_overlap.max(overlap);
-        prev_overlap = overlap;
-    }
+    let (max_overlap, duration) = head_on_contact(&mut sim, a);
     let sp = &s.species[0];
     let (m_eff, r_eff) = (sp.mass() / 2.0, a / 2.0);
     let e_star = 1.0e9 / (2.0 * (1.0 - 0.25));
     let v = 2.0 * v_each;
     let delta = (15.0 * m_eff * v * v / (16.0 * e_star * r_eff.sqrt())).powf(0.4);
     let t_c = 2.87 * (m_eff * m_eff / (r_eff * e_star * e_star * v)).powf(0.2);
-    let duration = t_end.unwrap() - t_start.unwrap();
     println!(
         "max overlap {max_overlap:.6e} (closed form {delta:.6e}); duration {duration:.6e} (closed form {t_c:.6e})"
     );
@@ -397,24 +402,10 @@ fn hooke_impact_rebounds_with_the_restitution_coefficient_after_half_a_damped_pe
     ));
     let mut sim = s.simulation(None);
     sim.initialise().unwrap();
-    let (mut t_start, mut t_end, mut prev_overlap) = (None, None, 0.0);
-    while t_end.is_none() {
-        sim.step().unwrap();
-        let p = &sim.state.particles;
-        let overlap = 2.0 * a - (p.position[1] - p.position[0]).norm();
-        let crossing = sim.state.time - sim.dt * overlap / (overlap - prev_overlap);
-        if overlap > 0.0 && prev_overlap <= 0.0 {
-            t_start = Some(crossing);
-        }
-        if overlap <= 0.0 && prev_overlap > 0.0 {
-            t_end = Some(crossing);
-        }
-        prev_overlap = overlap;
-    }
+    let (_, duration) = head_on_contact(&mut sim, a);
     let m_eff = s.species[0].mass() / 2.0;
     let beta = e.ln() / (e.ln().powi(2) + PI * PI).sqrt();
     let t_c = PI / ((k / m_eff).sqrt() * (1.0 - beta * beta).sqrt());
-    let duration = t_end.unwrap() - t_start.unwrap();
     let rebound = (sim.state.particles.velocity[1] - sim.state.particles.velocity[0]).x / (2.0 * v_each);
     println!("duration {duration:.6e} s (closed form {t_c:.6e}); restitution {rebound:.6} (scene {e})");
     assert!((duration / t_c - 1.0).abs() < 1e-3, "duration {duration:e} vs {t_c:e}");

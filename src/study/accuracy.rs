@@ -19,13 +19,8 @@ use plotters::style::RGBColor;
 use std::fmt::Write as _;
 use std::path::Path;
 
-pub const SCHEMES: [Scheme; 5] = [
-    Scheme::ExplicitEuler,
-    Scheme::SemiImplicitEuler,
-    Scheme::VelocityVerlet,
-    Scheme::ExponentialVerlet,
-    Scheme::Respa,
-];
+/// The fixed-step schemes of the stability map.
+pub use super::stability::SCHEMES;
 
 fn colour(scheme: Scheme) -> RGBColor {
     match scheme {
