@@ -188,6 +188,13 @@ fn check_drag(engine: Engine, drag: &DragSpec, fluid_velocity: Option<&[f64; 3]>
                 "fix viscous applies linear (Stokes) drag only",
             ))
         }
+        DragLawSpec::Rpy => {
+            return Err(unsupported(
+                engine,
+                "forces.drag.law = \"rpy\"",
+                "fix viscous drags each sphere alone (no hydrodynamic interactions)",
+            ))
+        }
     }
     match shielding {
         ShieldingSpec::None => {}
@@ -778,6 +785,7 @@ mod tests {
                     [Some("forces.drag.law"); 2],
                 ),
                 ("shielded drag", vec![("forces.drag.shielding", s("paper"))], [Some("forces.drag.shielding"); 2]),
+                ("RPY drag", vec![("forces.drag.law", s("rpy"))], [Some("forces.drag.law"); 2]),
                 ("rotational drag", vec![("forces.drag.rotational", b(true))], [Some("forces.drag.rotational"); 2]),
                 ("drag touch tolerance", vec![("forces.drag.touch_tolerance", f(1e-2))], [None, None]),
                 ("no drag", vec![("forces.drag", None)], [None, None]),

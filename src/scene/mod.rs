@@ -12,6 +12,7 @@ use crate::core::forces::dipole::DipoleForce;
 use crate::core::forces::drag::{Drag, DragLaw, Fluid, Shielding};
 use crate::core::forces::gradient::GradientForce;
 use crate::core::forces::gravity::GravityBuoyancy;
+use crate::core::forces::hydrodynamics::RpyDrag;
 use crate::core::forces::ForceTerm;
 use crate::core::integrators;
 use crate::core::magnetisation::{Induction, Magnetisation, MU0};
@@ -250,17 +251,19 @@ impl Scene {
         let touch_tolerance = f.drag.as_ref().map_or(0.0, |d| d.touch_tolerance);
         let range = self.largest_diameter() * (1.0 + touch_tolerance.max(1e-9));
         let near = PairRange::Within { range, skin: skins.near * range };
-        if let Some(d) = &f.drag {
+        let medium = Fluid { density: fluid.density, viscosity: fluid.viscosity, velocity: Vec3::from(fluid.velocity) };
+        if let Some(d) = f.drag.as_ref().filter(|d| d.law == DragLawSpec::Rpy) {
+            terms.push(Box::new(RpyDrag::new(medium, d.rotational)));
+        } else if let Some(d) = &f.drag {
             let law = match d.law {
                 DragLawSpec::Stokes => DragLaw::Stokes,
                 DragLawSpec::SchillerNaumann => DragLaw::SchillerNaumann,
+                DragLawSpec::Rpy => unreachable!("built above"),
             };
             let shielding = match d.shielding {
                 ShieldingSpec::None => Shielding::None,
                 ShieldingSpec::Paper => Shielding::Paper { touch_tolerance: d.touch_tolerance, near },
             };
-            let medium =
-                Fluid { density: fluid.density, viscosity: fluid.viscosity, velocity: Vec3::from(fluid.velocity) };
             let mut drag = Drag::new(law, shielding, d.rotational, medium);
             drag.exclude_linear = spec.integration.scheme.integrates_linear_drag();
             terms.push(Box::new(drag));
@@ -442,6 +445,20 @@ fn check_forces(
     }
     if let Some(d) = &f.drag {
         non_negative("forces.drag.touch_tolerance", d.touch_tolerance)?;
+        if d.law == DragLawSpec::Rpy && d.shielding != ShieldingSpec::None {
+            return Err(invalid(
+                "forces.drag.shielding",
+                "paper",
+                "the RPY mobility replaces the shielded area; use shielding = \"none\" with law = \"rpy\"",
+            ));
+        }
+        if d.law == DragLawSpec::Rpy && spec.integration.scheme.integrates_linear_drag() {
+            return Err(invalid(
+                "integration.scheme",
+                spec.integration.scheme,
+                "integrates a lone sphere's Stokes drag exactly; with law = \"rpy\" the drag couples all spheres",
+            ));
+        }
     }
     if let Some(c) = &f.contact {
         match (c.normal, c.stiffness) {
@@ -854,6 +871,10 @@ pub fn memory_estimate(spec: &SceneSpec, domain: &Domain, n: usize, radius: f64)
         if matches!(d.induction, InductionSpec::Exact) && n <= d.dense_max {
             bytes += (3.0 * n_f).powi(2) * 8.0;
         }
+    }
+    if spec.forces.drag.as_ref().is_some_and(|d| d.law == DragLawSpec::Rpy) {
+        // The dense 3N × 3N mobility and its Cholesky factor.
+        bytes += 2.0 * (3.0 * n_f).powi(2) * 8.0;
     }
     bytes.min(u64::MAX as f64) as u64
 }

@@ -271,6 +271,9 @@ pub struct GradientSpec {}
 pub enum DragLawSpec {
     Stokes,
     SchillerNaumann,
+    /// Stokes flow with hydrodynamic interactions: the Rotne–Prager–Yamakawa mobility of all
+    /// spheres, factorised at every force evaluation (dense, O(N³)).
+    Rpy,
 }
 
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]

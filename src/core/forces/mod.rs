@@ -7,6 +7,7 @@ pub mod dipole;
 pub mod drag;
 pub mod gradient;
 pub mod gravity;
+pub mod hydrodynamics;
 pub mod shielding;
 
 use super::domain::Domain;

@@ -1,0 +1,146 @@
+//! Hydrodynamic interactions in Stokes flow: the Rotne–Prager–Yamakawa far-field mobility with
+//! the regularised forms for overlapping spheres of unequal radii (Zuk, Wajnryb, Mizerski &
+//! Szymczak, J. Fluid Mech. 741, R5, 2014). For spheres i ≠ j, r = x_i − x_j, r̂ = r/|r|:
+//!
+//! - apart, r > a_i + a_j:   M_ij = 1/(8π μ r) [(1 + (a_i² + a_j²)/(3r²)) I + (1 − (a_i² + a_j²)/r²) r̂r̂]
+//! - overlapping, |a_i − a_j| < r ≤ a_i + a_j: M_ij = 1/(6π μ a_i a_j) [A I + B r̂r̂] with
+//!   A = (16 r³ (a_i + a_j) − ((a_i − a_j)² + 3r²)²)/(32 r³), B = 3((a_i − a_j)² − r²)²/(32 r³)
+//! - one inside the other, r ≤ |a_i − a_j|:   M_ij = I/(6π μ max(a_i, a_j))
+//! - self: M_ii = I/(6π μ a_i)
+//!
+//! The 3N × 3N mobility is symmetric positive definite for any configuration; the drag is
+//! F_h = −R (U − u_f) with R = M⁻¹, applied through a Cholesky factor of M (faer). docs/model.md §7.
+
+use super::drag::Fluid;
+use super::{Context, ForceTerm, Forces};
+use crate::core::state::{Particles, Vec3};
+use faer::linalg::solvers::Solve;
+use nalgebra::Matrix3;
+use std::f64::consts::PI;
+
+/// The mobility block M_ij (m/(N s)) coupling the velocity of sphere i to the force on sphere j.
+pub fn pair_mobility(a_i: f64, a_j: f64, r: &Vec3, viscosity: f64) -> Matrix3<f64> {
+    let d = r.norm();
+    let rr = if d > 0.0 { (r / d) * (r / d).transpose() } else { Matrix3::zeros() };
+    let id = Matrix3::identity();
+    if d > a_i + a_j {
+        let s = (a_i * a_i + a_j * a_j) / (d * d);
+        (id * (1.0 + s / 3.0) + rr * (1.0 - s)) / (8.0 * PI * viscosity * d)
+    } else if d > (a_i - a_j).abs() {
+        let diff2 = (a_i - a_j).powi(2);
+        let d3 = d * d * d;
+        let iso = (16.0 * d3 * (a_i + a_j) - (diff2 + 3.0 * d * d).powi(2)) / (32.0 * d3);
+        let aniso = 3.0 * (diff2 - d * d).powi(2) / (32.0 * d3);
+        (id * iso + rr * aniso) / (6.0 * PI * viscosity * a_i * a_j)
+    } else {
+        id / (6.0 * PI * viscosity * a_i.max(a_j))
+    }
+}
+
+/// The dense 3N × 3N mobility of spheres at `positions` with `radii` (unbounded fluid).
+pub fn mobility(positions: &[Vec3], radii: &[f64], viscosity: f64) -> faer::Mat<f64> {
+    let n = positions.len();
+    let mut m = faer::Mat::<f64>::zeros(3 * n, 3 * n);
+    for i in 0..n {
+        for k in 0..3 {
+            m[(3 * i + k, 3 * i + k)] = 1.0 / (6.0 * PI * viscosity * radii[i]);
+        }
+        for j in i + 1..n {
+            let block = pair_mobility(radii[i], radii[j], &(positions[i] - positions[j]), viscosity);
+            for (r, c) in (0..3).flat_map(|r| (0..3).map(move |c| (r, c))) {
+                m[(3 * i + r, 3 * j + c)] = block[(r, c)];
+                m[(3 * j + r, 3 * i + c)] = block[(c, r)];
+            }
+        }
+    }
+    m
+}
+
+/// A factorised mobility: solves M F = U for the forces that move the spheres at U.
+pub struct Resistance {
+    factor: faer::linalg::solvers::Llt<f64>,
+}
+
+/// The mobility is not positive definite (it always is for RPY: a failure means non-finite
+/// positions or radii).
+#[derive(Debug, Clone, thiserror::Error)]
+#[error("the RPY mobility of {particles} spheres has no Cholesky factor (non-finite positions or radii)")]
+pub struct NotPositiveDefinite {
+    pub particles: usize,
+}
+
+impl Resistance {
+    pub fn new(positions: &[Vec3], radii: &[f64], viscosity: f64) -> Result<Self, NotPositiveDefinite> {
+        let m = mobility(positions, radii, viscosity);
+        let factor = m.llt(faer::Side::Lower).map_err(|_| NotPositiveDefinite { particles: positions.len() })?;
+        Ok(Self { factor })
+    }
+
+    /// The hydrodynamic forces F_h = −M⁻¹ (U − u_f) on spheres moving at `velocity`.
+    pub fn drag(&self, velocity: &[Vec3], fluid_velocity: Vec3) -> Vec<Vec3> {
+        let n = velocity.len();
+        let rhs = faer::Mat::<f64>::from_fn(3 * n, 1, |k, _| velocity[k / 3][k % 3] - fluid_velocity[k % 3]);
+        let f = self.factor.solve(&rhs);
+        (0..n).map(|i| -Vec3::new(f[(3 * i, 0)], f[(3 * i + 1, 0)], f[(3 * i + 2, 0)])).collect()
+    }
+}
+
+/// Drag with hydrodynamic interactions (RPY): F_h = −M⁻¹ (U − u_f) on every sphere, M factorised
+/// at every force evaluation (so the drag is a function of the state and a resumed run is
+/// bitwise equal); with `rotational`, each sphere's own rotational Stokes drag −8π μ a³ ω (no
+/// rotational coupling). A factorisation failure (non-finite positions) leaves the force
+/// non-finite, which the run's monitor reports.
+pub struct RpyDrag {
+    pub fluid: Fluid,
+    pub rotational: bool,
+}
+
+impl RpyDrag {
+    pub fn new(fluid: Fluid, rotational: bool) -> Self {
+        Self { fluid, rotational }
+    }
+}
+
+impl ForceTerm for RpyDrag {
+    fn name(&self) -> &'static str {
+        "drag"
+    }
+    fn apply(&mut self, _ctx: &Context, p: &Particles, out: &mut Forces) {
+        match Resistance::new(&p.position, &p.radius, self.fluid.viscosity) {
+            Ok(r) => {
+                for (f, d) in out.force.iter_mut().zip(r.drag(&p.velocity, self.fluid.velocity)) {
+                    *f += d;
+                }
+            }
+            Err(_) => out.force.iter_mut().for_each(|f| *f = Vec3::repeat(f64::NAN)),
+        }
+        if self.rotational {
+            for ((t, w), a) in out.torque.iter_mut().zip(&p.angular_velocity).zip(&p.radius) {
+                *t -= 8.0 * PI * self.fluid.viscosity * a.powi(3) * w;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Equal radii: Zuk's overlapping form reduces to the classic regularised RPY,
+    /// (1/(6π μ a)) [(1 − 9r/(32a)) I + 3r/(32a) r̂r̂], and both forms meet at contact.
+    #[test]
+    fn overlapping_form_reduces_to_classic_rpy_and_is_continuous_at_contact() {
+        let (a, mu) = (1.0, 1.0 / (6.0 * PI));
+        for d in [0.3, 1.0, 1.7, 2.0] {
+            let m = pair_mobility(a, a, &Vec3::new(d, 0.0, 0.0), mu);
+            let (iso, aniso) = (1.0 - 9.0 * d / 32.0, 3.0 * d / 32.0);
+            assert!((m[(0, 0)] - (iso + aniso)).abs() < 1e-14, "d = {d}: axial {}", m[(0, 0)]);
+            assert!((m[(1, 1)] - iso).abs() < 1e-14, "d = {d}: transverse {}", m[(1, 1)]);
+        }
+        for (ai, aj) in [(1.0, 1.0), (1.0, 0.4)] {
+            let at = |d: f64| pair_mobility(ai, aj, &Vec3::new(d, 0.0, 0.0), mu);
+            let (inside, outside) = (at((ai + aj) * (1.0 - 1e-12)), at((ai + aj) * (1.0 + 1e-12)));
+            assert!((inside - outside).norm() < 1e-10 * outside.norm(), "radii {ai}, {aj}");
+        }
+    }
+}
