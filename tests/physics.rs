@@ -586,3 +586,29 @@ fn rpy_mobility_is_positive_definite_with_overlaps_and_unequal_radii() {
         assert!(power < 0.0, "trial {trial}: the drag does work {power:e}");
     }
 }
+
+/// Two equal spheres translating together along and across their line of centres, apart or
+/// touching: RPY gives each the drag 6π μ a U / (1 + 3a/(2r) − a³/r³) along the line and
+/// 6π μ a U / (1 + 3a/(4r) + a³/(2r³)) across it (the closed forms of the far-field mobility).
+#[test]
+fn rpy_pair_drag_matches_its_closed_form_at_several_separations() {
+    use magdem::core::forces::hydrodynamics::Resistance;
+    let (a, mu, speed) = (5.5e-6_f64, 1.0e-3, 1.0e-5);
+    for r_over_a in [2.0, 2.5, 4.0, 10.0] {
+        let r = r_over_a * a;
+        let x = [Vec3::zeros(), Vec3::new(r, 0.0, 0.0)];
+        let resistance = Resistance::new(&x, &[a, a], mu).unwrap();
+        for (axis, closed) in [
+            (0, 1.0 / (1.0 + 1.5 / r_over_a - r_over_a.powi(-3))),
+            (1, 1.0 / (1.0 + 0.75 / r_over_a + 0.5 * r_over_a.powi(-3))),
+        ] {
+            let mut u = Vec3::zeros();
+            u[axis] = speed;
+            let f = resistance.drag(&[u, u], Vec3::zeros());
+            for fi in &f {
+                let ratio = -fi[axis] / (6.0 * PI * mu * a * speed);
+                assert!((ratio - closed).abs() < 1e-12, "r = {r_over_a} a, axis {axis}: {ratio} vs {closed}");
+            }
+        }
+    }
+}
