@@ -434,7 +434,9 @@ pub fn bar_panels(
                     .filter(|(_, (v, e))| v.is_finite() && e.is_finite())
                     .map(|(k, (&v, &e))| {
                         let x = left(k) + width * 0.45;
-                        PathElement::new(vec![(x, v - e), (x, v + e)], BLACK.stroke_width(2))
+                        // Thin and grey, so that the bars stay readable where the spread is large;
+                        // a spread below zero is clipped at the axis.
+                        PathElement::new(vec![(x, (v - e).max(0.0)), (x, v + e)], RGBColor(90, 90, 90).stroke_width(1))
                     }),
             )?;
         }
