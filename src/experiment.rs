@@ -97,13 +97,26 @@ fn run_point(point: &Point, file: &Path, options: &ExperimentOptions) -> Outcome
     }
     let result = match point.engine.as_str() {
         // The runner has decided above which existing files it may replace.
-        "magdem" => match run(&point.scene, file, &RunOptions { resume, overwrite: !resume, ..Default::default() }) {
-            Err(RunFailure::Unstable(e)) => return Outcome::Unstable(e.to_string().replace('\n', " ")),
-            other => other.map(|_| ()).map_err(|e| match e {
-                RunFailure::Interrupted { .. } => None,
-                other => Some(other.to_string()),
-            }),
-        },
+        "magdem" => {
+            let go = |resume: bool| {
+                run(&point.scene, file, &RunOptions { resume, overwrite: !resume, ..Default::default() })
+            };
+            let mut outcome = go(resume);
+            // A file killed while it was being written may hold a checkpoint that cannot be read
+            // back (a torn HDF5 write). The run was not finished, and it is deterministic: it
+            // starts again from t = 0 and ends the same.
+            if resume && matches!(outcome, Err(RunFailure::Trajectory(_))) {
+                resume = false;
+                outcome = go(false);
+            }
+            match outcome {
+                Err(RunFailure::Unstable(e)) => return Outcome::Unstable(e.to_string().replace('\n', " ")),
+                other => other.map(|_| ()).map_err(|e| match e {
+                    RunFailure::Interrupted { .. } => None,
+                    other => Some(other.to_string()),
+                }),
+            }
+        }
         name => {
             let engine = if name == "liggghts" { Engine::Liggghts } else { Engine::Lammps };
             if !engine.available() {

@@ -1,6 +1,7 @@
 //! HDF5 trajectory files (schema in the README, "Trajectory files").
 //!
-//! Frames are appended one at a time into chunked, deflate-compressed datasets and the file is
+//! Frames are appended one at a time into chunked datasets (deflate-compressed where a chunk is one
+//! frame's row) and the file is
 //! flushed after every frame, so a killed run leaves a readable file holding every frame written.
 //! The `checkpoint` group holds the full state (forces and contact history included) and is
 //! rewritten in place with every frame and on interruption; `--resume` continues from it.
@@ -71,15 +72,31 @@ fn write_scalar_attr<T: hdf5::H5Type>(loc: &hdf5::Location, name: &str, value: T
 }
 
 /// Extendible dataset of shape (0.., tail...) chunked one row at a time.
-fn extendible<T: hdf5::H5Type>(group: &Group, name: &str, tail: &[usize], units: &str) -> H5Result<Dataset> {
+fn extendible<T: hdf5::H5Type>(
+    group: &Group,
+    name: &str,
+    tail: &[usize],
+    units: &str,
+    rewritten: bool,
+) -> H5Result<Dataset> {
     let mut extents = vec![Extent::resizable(0)];
     extents.extend(tail.iter().map(|&n| Extent::fixed(n)));
     let mut chunk = vec![1usize];
     chunk.extend_from_slice(tail);
-    if tail.is_empty() {
+    let builder = group.new_dataset::<T>().shape(SimpleExtents::from_vec(extents));
+    // Only chunks written whole and never again are compressed: a frame's row of a per-particle
+    // dataset, a contact row. Chunks that are rewritten — the 1 024-row chunks of the one-value
+    // datasets (time, step, contact indices), the checkpoint's contact history, rewritten with
+    // every frame — stay uncompressed and are rewritten in place: compressed, a chunk torn by a
+    // kill (-9) during a write could not be inflated when the resumed run reads or extends it.
+    let ds = if tail.is_empty() {
         chunk[0] = 1024;
-    }
-    let ds = group.new_dataset::<T>().shape(SimpleExtents::from_vec(extents)).chunk(chunk).deflate(4).create(name)?;
+        builder.chunk(chunk).create(name)?
+    } else if rewritten {
+        builder.chunk(chunk).create(name)?
+    } else {
+        builder.chunk(chunk).deflate(4).create(name)?
+    };
     write_str_attr(&ds, "units", units)?;
     Ok(ds)
 }
@@ -154,26 +171,26 @@ impl TrajectoryWriter {
             write_str_attr(&particles, "species_names", &names)?;
 
             let frames = file.create_group("frames")?;
-            extendible::<f64>(&frames, "time", &[], "s")?;
-            extendible::<u64>(&frames, "step", &[], "1")?;
+            extendible::<f64>(&frames, "time", &[], "s", false)?;
+            extendible::<u64>(&frames, "step", &[], "1", false)?;
             let vectors = FRAME_VECTORS.iter().chain(if forces { &FORCE_VECTORS[..] } else { &[] });
             for (name, units) in vectors {
-                extendible::<f64>(&frames, name, &[n, 3], units)?;
+                extendible::<f64>(&frames, name, &[n, 3], units, false)?;
             }
             if contacts {
                 let c = file.create_group("contacts")?;
-                extendible::<u64>(&c, "frame_start", &[], "index into pair")?;
-                extendible::<u32>(&c, "pair", &[2], "particle index")?;
-                extendible::<f64>(&c, "overlap", &[], "m")?;
+                extendible::<u64>(&c, "frame_start", &[], "index into pair", false)?;
+                extendible::<u32>(&c, "pair", &[2], "particle index", false)?;
+                extendible::<f64>(&c, "overlap", &[], "m", false)?;
             }
             let ck = file.create_group("checkpoint")?;
             for name in State::vector_names() {
                 ck.new_dataset::<f64>().shape((n, 3)).create(name)?;
             }
-            extendible::<u32>(&ck, "pair_keys", &[2], "particle index")?;
-            extendible::<f64>(&ck, "pair_shear", &[3], "m")?;
-            extendible::<u32>(&ck, "wall_keys", &[2], "particle index, wall face")?;
-            extendible::<f64>(&ck, "wall_shear", &[3], "m")?;
+            extendible::<u32>(&ck, "pair_keys", &[2], "particle index", true)?;
+            extendible::<f64>(&ck, "pair_shear", &[3], "m", true)?;
+            extendible::<u32>(&ck, "wall_keys", &[2], "particle index, wall face", true)?;
+            extendible::<f64>(&ck, "wall_shear", &[3], "m", true)?;
             file.flush()
         })()
         .map_err(wrap)?;
