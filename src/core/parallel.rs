@@ -163,13 +163,9 @@ split_tuple!(A, B, C, D, E);
 split_tuple!(A, B, C, D, E, F);
 split_tuple!(A, B, C, D, E, F, G);
 
-/// `parts` cut into the shares of [`share`], each with the index of its first item (one piece,
-/// the whole, when the loop is not [`worth_it`]).
+/// `parts` cut into the shares of [`share`], each with the index of its first item.
 fn shares<S: Split>(parts: S) -> Vec<(usize, S)> {
     let len = parts.len();
-    if !worth_it(len) {
-        return vec![(0, parts)];
-    }
     let share = share(len);
     let (mut pieces, mut rest, mut first) = (Vec::with_capacity(len.div_ceil(share)), parts, 0);
     while rest.len() > share {
@@ -186,22 +182,20 @@ fn shares<S: Split>(parts: S) -> Vec<(usize, S)> {
 /// whole. Elementwise work gives the same bits either way.
 pub fn for_each_share<S: Split>(parts: S, f: impl Fn(usize, S) + Sync + Send) {
     use rayon::prelude::*;
-    let mut pieces = shares(parts);
-    if pieces.len() == 1 {
-        let (first, whole) = pieces.pop().expect("one piece");
-        return f(first, whole);
+    // Serial loops, most of them, allocate nothing.
+    if !worth_it(parts.len()) {
+        return f(0, parts);
     }
-    pieces.into_par_iter().for_each(|(first, piece)| f(first, piece));
+    shares(parts).into_par_iter().for_each(|(first, piece)| f(first, piece));
 }
 
 /// Whether `test` holds on any share of `parts` (an exact reduction: the same answer serially).
 pub fn any_share<S: Split>(parts: S, test: impl Fn(S) -> bool + Sync + Send) -> bool {
     use rayon::prelude::*;
-    let mut pieces = shares(parts);
-    if pieces.len() == 1 {
-        return test(pieces.pop().expect("one piece").1);
+    if !worth_it(parts.len()) {
+        return test(parts);
     }
-    pieces.into_par_iter().map(|(_, piece)| test(piece)).reduce(|| false, |a, b| a | b)
+    shares(parts).into_par_iter().map(|(_, piece)| test(piece)).reduce(|| false, |a, b| a | b)
 }
 
 /// `add(k, value(k))` for k in 0..n in k order, the values computed in parallel chunks (into

@@ -18,7 +18,7 @@
 //! capped by the drag-limited closing speed 2F/(6π μ a) under the contact attraction
 //! F = 3μ0 m²/(2π d⁴), or the fastest initial speed if larger; Hertz theory gives the overlap.
 
-use super::forces::contact::law::{ContactLaw, Normal};
+use super::forces::contact::law::{restitution_beta, ContactLaw, Normal};
 use super::forces::drag::Drag;
 use super::integrators::Scheme;
 use super::magnetisation::MU0;
@@ -95,7 +95,7 @@ impl StepEstimate {
                     }
                     // A linear spring-dashpot: ω = √(k/m*), ζ = −β, half a damped period.
                     Normal::Hooke { stiffness } => {
-                        let beta = ln_e / (ln_e * ln_e + PI * PI).sqrt();
+                        let beta = restitution_beta(s.restitution);
                         let omega = (stiffness / m_eff).sqrt();
                         (PI / (omega * (1.0 - beta * beta).sqrt()), omega, -beta)
                     }

@@ -10,6 +10,7 @@
 //!   the shear history when projecting it and includes damping in its Coulomb check.
 
 use super::{Engine, ReferenceError};
+use crate::core::forces::contact::law::restitution_beta;
 use crate::core::forces::contact::PairMaterial;
 use crate::scene::{
     Boundary, BoundarySpec, ContactSpec, DipoleSpec, DomainSpec, DragLawSpec, DragSpec, FieldSpec, FluidSpec,
@@ -37,9 +38,7 @@ pub fn tsuji_alpha(e: f64) -> f64 {
 /// LAMMPS tsuji input e_in whose damping equals LIGGGHTS' damping for restitution `e`; `None`
 /// below e ≈ 0.11, where LIGGGHTS damps more than tsuji's α(0) = 1.2728 can.
 pub fn lammps_tsuji_input(e: f64) -> Option<f64> {
-    let ln_e = e.ln();
-    let beta = ln_e / (ln_e * ln_e + std::f64::consts::PI.powi(2)).sqrt();
-    let target = 5.0_f64.sqrt() * beta.abs();
+    let target = 5.0_f64.sqrt() * restitution_beta(e).abs();
     if target > tsuji_alpha(0.0) {
         return None;
     }
