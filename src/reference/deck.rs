@@ -92,6 +92,7 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
             angular_velocities: _,
             count: _,
             concentration: _,
+            lattice: _,
             region: _,
             order: _,
         } = group;

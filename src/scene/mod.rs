@@ -606,37 +606,93 @@ fn random_count(
             )
         }
     };
+    // Checked before anything is allocated: what the region can hold at random.
+    let l = hi - lo;
+    let fraction = count * s.volume() / (l.x * l.y * l.z);
+    if fraction > MAX_RANDOM_SOLID_FRACTION && count <= u32::MAX as f64 {
+        return Err(refuse_count(
+            format!(
+                "{count} particles fill {fraction:.3e} of their region; random placement holds at most {MAX_RANDOM_SOLID_FRACTION} \
+                 (random sequential addition jams near 0.38); give explicit positions or a lattice for denser packings"
+            ),
+        ));
+    }
+    checked_count(spec, domain, s, existing, count, refuse_count)
+}
+
+/// `count` new particles after `existing` others, checked before anything is allocated: 32-bit
+/// indices and the run's memory against the machine's (`refuse` names the key that set it).
+fn checked_count(
+    spec: &SceneSpec,
+    domain: &Domain,
+    s: &Species,
+    existing: usize,
+    count: f64,
+    refuse: impl Fn(String) -> SceneError,
+) -> Result<usize, SceneError> {
     // Pairs index particles with 32 bits.
     if existing as f64 + count > u32::MAX as f64 {
-        return Err(refuse_count(format!(
+        return Err(refuse(format!(
             "gives {count:.3e} particles; magdem holds at most {} (32-bit particle indices)",
             u32::MAX
         )));
     }
     let count = count as usize;
-    // Checked before anything is allocated: what the region can hold at random.
-    let l = hi - lo;
-    let fraction = count as f64 * s.volume() / (l.x * l.y * l.z);
-    if fraction > MAX_RANDOM_SOLID_FRACTION {
-        return Err(refuse_count(
-            format!(
-                "{count} particles fill {fraction:.3e} of their region; random placement holds at most {MAX_RANDOM_SOLID_FRACTION} \
-                 (random sequential addition jams near 0.38); give explicit positions for denser packings"
-            ),
-        ));
-    }
     let needed = memory_estimate(spec, domain, existing + count, s.radius);
     if let Some(available) = available_memory().filter(|&a| needed > a) {
-        return Err(refuse_count(
+        return Err(refuse(format!(
+            "{} particles need about {:.2} GB (state, neighbour and dipole lists), more than the {:.2} GB of memory available",
+            existing + count,
+            needed as f64 / 1e9,
+            available as f64 / 1e9
+        )));
+    }
+    Ok(count)
+}
+
+/// The sites of group `g`'s lattice in its region `lo..hi`, checked: the spacing against the
+/// overlap the run accepts, periodic axes, the count (before allocating) and the `existing`
+/// particles of earlier groups.
+fn lattice_sites(
+    spec: &SceneSpec,
+    domain: &Domain,
+    s: &Species,
+    g: usize,
+    lattice: &LatticeSpec,
+    (lo, hi): (Vec3, Vec3),
+    existing: &[(Vec3, f64)],
+) -> Result<Vec<Vec3>, SceneError> {
+    let key = |name: &str| format!("particles[{g}].lattice.{name}");
+    let diameter = 2.0 * s.radius;
+    let spacing = lattice.spacing.unwrap_or(diameter);
+    let least = diameter * (1.0 - spec.stability.max_overlap);
+    if spacing.is_nan() || spacing < least {
+        return Err(invalid(
+            key("spacing"),
+            spacing,
             format!(
-                "{} particles need about {:.2} GB (state, neighbour and dipole lists), more than the {:.2} GB of memory available",
-                existing + count,
-                needed as f64 / 1e9,
-                available as f64 / 1e9
+                "must be at least {least:e} m: neighbours would overlap by more than stability.max_overlap = {} of the diameter",
+                spec.stability.max_overlap
             ),
         ));
     }
-    Ok(count)
+    let LatticeKind::Fcc = lattice.kind;
+    let grid =
+        placement::FccGrid::new(spacing, s.radius, lo, hi, domain).map_err(|why| invalid(key("kind"), "fcc", why))?;
+    let count = grid.count();
+    if count == 0 {
+        return Err(invalid(key("spacing"), spacing, "no lattice site fits in the region"));
+    }
+    checked_count(spec, domain, s, existing.len(), count as f64, |why| invalid(key("spacing"), spacing, why))?;
+    let sites = grid.sites();
+    if let Some(k) = placement::first_overlap(&sites, s.radius, existing, domain) {
+        return Err(invalid(
+            key("kind"),
+            "fcc",
+            format!("site {k} at {} overlaps a particle of an earlier group", fmt3(&sites[k].into())),
+        ));
+    }
+    Ok(sites)
 }
 
 /// Group `g`'s explicit positions (with their velocities and spins), checked inside the box and
@@ -709,12 +765,13 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
             ));
         };
         let s = &species[si];
-        let given = [group.positions.is_some(), group.count.is_some(), group.concentration.is_some()];
+        let given =
+            [group.positions.is_some(), group.count.is_some(), group.concentration.is_some(), group.lattice.is_some()];
         if given.iter().filter(|&&b| b).count() != 1 {
             return Err(invalid(
                 format!("particles[{g}]"),
                 &group.species,
-                "give exactly one of positions, count, concentration",
+                "give exactly one of positions, count, concentration, lattice",
             ));
         }
         if let Some(positions) = &group.positions {
@@ -742,9 +799,20 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
             }
             None => (domain.lo, domain.hi),
         };
-        let count = random_count(spec, domain, s, g, group, (lo, hi), particles.len())?;
         let existing: Vec<(Vec3, f64)> =
             (0..particles.len()).map(|j| (particles.position[j], particles.radius[j])).collect();
+        if let Some(lattice) = &group.lattice {
+            let sites = lattice_sites(spec, domain, s, g, lattice, (lo, hi), &existing)?;
+            let sites = match group.order {
+                ParticleOrder::Placement => sites,
+                ParticleOrder::Spatial => placement::morton_order(sites, 2.0 * s.radius, domain),
+            };
+            for x in sites {
+                particles.push(si as u16, s, x, Vec3::zeros());
+            }
+            continue;
+        }
+        let count = random_count(spec, domain, s, g, group, (lo, hi), particles.len())?;
         let seed = spec.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(g as u64);
         let placed = placement::place_random(count, s.radius, lo, hi, domain, &existing, seed).map_err(|k| {
             let l = hi - lo;

@@ -130,7 +130,7 @@ pub enum SaturationLawSpec {
 }
 
 /// `[[particles]]`: a group of particles of one species, given by exactly one of `positions`,
-/// `count` or `concentration`.
+/// `count`, `concentration` or `lattice`.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ParticleGroupSpec {
@@ -146,6 +146,8 @@ pub struct ParticleGroupSpec {
     /// Mass concentration (mg/ml = kg/m³) of randomly placed particles over the region's volume;
     /// the count is rounded down.
     pub concentration: Option<f64>,
+    /// Particles on every site of a lattice that fits in the region (a packed bed).
+    pub lattice: Option<LatticeSpec>,
     /// Placement region (default: the whole box).
     pub region: Option<RegionSpec>,
     /// How randomly placed particles are numbered (default: in the order they were placed).
@@ -163,6 +165,26 @@ pub enum ParticleOrder {
     Placement,
     /// Along a Morton (Z-order) curve through cells of one diameter.
     Spatial,
+}
+
+/// `lattice = { kind = "fcc", spacing = … }`: a crystal filling the group's region, its cubic axes
+/// along x, y, z and a site at the region's low corner (a radius in from a wall). On a walled
+/// axis the sites stop a radius short of the wall; a periodic axis must be spanned by the region
+/// and hold a whole number of cubic cells.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LatticeSpec {
+    pub kind: LatticeKind,
+    /// Nearest-neighbour distance between centres (m); default one diameter (touching spheres).
+    /// Less than a diameter starts the bed pre-compressed, by at most `stability.max_overlap`.
+    pub spacing: Option<f64>,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum LatticeKind {
+    /// Face-centred cubic: cubic cell √2 × spacing, 4 sites per cell, 12 nearest neighbours.
+    Fcc,
 }
 
 #[derive(Debug, Clone, Deserialize)]
