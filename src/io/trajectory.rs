@@ -71,31 +71,34 @@ fn write_scalar_attr<T: hdf5::H5Type>(loc: &hdf5::Location, name: &str, value: T
     }
 }
 
-/// Extendible dataset of shape (0.., tail...) chunked one row at a time.
+/// How an extendible dataset is chunked.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Rows {
+    /// One frame of per-particle rows per chunk, deflate-compressed: written whole, never again.
+    Frames,
+    /// 1 024 rows per chunk, uncompressed: a chunk that receives rows from several appends or
+    /// rewrites (time, step, the contact list, the checkpoint's contact history) is rewritten
+    /// in place; compressed, a chunk torn by a kill (-9) during a write could not be inflated
+    /// when the resumed run reads or extends it.
+    Appended,
+}
+
+/// Extendible dataset of shape (0.., tail...).
 fn extendible<T: hdf5::H5Type>(
     group: &Group,
     name: &str,
     tail: &[usize],
     units: &str,
-    rewritten: bool,
+    rows: Rows,
 ) -> H5Result<Dataset> {
     let mut extents = vec![Extent::resizable(0)];
     extents.extend(tail.iter().map(|&n| Extent::fixed(n)));
-    let mut chunk = vec![1usize];
+    let mut chunk = vec![if rows == Rows::Frames { 1 } else { 1024 }];
     chunk.extend_from_slice(tail);
-    let builder = group.new_dataset::<T>().shape(SimpleExtents::from_vec(extents));
-    // Only chunks written whole and never again are compressed: a frame's row of a per-particle
-    // dataset, a contact row. Chunks that are rewritten — the 1 024-row chunks of the one-value
-    // datasets (time, step, contact indices), the checkpoint's contact history, rewritten with
-    // every frame — stay uncompressed and are rewritten in place: compressed, a chunk torn by a
-    // kill (-9) during a write could not be inflated when the resumed run reads or extends it.
-    let ds = if tail.is_empty() {
-        chunk[0] = 1024;
-        builder.chunk(chunk).create(name)?
-    } else if rewritten {
-        builder.chunk(chunk).create(name)?
-    } else {
-        builder.chunk(chunk).deflate(4).create(name)?
+    let builder = group.new_dataset::<T>().shape(SimpleExtents::from_vec(extents)).chunk(chunk);
+    let ds = match rows {
+        Rows::Frames => builder.deflate(4).create(name)?,
+        Rows::Appended => builder.create(name)?,
     };
     write_str_attr(&ds, "units", units)?;
     Ok(ds)
@@ -171,26 +174,26 @@ impl TrajectoryWriter {
             write_str_attr(&particles, "species_names", &names)?;
 
             let frames = file.create_group("frames")?;
-            extendible::<f64>(&frames, "time", &[], "s", false)?;
-            extendible::<u64>(&frames, "step", &[], "1", false)?;
+            extendible::<f64>(&frames, "time", &[], "s", Rows::Appended)?;
+            extendible::<u64>(&frames, "step", &[], "1", Rows::Appended)?;
             let vectors = FRAME_VECTORS.iter().chain(if forces { &FORCE_VECTORS[..] } else { &[] });
             for (name, units) in vectors {
-                extendible::<f64>(&frames, name, &[n, 3], units, false)?;
+                extendible::<f64>(&frames, name, &[n, 3], units, Rows::Frames)?;
             }
             if contacts {
                 let c = file.create_group("contacts")?;
-                extendible::<u64>(&c, "frame_start", &[], "index into pair", false)?;
-                extendible::<u32>(&c, "pair", &[2], "particle index", false)?;
-                extendible::<f64>(&c, "overlap", &[], "m", false)?;
+                extendible::<u64>(&c, "frame_start", &[], "index into pair", Rows::Appended)?;
+                extendible::<u32>(&c, "pair", &[2], "particle index", Rows::Appended)?;
+                extendible::<f64>(&c, "overlap", &[], "m", Rows::Appended)?;
             }
             let ck = file.create_group("checkpoint")?;
             for name in State::vector_names() {
                 ck.new_dataset::<f64>().shape((n, 3)).create(name)?;
             }
-            extendible::<u32>(&ck, "pair_keys", &[2], "particle index", true)?;
-            extendible::<f64>(&ck, "pair_shear", &[3], "m", true)?;
-            extendible::<u32>(&ck, "wall_keys", &[2], "particle index, wall face", true)?;
-            extendible::<f64>(&ck, "wall_shear", &[3], "m", true)?;
+            extendible::<u32>(&ck, "pair_keys", &[2], "particle index", Rows::Appended)?;
+            extendible::<f64>(&ck, "pair_shear", &[3], "m", Rows::Appended)?;
+            extendible::<u32>(&ck, "wall_keys", &[2], "particle index, wall face", Rows::Appended)?;
+            extendible::<f64>(&ck, "wall_shear", &[3], "m", Rows::Appended)?;
             file.flush()
         })()
         .map_err(wrap)?;
