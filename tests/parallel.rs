@@ -61,6 +61,42 @@ fn one_and_two_threads_give_identical_bits() {
     }
 }
 
+/// A packed bed (an FCC block of 4 631 particles pre-compressed in its walled box) driven sideways
+/// by a body force of 3e4 weights, so that its contacts shear and slide: the pair pass splits into
+/// one share of particles per thread, each adding the earlier shares' pairs that reach it first,
+/// and one, two and three threads (three shares: pairs from two earlier shares) give the same
+/// bits.
+#[test]
+fn a_sheared_packed_bed_gives_identical_bits_on_one_two_and_three_threads() {
+    let (d, cells) = (11e-6, 10.0);
+    let spacing = d * (1.0 - 1e-4);
+    let edge = cells * std::f64::consts::SQRT_2 * spacing + d;
+    let text = common::scene(
+        &format!("version = 1\n[domain]\nlo = [0.0, 0.0, 0.0]\nhi = [{edge:e}, {edge:e}, {edge:e}]\n"),
+        &format!(
+            "[[particles]]\nspecies = \"p\"\nlattice = {{ kind = \"fcc\", spacing = {spacing:e} }}\n[forces.contact]\nwalls = true\n\
+             [forces.gravity]\ng = [3.0e5, 1.0e5, -9.81]\n[integration]\nscheme = \"velocity-verlet\"\ndt = 1.0e-8\nend_time = 4.0e-7\n"
+        ),
+    );
+    let scene = Scene::parse(&text, "packed bed").unwrap();
+    assert_eq!(scene.initial.len(), 4631);
+    assert!(scene.initial.len() > MIN_PARALLEL_LEN);
+    let one = run_on(&scene, 1);
+    let coordination = 2.0 * one.contacts.pairs.len() as f64 / scene.initial.len() as f64;
+    assert!(coordination > 9.0, "coordination {coordination}: the bed should stay packed");
+    // With ν = 0.5, kt = kn: a spring at the Coulomb limit is about μ δ long (δ the lattice's
+    // overlap, μ = 0.5); the longest springs reach it, so contacts slide.
+    let overlap = d - spacing;
+    let mut springs: Vec<f64> = one.contacts.pairs.iter().map(|(_, s)| s.norm()).collect();
+    springs.sort_by(f64::total_cmp);
+    let (median, longest) = (springs[springs.len() / 2], springs[springs.len() - 1]);
+    assert!(median > 0.05 * overlap, "median spring {median:e} m: the bed should shear");
+    assert!(longest > 0.4 * overlap, "longest spring {longest:e} m: some contacts should slide");
+    for threads in [2, 3] {
+        assert_eq!(one, run_on(&scene, threads), "states differ between 1 and {threads} threads");
+    }
+}
+
 #[test]
 fn the_row_sums_equal_a_direct_pair_sum() {
     // Half rows in 16 bands (above the threshold) and in one (below), in a walled box and in one

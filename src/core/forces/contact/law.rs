@@ -61,14 +61,12 @@ pub enum Normal {
 }
 
 impl Normal {
-    /// kn and the restitution damping γn at overlap δ (`sq` = √(R*δ)).
+    /// kn and the restitution damping γn at overlap δ (`sq` = √(R*δ)) for E* and β of the pair.
     #[inline(always)]
-    fn stiffness_and_damping(self, m: &PairMaterial, sq: f64, m_eff: f64) -> (f64, f64) {
+    fn stiffness_and_damping(self, e_star: f64, beta: f64, sq: f64, m_eff: f64) -> (f64, f64) {
         match self {
-            Normal::Hertz => {
-                (4.0 / 3.0 * m.e_star * sq, -2.0 * SQRT_5_6 * m.beta * (2.0 * m.e_star * sq * m_eff).sqrt())
-            }
-            Normal::Hooke { stiffness } => (stiffness, -2.0 * m.beta * (stiffness * m_eff).sqrt()),
+            Normal::Hertz => (4.0 / 3.0 * e_star * sq, -2.0 * SQRT_5_6 * beta * (2.0 * e_star * sq * m_eff).sqrt()),
+            Normal::Hooke { stiffness } => (stiffness, -2.0 * beta * (stiffness * m_eff).sqrt()),
         }
     }
 }
@@ -82,16 +80,87 @@ pub enum Tangential {
     None,
 }
 
-/// Geometry and kinematics of one contact, the input of the contact law.
-pub struct ContactPoint {
-    pub overlap: f64,
-    pub normal: Vec3,
-    pub r_eff: f64,
-    pub m_eff: f64,
+/// Contacts taken [`LANES`] at a time, one array per quantity, so that the law's loop over them
+/// runs in SIMD lanes (each lane's arithmetic is the scalar law's, operation for operation).
+pub const LANES: usize = 8;
+
+type Lane = [f64; LANES];
+
+/// Up to [`LANES`] contacts: the law's inputs (geometry, kinematics, pair constants, springs)
+/// and, after [`ContactLaw::apply`], its outputs. A wall contact has R* = a, m* = m, the
+/// particle's own velocity and one lever arm.
+#[derive(Clone, Default)]
+pub struct Lanes {
+    pub overlap: Lane,
+    /// Unit normal, from j to i (from the wall into the box).
+    pub normal: [Lane; 3],
+    pub r_eff: Lane,
+    pub m_eff: Lane,
     /// v_i − v_j
-    pub rel_velocity: Vec3,
-    /// cr_i ω_i + cr_j ω_j (lever arms a − δ/2)
-    pub spin: Vec3,
+    pub rel_velocity: [Lane; 3],
+    /// cr_i ω_i + cr_j ω_j, with the lever arms cr = a − δ/2
+    pub spin: [Lane; 3],
+    pub lever_i: Lane,
+    pub lever_j: Lane,
+    pub e_star: Lane,
+    pub g_star: Lane,
+    pub beta: Lane,
+    pub friction: Lane,
+    /// The spring: in, the stored history; out, updated.
+    pub shear: [Lane; 3],
+    /// Out: Fn n + Ft on i (j receives −force).
+    pub force: [Lane; 3],
+    /// Out: the torques −cr_i n × Ft and −cr_j n × Ft.
+    pub torque_i: [Lane; 3],
+    pub torque_j: [Lane; 3],
+}
+
+impl Lanes {
+    /// Fills lane `l` from a contact's geometry and kinematics and its pair constants.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub fn set(
+        &mut self,
+        l: usize,
+        overlap: f64,
+        normal: Vec3,
+        (r_eff, m_eff): (f64, f64),
+        rel_velocity: Vec3,
+        spin: Vec3,
+        (lever_i, lever_j): (f64, f64),
+        m: &PairMaterial,
+        shear: Vec3,
+    ) {
+        self.overlap[l] = overlap;
+        (self.r_eff[l], self.m_eff[l], self.lever_i[l], self.lever_j[l]) = (r_eff, m_eff, lever_i, lever_j);
+        (self.e_star[l], self.g_star[l], self.beta[l], self.friction[l]) = (m.e_star, m.g_star, m.beta, m.friction);
+        for c in 0..3 {
+            self.normal[c][l] = normal[c];
+            self.rel_velocity[c][l] = rel_velocity[c];
+            self.spin[c][l] = spin[c];
+            self.shear[c][l] = shear[c];
+        }
+    }
+
+    fn get(v: &[Lane; 3], l: usize) -> Vec3 {
+        Vec3::new(v[0][l], v[1][l], v[2][l])
+    }
+    pub fn force(&self, l: usize) -> Vec3 {
+        Self::get(&self.force, l)
+    }
+    pub fn torque_i(&self, l: usize) -> Vec3 {
+        Self::get(&self.torque_i, l)
+    }
+    pub fn torque_j(&self, l: usize) -> Vec3 {
+        Self::get(&self.torque_j, l)
+    }
+    pub fn shear(&self, l: usize) -> Vec3 {
+        Self::get(&self.shear, l)
+    }
+    #[cfg(test)]
+    fn normal_of(&self, l: usize) -> Vec3 {
+        Self::get(&self.normal, l)
+    }
 }
 
 /// The composed law.
@@ -109,37 +178,155 @@ impl Default for ContactLaw {
 }
 
 impl ContactLaw {
-    /// Returns (Fn n + Ft) on i, updating the shear history `s` in place.
-    #[inline(always)]
-    pub fn force(&self, c: &ContactPoint, m: &PairMaterial, s: &mut Vec3, dt: f64) -> Vec3 {
-        let sq = (c.r_eff * c.overlap).sqrt();
-        let (kn, gamma_n) = self.normal.stiffness_and_damping(m, sq, c.m_eff);
-        let vn = c.rel_velocity.dot(&c.normal);
-        let fn_mag = kn * c.overlap - gamma_n * vn;
-        match self.tangential {
-            Tangential::Mindlin => fn_mag * c.normal + mindlin(c, m, sq, vn, fn_mag, s, dt),
-            Tangential::None => fn_mag * c.normal,
+    /// The law on every lane of `c` (lanes past the contacts in use compute what they hold).
+    pub fn apply(&self, c: &mut Lanes, dt: f64) {
+        let normal = self.normal;
+        match (normal, self.tangential) {
+            (Normal::Hertz, Tangential::Mindlin) => {
+                lanes::<true>(c, dt, |e, b, sq, m| Normal::Hertz.stiffness_and_damping(e, b, sq, m))
+            }
+            (Normal::Hertz, Tangential::None) => {
+                lanes::<false>(c, dt, |e, b, sq, m| Normal::Hertz.stiffness_and_damping(e, b, sq, m))
+            }
+            (Normal::Hooke { .. }, Tangential::Mindlin) => {
+                lanes::<true>(c, dt, |e, b, sq, m| normal.stiffness_and_damping(e, b, sq, m))
+            }
+            (Normal::Hooke { .. }, Tangential::None) => {
+                lanes::<false>(c, dt, |e, b, sq, m| normal.stiffness_and_damping(e, b, sq, m))
+            }
         }
     }
 }
 
-/// Mindlin's tangential force with history and the Coulomb limit.
+/// The law lane by lane, branch-free (both sides of the Coulomb test are computed and one is
+/// kept), written component by component in nalgebra's order of operations: the bits are those
+/// of the vector expressions in the module's doc. Eight independent contacts in one loop keep
+/// the core's pipelines full (a contact alone is one long chain of dependent √ and ÷).
 #[inline(always)]
-fn mindlin(c: &ContactPoint, m: &PairMaterial, sq: f64, vn: f64, fn_mag: f64, s: &mut Vec3, dt: f64) -> Vec3 {
-    let kt = 8.0 * m.g_star * sq;
-    let gamma_t = -2.0 * SQRT_5_6 * m.beta * (kt * c.m_eff).sqrt();
-    let vt = c.rel_velocity - vn * c.normal;
-    let vtr = vt - c.spin.cross(&c.normal);
-    *s += vtr * dt;
-    *s -= s.dot(&c.normal) * c.normal;
-    let mut ft = -kt * *s;
-    let limit = m.friction * fn_mag.abs();
-    let ft_norm = ft.norm();
-    if ft_norm > limit {
-        ft *= if ft_norm > 0.0 { limit / ft_norm } else { 0.0 };
-        *s = -ft / kt;
-    } else {
-        ft -= gamma_t * vtr;
+fn lanes<const MINDLIN: bool>(c: &mut Lanes, dt: f64, normal_law: impl Fn(f64, f64, f64, f64) -> (f64, f64)) {
+    for l in 0..LANES {
+        let [nx, ny, nz] = [c.normal[0][l], c.normal[1][l], c.normal[2][l]];
+        let [rx, ry, rz] = [c.rel_velocity[0][l], c.rel_velocity[1][l], c.rel_velocity[2][l]];
+        let (overlap, m_eff) = (c.overlap[l], c.m_eff[l]);
+        let sq = (c.r_eff[l] * overlap).sqrt();
+        let (kn, gamma_n) = normal_law(c.e_star[l], c.beta[l], sq, m_eff);
+        let vn = rx * nx + ry * ny + rz * nz;
+        let fn_mag = kn * overlap - gamma_n * vn;
+        let (mut fx, mut fy, mut fz) = (fn_mag * nx, fn_mag * ny, fn_mag * nz);
+        if MINDLIN {
+            let kt = 8.0 * c.g_star[l] * sq;
+            let gamma_t = -2.0 * SQRT_5_6 * c.beta[l] * (kt * m_eff).sqrt();
+            let [wx, wy, wz] = [c.spin[0][l], c.spin[1][l], c.spin[2][l]];
+            // v_t,rel = (v − vn n) − spin × n
+            let vtx = (rx - vn * nx) - (wy * nz - wz * ny);
+            let vty = (ry - vn * ny) - (wz * nx - wx * nz);
+            let vtz = (rz - vn * nz) - (wx * ny - wy * nx);
+            let (sx, sy, sz) = (c.shear[0][l] + vtx * dt, c.shear[1][l] + vty * dt, c.shear[2][l] + vtz * dt);
+            let sn = sx * nx + sy * ny + sz * nz;
+            let (sx, sy, sz) = (sx - sn * nx, sy - sn * ny, sz - sn * nz);
+            let (tx, ty, tz) = (-kt * sx, -kt * sy, -kt * sz);
+            let limit = c.friction[l] * fn_mag.abs();
+            let ft_norm2 = tx * tx + ty * ty + tz * tz;
+            let ft_norm = ft_norm2.sqrt();
+            // Sliding: Ft scaled to the limit, the spring to −Ft/kt; sticking: Ft damped.
+            let sliding = ft_norm2 > limit * limit * (1.0 - 1e-12) && ft_norm > limit;
+            let scale = if ft_norm > 0.0 { limit / ft_norm } else { 0.0 };
+            let slide = (tx * scale, ty * scale, tz * scale);
+            let stick = (tx - gamma_t * vtx, ty - gamma_t * vty, tz - gamma_t * vtz);
+            let (tx, ty, tz) = if sliding { slide } else { stick };
+            let spring = if sliding { (-tx / kt, -ty / kt, -tz / kt) } else { (sx, sy, sz) };
+            (c.shear[0][l], c.shear[1][l], c.shear[2][l]) = spring;
+            (fx, fy, fz) = (fx + tx, fy + ty, fz + tz);
+        }
+        (c.force[0][l], c.force[1][l], c.force[2][l]) = (fx, fy, fz);
+        // n × (F − (F·n) n), the lever arms' torques
+        let fd = fx * nx + fy * ny + fz * nz;
+        let (ux, uy, uz) = (fx - fd * nx, fy - fd * ny, fz - fd * nz);
+        let (qx, qy, qz) = (ny * uz - nz * uy, nz * ux - nx * uz, nx * uy - ny * ux);
+        let (ai, aj) = (-c.lever_i[l], -c.lever_j[l]);
+        (c.torque_i[0][l], c.torque_i[1][l], c.torque_i[2][l]) = (ai * qx, ai * qy, ai * qz);
+        (c.torque_j[0][l], c.torque_j[1][l], c.torque_j[2][l]) = (aj * qx, aj * qy, aj * qz);
     }
-    ft
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The module doc's vector expressions, one contact at a time (nalgebra): (force, spring,
+    /// n × Ft).
+    fn reference(law: &ContactLaw, c: &Lanes, l: usize, dt: f64) -> (Vec3, Vec3, Vec3) {
+        let get = |v: &[Lane; 3]| Vec3::new(v[0][l], v[1][l], v[2][l]);
+        let (n, v, spin, mut s) = (get(&c.normal), get(&c.rel_velocity), get(&c.spin), get(&c.shear));
+        let (overlap, m_eff) = (c.overlap[l], c.m_eff[l]);
+        let sq = (c.r_eff[l] * overlap).sqrt();
+        let (kn, gamma_n) = law.normal.stiffness_and_damping(c.e_star[l], c.beta[l], sq, m_eff);
+        let vn = v.dot(&n);
+        let fn_mag = kn * overlap - gamma_n * vn;
+        let mut force = fn_mag * n;
+        if law.tangential == Tangential::Mindlin {
+            let kt = 8.0 * c.g_star[l] * sq;
+            let gamma_t = -2.0 * SQRT_5_6 * c.beta[l] * (kt * m_eff).sqrt();
+            let vtr = (v - vn * n) - spin.cross(&n);
+            s += vtr * dt;
+            s -= s.dot(&n) * n;
+            let mut ft = -kt * s;
+            let (limit, ft_norm) = (c.friction[l] * fn_mag.abs(), ft.norm());
+            if ft_norm > limit {
+                ft *= if ft_norm > 0.0 { limit / ft_norm } else { 0.0 };
+                s = -ft / kt;
+            } else {
+                ft -= gamma_t * vtr;
+            }
+            force += ft;
+        }
+        (force, s, n.cross(&(force - force.dot(&n) * n)))
+    }
+
+    /// Every lane of the law gives the bits of the vector expressions, for both normal models,
+    /// with and without Mindlin, over contacts that stick and contacts that slide.
+    #[test]
+    fn lanes_give_the_bits_of_the_vector_law() {
+        let value = |k: usize| (k as f64 * 0.618_033_988_749_895).fract() - 0.5;
+        let species = crate::core::state::test_sphere(5.5e-6);
+        let m = PairMaterial::new(&species, &species);
+        let (mut sliding, mut sticking) = (0, 0);
+        for law in [
+            ContactLaw::default(),
+            ContactLaw { normal: Normal::Hertz, tangential: Tangential::None },
+            ContactLaw { normal: Normal::Hooke { stiffness: 50.0 }, tangential: Tangential::Mindlin },
+        ] {
+            for batch in 0..40 {
+                let mut c = Lanes::default();
+                for l in 0..LANES {
+                    let k = 40 * (batch * LANES + l);
+                    let normal = Vec3::new(value(k), value(k + 1), value(k + 2)).normalize();
+                    let v = 1e-4 * Vec3::new(value(k + 3), value(k + 4), value(k + 5));
+                    let spin = 1e-4 * Vec3::new(value(k + 6), value(k + 7), value(k + 8));
+                    // Springs from none to well past the Coulomb limit.
+                    let shear = 1e-9 * (batch as f64 / 10.0) * Vec3::new(value(k + 9), value(k + 10), value(k + 11));
+                    let overlap = 1e-9 * (1.0 + value(k + 12));
+                    c.set(l, overlap, normal, (2.75e-6, 3.8e-13), v, spin, (5.5e-6, 5.5e-6), &m, shear);
+                }
+                let input = c.clone();
+                law.apply(&mut c, 1e-8);
+                for l in 0..LANES {
+                    let (force, shear, n_x_ft) = reference(&law, &input, l, 1e-8);
+                    assert_eq!(c.force(l), force, "{law:?} lane {l}: force");
+                    assert_eq!(c.shear(l), shear, "{law:?} lane {l}: spring");
+                    assert_eq!(c.torque_i(l), -input.lever_i[l] * n_x_ft, "{law:?} lane {l}: torque");
+                    if law.tangential == Tangential::Mindlin {
+                        let fn_mag = force.dot(&input.normal_of(l));
+                        let ft = force - fn_mag * input.normal_of(l);
+                        if ft.norm() >= 0.999 * m.friction * fn_mag.abs() {
+                            sliding += 1;
+                        } else {
+                            sticking += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(sliding > 50 && sticking > 50, "{sliding} sliding and {sticking} sticking contacts");
+    }
 }

@@ -11,24 +11,75 @@ use crate::core::neighbours::{Pair, PairRange};
 use crate::core::parallel;
 use crate::core::state::{ContactDiagnostics, Particles, Species, Vec3, WallFace};
 pub use law::PairMaterial;
-use law::{ContactLaw, ContactPoint};
+use law::{ContactLaw, Lanes, LANES};
+use std::sync::Mutex;
 use walls::{WallScan, WallTouch};
 
 /// What one contact gives: the force on i (j receives −force), the torques on i and j, the
-/// updated spring and the overlap as a fraction of the smaller diameter.
+/// updated spring, the overlap and the smaller diameter (the wall's: the particle's).
+#[derive(Clone, Copy, Default)]
 struct ContactOutcome {
     force: Vec3,
     torque_i: Vec3,
     torque_j: Vec3,
     shear: Vec3,
-    overlap_ratio: f64,
+    overlap: f64,
+    diameter: f64,
 }
+
+impl ContactOutcome {
+    /// Lane `l` of computed `lanes`.
+    #[inline(always)]
+    fn of(lanes: &Lanes, l: usize, diameter: f64) -> Self {
+        ContactOutcome {
+            force: lanes.force(l),
+            torque_i: lanes.torque_i(l),
+            torque_j: lanes.torque_j(l),
+            shear: lanes.shear(l),
+            overlap: lanes.overlap[l],
+            diameter,
+        }
+    }
+
+    /// The overlap as a fraction of the smaller diameter, if above `max`: the division is taken
+    /// only where the ratio may exceed it (the margin 1e-12 keeps the test exact).
+    #[inline(always)]
+    fn overlap_ratio_above(&self, max: f64) -> Option<f64> {
+        if self.overlap < max * self.diameter * (1.0 - 1e-12) {
+            return None;
+        }
+        Some(self.overlap / self.diameter).filter(|&ratio| ratio > max)
+    }
+}
+
+/// R* = a_i a_j/(a_i + a_j) and m* = m_i m_j/(m_i + m_j) of the last pair, reused while the
+/// radii and masses repeat (always, for one species): the same operands give the same bits.
+#[derive(Default)]
+struct ReducedCache {
+    key: [f64; 4],
+    value: (f64, f64),
+}
+
+impl ReducedCache {
+    #[inline(always)]
+    fn get(&mut self, (ai, aj, mi, mj): (f64, f64, f64, f64)) -> (f64, f64) {
+        if self.key != [ai, aj, mi, mj] {
+            self.key = [ai, aj, mi, mj];
+            self.value = (ai * aj / (ai + aj), mi * mj / (mi + mj));
+        }
+        self.value
+    }
+}
+
+/// What a share of the pair pass leaves: its part of the next history, its largest overlap.
+type ShareOut = (Vec<((u32, u32), Vec3)>, ContactDiagnostics);
 
 /// Particle–particle and particle–wall contacts.
 ///
-/// Each evaluation runs in three passes: find the touching pairs and wall contacts and their
-/// springs (a merge with the sorted history), compute each contact (in parallel for many
-/// contacts), then add the results in contact order — the same bits for any thread count.
+/// Pairs: one pass per particle share over the near pairs in (i, j) order finds the touching ones
+/// and their springs (a merge with the sorted history), computes them [`LANES`] at a time and
+/// adds them in order (see [`Contact::share_pass`]). Walls: found and merged the same way,
+/// computed in parallel batches when many, added in order. The same bits for any thread count.
 pub struct Contact {
     /// Pair constants indexed `[species_i * n_species + species_j]`.
     materials: Vec<PairMaterial>,
@@ -37,11 +88,12 @@ pub struct Contact {
     walls: bool,
     /// The near-pair search: the largest contact distance (times 1 + a touch tolerance).
     near: PairRange,
-    touching: Vec<(u32, Vec3)>,
     wall_scan: WallScan,
     wall_found: Vec<WallTouch>,
     wall_touching: Vec<(WallTouch, Vec3)>,
-    outcomes: Vec<ContactOutcome>,
+    outcomes: Vec<[ContactOutcome; LANES]>,
+    /// Per particle share of the pair pass: its next history and largest overlap.
+    shares: Vec<Mutex<ShareOut>>,
     spare_pairs: Vec<((u32, u32), Vec3)>,
     spare_walls: Vec<((u32, WallFace), Vec3)>,
 }
@@ -67,11 +119,11 @@ impl Contact {
             law,
             walls,
             near,
-            touching: vec![],
             wall_scan: WallScan::default(),
             wall_found: vec![],
             wall_touching: vec![],
             outcomes: vec![],
+            shares: vec![],
             spare_pairs: vec![],
             spare_walls: vec![],
         }
@@ -81,87 +133,163 @@ impl Contact {
         &self.materials[si as usize * self.n_species + sj as usize]
     }
 
-    fn pair_contact(&self, p: &Particles, pair: &Pair, mut shear: Vec3, dt: f64) -> ContactOutcome {
+    /// Lane `l` for the touching `pair`, its R* and m* given as `reduced`; returns the smaller
+    /// diameter.
+    #[inline(always)]
+    fn fill_pair(
+        &self,
+        lanes: &mut Lanes,
+        l: usize,
+        p: &Particles,
+        pair: &Pair,
+        reduced: (f64, f64),
+        shear: Vec3,
+    ) -> f64 {
         let (i, j) = (pair.i as usize, pair.j as usize);
-        let overlap = p.radius[i] + p.radius[j] - pair.dist;
-        let normal = pair.r / pair.dist;
-        let (cr_i, cr_j) = (p.radius[i] - 0.5 * overlap, p.radius[j] - 0.5 * overlap);
-        let point = ContactPoint {
-            overlap,
-            normal,
-            r_eff: p.radius[i] * p.radius[j] / (p.radius[i] + p.radius[j]),
-            m_eff: p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j]),
-            rel_velocity: p.velocity[i] - p.velocity[j],
-            spin: cr_i * p.angular_velocity[i] + cr_j * p.angular_velocity[j],
-        };
-        let force = self.law.force(&point, self.material(p.species[i], p.species[j]), &mut shear, dt);
-        let n_x_ft = normal.cross(&(force - force.dot(&normal) * normal));
-        ContactOutcome {
-            force,
-            torque_i: -cr_i * n_x_ft,
-            torque_j: -cr_j * n_x_ft,
-            shear,
-            overlap_ratio: overlap / (2.0 * p.radius[i].min(p.radius[j])),
-        }
+        let (ai, aj) = (p.radius[i], p.radius[j]);
+        let overlap = ai + aj - pair.dist;
+        let (cr_i, cr_j) = (ai - 0.5 * overlap, aj - 0.5 * overlap);
+        let spin = cr_i * p.angular_velocity[i] + cr_j * p.angular_velocity[j];
+        let material = self.material(p.species[i], p.species[j]);
+        let relative = p.velocity[i] - p.velocity[j];
+        lanes.set(l, overlap, pair.r / pair.dist, reduced, relative, spin, (cr_i, cr_j), material, shear);
+        2.0 * ai.min(aj)
     }
 
-    fn wall_contact(&self, p: &Particles, touch: &WallTouch, mut shear: Vec3, dt: f64) -> ContactOutcome {
+    /// Lane `l` for the wall contact `touch` (R* = a, m* = m, one lever arm); returns the diameter.
+    #[inline(always)]
+    fn fill_wall(&self, lanes: &mut Lanes, l: usize, p: &Particles, touch: &WallTouch, shear: Vec3) -> f64 {
         let i = touch.i as usize;
         let a = p.radius[i];
-        let normal = touch.normal();
         let cr = a - 0.5 * touch.overlap;
-        let point = ContactPoint {
-            overlap: touch.overlap,
-            normal,
-            r_eff: a,
-            m_eff: p.mass[i],
-            rel_velocity: p.velocity[i],
-            spin: cr * p.angular_velocity[i],
+        let material = self.material(p.species[i], p.species[i]);
+        let spin = cr * p.angular_velocity[i];
+        lanes.set(l, touch.overlap, touch.normal(), (a, p.mass[i]), p.velocity[i], spin, (cr, 0.0), material, shear);
+        2.0 * a
+    }
+
+    /// Outcomes of contacts `0..n`, [`LANES`] to a batch, computed in parallel batches when
+    /// worth it (`fill(lanes, l, c)` sets lane l for contact c and returns its diameter).
+    fn outcomes_of(
+        &self,
+        n: usize,
+        dt: f64,
+        fill: impl Fn(&mut Lanes, usize, usize) -> f64 + Sync,
+        batches: &mut Vec<[ContactOutcome; LANES]>,
+    ) {
+        parallel::map_ordered(n.div_ceil(LANES), batches, |b| {
+            let mut lanes = Lanes::default();
+            let first = b * LANES;
+            let diameters: [f64; LANES] =
+                std::array::from_fn(|l| if first + l < n { fill(&mut lanes, l, first + l) } else { 0.0 });
+            self.law.apply(&mut lanes, dt);
+            std::array::from_fn(|l| ContactOutcome::of(&lanes, l, diameters[l]))
+        });
+    }
+
+    /// The touching pairs among `pairs` that `keep` selects, in order, their springs merged
+    /// from `history` (sorted, covering them), computed [`LANES`] at a time; `emit(pair,
+    /// outcome)` receives each in order.
+    fn in_lanes<'p>(
+        &self,
+        p: &Particles,
+        pairs: &'p [Pair],
+        history: &[((u32, u32), Vec3)],
+        dt: f64,
+        keep: impl Fn(&Pair) -> bool,
+        mut emit: impl FnMut(&'p Pair, &ContactOutcome),
+    ) {
+        let (mut lanes, mut batch) = (Lanes::default(), [(0u32, 0.0); LANES]);
+        let (mut cache, mut cursor, mut used) = (ReducedCache::default(), 0, 0);
+        let mut flush = |lanes: &mut Lanes, batch: &[(u32, f64)]| {
+            self.law.apply(lanes, dt);
+            for (l, &(k, diameter)) in batch.iter().enumerate() {
+                emit(&pairs[k as usize], &ContactOutcome::of(lanes, l, diameter));
+            }
         };
-        let force = self.law.force(&point, self.material(p.species[i], p.species[i]), &mut shear, dt);
-        let ft = force - force.dot(&normal) * normal;
-        ContactOutcome {
-            force,
-            torque_i: -cr * normal.cross(&ft),
-            torque_j: Vec3::zeros(),
-            shear,
-            overlap_ratio: touch.overlap / (2.0 * a),
+        for (k, pair) in pairs.iter().enumerate() {
+            let (i, j) = (pair.i as usize, pair.j as usize);
+            if pair.dist < p.radius[i] + p.radius[j] && keep(pair) {
+                let s = spring(history, &mut cursor, (pair.i, pair.j));
+                let reduced = cache.get((p.radius[i], p.radius[j], p.mass[i], p.mass[j]));
+                batch[used] = (k as u32, self.fill_pair(&mut lanes, used, p, pair, reduced, s));
+                used += 1;
+                if used == LANES {
+                    flush(&mut lanes, &batch);
+                    used = 0;
+                }
+            }
         }
+        flush(&mut lanes, &batch[..used]);
+    }
+
+    /// Pair contacts on the particles `lo..lo + force.len()` (a share; `force` and `torque` are
+    /// its slices): first the pairs (i, j) of earlier rows with j in the share, in order (they
+    /// come first in each j's serial sum; the share before computes them too, for its own i),
+    /// then the share's own rows, whose j beyond the share are left to the shares after. Each
+    /// particle's force and torque are so summed in the serial order, on any split.
+    #[allow(clippy::too_many_arguments)]
+    fn share_pass(
+        &self,
+        ctx: &Context,
+        p: &Particles,
+        history: &[((u32, u32), Vec3)],
+        lo: usize,
+        (force, torque): (&mut [Vec3], &mut [Vec3]),
+        (next, diag): &mut ShareOut,
+    ) {
+        let near = ctx.neighbours.pairs(self.near);
+        let hi = lo + force.len();
+        let (rows, rest) =
+            (near.partition_point(|q| (q.i as usize) < lo), near.partition_point(|q| (q.i as usize) < hi));
+        let split = history.partition_point(|h| (h.0 .0 as usize) < lo);
+        let within = |j: usize| (lo..hi).contains(&j);
+        self.in_lanes(
+            p,
+            &near[..rows],
+            &history[..split],
+            ctx.dt,
+            |q| within(q.j as usize),
+            |q, o| {
+                let j = q.j as usize - lo;
+                force[j] -= o.force;
+                torque[j] += o.torque_j;
+            },
+        );
+        next.clear();
+        *diag = ContactDiagnostics::default();
+        let mut adder = RowAdder::new(lo, diag, next);
+        self.in_lanes(p, &near[rows..rest], &history[split..], ctx.dt, |_| true, |q, o| adder.add(force, torque, q, o));
+        adder.finish(force, torque);
     }
 
     fn apply_pairs(&mut self, ctx: &Context, p: &Particles, out: &mut Forces, diag: &mut ContactDiagnostics) {
         let history = std::mem::take(&mut out.contacts.pairs);
-        let near_pairs = ctx.neighbours.pairs(self.near);
-        let mut cursor = 0;
-        self.touching.clear();
-        for (k, pair) in near_pairs.iter().enumerate() {
-            if pair.dist < p.radius[pair.i as usize] + p.radius[pair.j as usize] {
-                self.touching.push((k as u32, spring(&history, &mut cursor, (pair.i, pair.j))));
-            }
-        }
-        let mut outcomes = std::mem::take(&mut self.outcomes);
-        let touching = &self.touching;
-        parallel::map_ordered(touching.len(), &mut outcomes, |c| {
-            let (k, s) = touching[c];
-            self.pair_contact(p, &near_pairs[k as usize], s, ctx.dt)
+        let n = out.force.len();
+        let shares = if parallel::worth_it(n) { n.div_ceil(parallel::share(n)) } else { 1 };
+        let mut slots = std::mem::take(&mut self.shares);
+        slots.resize_with(shares.max(slots.len()), Default::default);
+        // The first share writes the next history in place; the others are appended to it.
+        *slots[0].get_mut().expect("no share running") =
+            (std::mem::take(&mut self.spare_pairs), ContactDiagnostics::default());
+        let size = if shares > 1 { parallel::share(n) } else { n.max(1) };
+        parallel::for_each_share((&mut *out.force, &mut *out.torque), |lo, parts| {
+            let mut slot = slots[lo / size].lock().expect("one share per slot");
+            self.share_pass(ctx, p, &history, lo, parts, &mut slot);
         });
-        let mut next = std::mem::replace(&mut self.spare_pairs, history);
-        next.clear();
-        for (&(k, _), o) in self.touching.iter().zip(&outcomes) {
-            let pair = &near_pairs[k as usize];
-            let (i, j) = (pair.i as usize, pair.j as usize);
-            out.force[i] += o.force;
-            out.force[j] -= o.force;
-            out.torque[i] += o.torque_i;
-            out.torque[j] += o.torque_j;
-            next.push(((pair.i, pair.j), o.shear));
-            if o.overlap_ratio > diag.max_overlap_ratio {
-                *diag =
-                    ContactDiagnostics { max_overlap_ratio: o.overlap_ratio, max_overlap_pair: (pair.i, Some(pair.j)) };
+        // The shares' histories in order; the first largest overlap, as the serial pass finds it.
+        let (mut next, first_diag) = std::mem::take(slots[0].get_mut().expect("the shares are done"));
+        *diag = first_diag;
+        for slot in &mut slots[1..shares] {
+            let (piece, share_diag) = slot.get_mut().expect("the shares are done");
+            next.extend_from_slice(piece);
+            if share_diag.max_overlap_ratio > diag.max_overlap_ratio {
+                *diag = *share_diag;
             }
         }
         out.contacts.pairs = next;
-        self.outcomes = outcomes;
+        self.spare_pairs = history;
+        self.shares = slots;
     }
 
     fn apply_walls(&mut self, ctx: &Context, p: &Particles, out: &mut Forces, diag: &mut ContactDiagnostics) {
@@ -172,24 +300,72 @@ impl Contact {
         self.wall_touching.clear();
         self.wall_touching.extend(found.iter().map(|&t| (t, spring(&history, &mut cursor, (t.i, t.face)))));
         self.wall_found = found;
-        let mut outcomes = std::mem::take(&mut self.outcomes);
-        let touching = &self.wall_touching;
-        parallel::map_ordered(touching.len(), &mut outcomes, |c| {
-            self.wall_contact(p, &touching[c].0, touching[c].1, ctx.dt)
-        });
+        let (touching, mut batches) = (&self.wall_touching, std::mem::take(&mut self.outcomes));
+        let fill = |lanes: &mut Lanes, l, c: usize| self.fill_wall(lanes, l, p, &touching[c].0, touching[c].1);
+        self.outcomes_of(touching.len(), ctx.dt, fill, &mut batches);
         let mut next = std::mem::replace(&mut self.spare_walls, history);
         next.clear();
-        for ((t, _), o) in self.wall_touching.iter().zip(&outcomes) {
+        for ((t, _), o) in touching.iter().zip(batches.iter().flatten()) {
             let i = t.i as usize;
             out.force[i] += o.force;
             out.torque[i] += o.torque_i;
             next.push(((t.i, t.face), o.shear));
-            if o.overlap_ratio > diag.max_overlap_ratio {
-                *diag = ContactDiagnostics { max_overlap_ratio: o.overlap_ratio, max_overlap_pair: (t.i, None) };
+            if let Some(ratio) = o.overlap_ratio_above(diag.max_overlap_ratio) {
+                *diag = ContactDiagnostics { max_overlap_ratio: ratio, max_overlap_pair: (t.i, None) };
             }
         }
         out.contacts.walls = next;
-        self.outcomes = outcomes;
+        self.outcomes = batches;
+    }
+}
+
+/// Adds a share's pair contacts, taken in (i, j) order, to its particles' forces and torques
+/// (slices from particle `lo`), its next history and diagnostics; a j beyond the share is left
+/// to the shares after. Particle i's force and torque are summed over its row and stored once
+/// (no store-to-load chain through memory from one contact to the next); nothing else touches
+/// particle i during its row, so the sums are those of adding one contact at a time, bit for bit.
+struct RowAdder<'a> {
+    lo: usize,
+    diag: &'a mut ContactDiagnostics,
+    next: &'a mut Vec<((u32, u32), Vec3)>,
+    /// The row's particle (share index) and its force and torque so far.
+    row: Option<(usize, Vec3, Vec3)>,
+}
+
+impl<'a> RowAdder<'a> {
+    fn new(lo: usize, diag: &'a mut ContactDiagnostics, next: &'a mut Vec<((u32, u32), Vec3)>) -> Self {
+        RowAdder { lo, diag, next, row: None }
+    }
+
+    #[inline(always)]
+    fn add(&mut self, force: &mut [Vec3], torque: &mut [Vec3], pair: &Pair, o: &ContactOutcome) {
+        let i = pair.i as usize - self.lo;
+        let (_, force_i, torque_i) = match &mut self.row {
+            Some(row) if row.0 == i => row,
+            row => {
+                if let Some((k, f, t)) = row.take() {
+                    (force[k], torque[k]) = (f, t);
+                }
+                row.insert((i, force[i], torque[i]))
+            }
+        };
+        *force_i += o.force;
+        *torque_i += o.torque_i;
+        if let Some(j) = (pair.j as usize).checked_sub(self.lo).filter(|&j| j < force.len()) {
+            force[j] -= o.force;
+            torque[j] += o.torque_j;
+        }
+        self.next.push(((pair.i, pair.j), o.shear));
+        if let Some(ratio) = o.overlap_ratio_above(self.diag.max_overlap_ratio) {
+            *self.diag = ContactDiagnostics { max_overlap_ratio: ratio, max_overlap_pair: (pair.i, Some(pair.j)) };
+        }
+    }
+
+    /// Stores the last row.
+    fn finish(self, force: &mut [Vec3], torque: &mut [Vec3]) {
+        if let Some((k, f, t)) = self.row {
+            (force[k], torque[k]) = (f, t);
+        }
     }
 }
 
