@@ -48,13 +48,15 @@ fn force_terms(c: &mut Criterion) {
 fn steps(c: &mut Criterion) {
     let mut group = c.benchmark_group("step");
     for n in [300, 3000, 30000] {
-        group.throughput(Throughput::Elements(n as u64));
         let scenes = [
-            ("contact sparse", Scene::parse(&contact_scene(Packing::Sparse, n, 1000), "bench").unwrap()),
-            ("contact dense", Scene::parse(&contact_scene(Packing::Dense, n, 1000), "bench").unwrap()),
+            ("contact dilute", Scene::parse(&contact_scene(Packing::Dilute, n, 1000), "bench").unwrap()),
+            ("contact loose", Scene::parse(&contact_scene(Packing::Loose, n, 1000), "bench").unwrap()),
+            ("contact packed", Scene::parse(&contact_scene(Packing::Packed, n, 1000), "bench").unwrap()),
             ("case 1", case1(n)),
         ];
         for (name, scene) in scenes {
+            // The packed bed's lattice holds about n particles.
+            group.throughput(Throughput::Elements(scene.initial.len() as u64));
             let mut sim = scene.simulation(None);
             sim.initialise().unwrap();
             group.bench_with_input(BenchmarkId::new(name, n), &n, |b, _| {

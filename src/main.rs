@@ -213,6 +213,9 @@ enum Command {
         /// `mpirun -np 1` and `-np 2`, about 5 minutes).
         #[arg(long)]
         no_mpi: bool,
+        /// Only redraw performance-scaling.png from the performance.csv in --out (no timing).
+        #[arg(long)]
+        redraw: bool,
     },
 }
 
@@ -260,7 +263,8 @@ fn main() -> ExitCode {
         }
         Command::Info { file } => cli::trajectory::info(&file),
         Command::Export { files, format, output } => cli::trajectory::export(&files, format, output.as_deref()),
-        Command::Bench { out, work, repeats, max_particles, no_mpi } => {
+        Command::Bench { out, redraw: true, .. } => cli::report_written(magdem::bench::report::redraw(&out)),
+        Command::Bench { out, work, repeats, max_particles, no_mpi, redraw: false } => {
             cli::report::bench(magdem::bench::Options { out, work, repeats, max_particles, mpi: !no_mpi })
         }
     }

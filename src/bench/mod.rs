@@ -38,26 +38,30 @@ pub struct Options {
     pub mpi: bool,
 }
 
-/// Contact-only packings: box edge for 300 particles (the edge grows as N^(1/3)).
+/// The contact-only packings of 11 µm spheres in a walled box under gravity.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Packing {
-    /// 0.5 mm cube for 300 (solid fraction 0.0017): few contacts.
-    Sparse,
-    /// 0.1 mm cube for 300 (solid fraction 0.21): particles settle into contact.
-    Dense,
+    /// Random placement, a 0.5 mm cube per 300 particles (solid fraction 0.0017): free flight,
+    /// almost no contact. It times the streaming of free particles.
+    Dilute,
+    /// Random placement, a 0.1 mm cube per 300 particles (solid fraction 0.21): a few contacts
+    /// as the particles settle.
+    Loose,
+    /// A face-centred cubic block filling its box, pre-compressed by [`PACKED_PRESTRAIN`] of a
+    /// diameter: 12 contacts per particle in its bulk, the work a DEM code exists for.
+    Packed,
 }
+
+/// The packed bed's overlap between lattice neighbours, as a fraction of the diameter (its
+/// contact force, 5e-8 N, is 7 000 weights: gravity does not open a contact).
+pub const PACKED_PRESTRAIN: f64 = 1e-4;
 
 impl Packing {
     pub fn name(self) -> &'static str {
         match self {
-            Packing::Sparse => "sparse",
-            Packing::Dense => "dense",
-        }
-    }
-    fn edge_for_300(self) -> f64 {
-        match self {
-            Packing::Sparse => 5.0e-4,
-            Packing::Dense => 1.0e-4,
+            Packing::Dilute => "dilute",
+            Packing::Loose => "loose",
+            Packing::Packed => "packed",
         }
     }
 }
@@ -66,13 +70,29 @@ const SPECIES: &str = "[[species]]\nname = \"fe3o4\"\ndiameter = 11.0e-6\ndensit
                        friction = 0.5\nrestitution = 0.5\nrelative_permeability = 12.3\n";
 
 /// The contact-only scene of docs/model.md §10.6 (11 µm Hertz spheres, walls, gravity,
-/// dt = 1e-8 s) with `n` particles for `steps` steps.
+/// dt = 1e-8 s) for about `n` particles over `steps` steps: `n` at random for the dilute and
+/// loose packings; for the packed bed the largest FCC block of c cubic cells per edge (sites on
+/// its faces included: 4c³ + 6c² + 3c + 1 particles) with 4c³ ≤ n.
 pub fn contact_scene(packing: Packing, n: usize, steps: u64) -> String {
-    let edge = packing.edge_for_300() * (n as f64 / 300.0).cbrt();
+    let d = 11.0e-6;
+    let (edge, placement) = match packing {
+        Packing::Dilute | Packing::Loose => {
+            let edge_for_300 = if packing == Packing::Dilute { 5.0e-4 } else { 1.0e-4 };
+            (edge_for_300 * (n as f64 / 300.0).cbrt(), format!("count = {n}\norder = \"spatial\"\n"))
+        }
+        Packing::Packed => {
+            let cells = ((n as f64 / 4.0).cbrt() * (1.0 + 1e-12)).floor().max(1.0);
+            let spacing = d * (1.0 - PACKED_PRESTRAIN);
+            (
+                cells * std::f64::consts::SQRT_2 * spacing + d,
+                format!("lattice = {{ kind = \"fcc\", spacing = {spacing:e} }}\n"),
+            )
+        }
+    };
     let end = steps as f64 * 1e-8;
     format!(
         "version = 1\nname = \"bench-contact-{}-{n}\"\nseed = 1\n[domain]\nlo = [0.0, 0.0, 0.0]\nhi = [{edge:e}, {edge:e}, {edge:e}]\n\
-         [fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n{SPECIES}[[particles]]\nspecies = \"fe3o4\"\ncount = {n}\norder = \"spatial\"\n\
+         [fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n{SPECIES}[[particles]]\nspecies = \"fe3o4\"\n{placement}\
          [forces.contact]\nwalls = true\n[forces.gravity]\ng = [0.0, 0.0, -9.81]\n\
          [integration]\nscheme = \"velocity-verlet\"\ndt = 1.0e-8\nend_time = {end:e}\n[output]\ninterval = {end:e}\n",
         packing.name()
