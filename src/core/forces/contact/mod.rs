@@ -209,7 +209,7 @@ impl Contact {
         };
         for (k, pair) in pairs.iter().enumerate() {
             let (i, j) = (pair.i as usize, pair.j as usize);
-            if pair.dist < p.radius[i] + p.radius[j] && keep(pair) {
+            if keep(pair) && pair.dist < p.radius[i] + p.radius[j] {
                 let s = spring(history, &mut cursor, (pair.i, pair.j));
                 let reduced = cache.get((p.radius[i], p.radius[j], p.mass[i], p.mass[j]));
                 batch[used] = (k as u32, self.fill_pair(&mut lanes, used, p, pair, reduced, s));
