@@ -44,8 +44,9 @@ pub enum Packing {
     /// Random placement, a 0.5 mm cube per 300 particles (solid fraction 0.0017): free flight,
     /// almost no contact. It times the streaming of free particles.
     Dilute,
-    /// Random placement, a 0.1 mm cube per 300 particles (solid fraction 0.21): a few contacts
-    /// as the particles settle.
+    /// Random placement, a 0.1 mm cube per 300 particles (solid fraction 0.21): the particles
+    /// would settle into contact, but a bench run's 10 µs leaves almost none (0.00 per particle at
+    /// its end); it times free particles among more neighbours.
     Loose,
     /// A face-centred cubic block filling its box, pre-compressed by [`PACKED_PRESTRAIN`] of a
     /// diameter: 12 contacts per particle in its bulk, the work a DEM code exists for.
@@ -74,7 +75,7 @@ const SPECIES: &str = "[[species]]\nname = \"fe3o4\"\ndiameter = 11.0e-6\ndensit
 /// loose packings; for the packed bed the largest FCC block of c cubic cells per edge (sites on
 /// its faces included: 4c³ + 6c² + 3c + 1 particles) with 4c³ ≤ n.
 pub fn contact_scene(packing: Packing, n: usize, steps: u64) -> String {
-    let d = 11.0e-6;
+    let d = 11.0e-6; // the diameter of SPECIES
     let (edge, placement) = match packing {
         Packing::Dilute | Packing::Loose => {
             let edge_for_300 = if packing == Packing::Dilute { 5.0e-4 } else { 1.0e-4 };

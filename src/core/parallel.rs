@@ -163,10 +163,20 @@ split_tuple!(A, B, C, D, E);
 split_tuple!(A, B, C, D, E, F);
 split_tuple!(A, B, C, D, E, F, G);
 
+/// How [`for_each_share`] splits a loop of `len` items: (number of shares, items per share;
+/// share k starts at item k × items per share).
+pub fn split_of(len: usize) -> (usize, usize) {
+    if !worth_it(len) {
+        return (1, len.max(1));
+    }
+    let share = share(len);
+    (len.div_ceil(share).max(1), share)
+}
+
 /// `parts` cut into the shares of [`share`], each with the index of its first item.
 fn shares<S: Split>(parts: S) -> Vec<(usize, S)> {
     let len = parts.len();
-    let share = share(len);
+    let (_, share) = split_of(len);
     let (mut pieces, mut rest, mut first) = (Vec::with_capacity(len.div_ceil(share)), parts, 0);
     while rest.len() > share {
         let (piece, tail) = rest.split_at(share);

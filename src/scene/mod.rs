@@ -606,7 +606,8 @@ fn random_count(
             )
         }
     };
-    // Checked before anything is allocated: what the region can hold at random.
+    // Checked before anything is allocated: what the region can hold at random (a count beyond
+    // 32-bit indices is refused for that instead, below).
     let l = hi - lo;
     let fraction = count * s.volume() / (l.x * l.y * l.z);
     if fraction > MAX_RANDOM_SOLID_FRACTION && count <= u32::MAX as f64 {
@@ -648,6 +649,34 @@ fn checked_count(
         )));
     }
     Ok(count)
+}
+
+/// Group `g`'s particles placed at random in its region `lo..hi`, clear of the `existing`
+/// particles of earlier groups, from the scene's seed.
+fn random_sites(
+    spec: &SceneSpec,
+    domain: &Domain,
+    s: &Species,
+    g: usize,
+    group: &ParticleGroupSpec,
+    (lo, hi): (Vec3, Vec3),
+    existing: &[(Vec3, f64)],
+) -> Result<Vec<Vec3>, SceneError> {
+    let key = |name: &str| format!("particles[{g}].{name}");
+    let count = random_count(spec, domain, s, g, group, (lo, hi), existing.len())?;
+    let seed = spec.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(g as u64);
+    placement::place_random(count, s.radius, lo, hi, domain, existing, seed).map_err(|k| {
+        let l = hi - lo;
+        let fraction = count as f64 * s.volume() / (l.x * l.y * l.z);
+        invalid(
+            key(if group.count.is_some() { "count" } else { "concentration" }),
+            group.count.map_or_else(|| group.concentration.unwrap().to_string(), |n| n.to_string()),
+            format!(
+                "could not place particle {k} of {count} without overlap after {} attempts (solid fraction {fraction:.3})",
+                placement::MAX_ATTEMPTS
+            ),
+        )
+    })
 }
 
 /// The sites of group `g`'s lattice in its region `lo..hi`, checked: the spacing against the
@@ -801,31 +830,10 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
         };
         let existing: Vec<(Vec3, f64)> =
             (0..particles.len()).map(|j| (particles.position[j], particles.radius[j])).collect();
-        if let Some(lattice) = &group.lattice {
-            let sites = lattice_sites(spec, domain, s, g, lattice, (lo, hi), &existing)?;
-            let sites = match group.order {
-                ParticleOrder::Placement => sites,
-                ParticleOrder::Spatial => placement::morton_order(sites, 2.0 * s.radius, domain),
-            };
-            for x in sites {
-                particles.push(si as u16, s, x, Vec3::zeros());
-            }
-            continue;
-        }
-        let count = random_count(spec, domain, s, g, group, (lo, hi), particles.len())?;
-        let seed = spec.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(g as u64);
-        let placed = placement::place_random(count, s.radius, lo, hi, domain, &existing, seed).map_err(|k| {
-            let l = hi - lo;
-            let fraction = count as f64 * s.volume() / (l.x * l.y * l.z);
-            invalid(
-                key(if group.count.is_some() { "count" } else { "concentration" }),
-                group.count.map_or_else(|| group.concentration.unwrap().to_string(), |n| n.to_string()),
-                format!(
-                    "could not place particle {k} of {count} without overlap after {} attempts (solid fraction {fraction:.3})",
-                    placement::MAX_ATTEMPTS
-                ),
-            )
-        })?;
+        let placed = match &group.lattice {
+            Some(lattice) => lattice_sites(spec, domain, s, g, lattice, (lo, hi), &existing)?,
+            None => random_sites(spec, domain, s, g, group, (lo, hi), &existing)?,
+        };
         let placed = match group.order {
             ParticleOrder::Placement => placed,
             ParticleOrder::Spatial => placement::morton_order(placed, 2.0 * s.radius, domain),

@@ -181,19 +181,10 @@ impl ContactLaw {
     /// The law on every lane of `c` (lanes past the contacts in use compute what they hold).
     pub fn apply(&self, c: &mut Lanes, dt: f64) {
         let normal = self.normal;
-        match (normal, self.tangential) {
-            (Normal::Hertz, Tangential::Mindlin) => {
-                lanes::<true>(c, dt, |e, b, sq, m| Normal::Hertz.stiffness_and_damping(e, b, sq, m))
-            }
-            (Normal::Hertz, Tangential::None) => {
-                lanes::<false>(c, dt, |e, b, sq, m| Normal::Hertz.stiffness_and_damping(e, b, sq, m))
-            }
-            (Normal::Hooke { .. }, Tangential::Mindlin) => {
-                lanes::<true>(c, dt, |e, b, sq, m| normal.stiffness_and_damping(e, b, sq, m))
-            }
-            (Normal::Hooke { .. }, Tangential::None) => {
-                lanes::<false>(c, dt, |e, b, sq, m| normal.stiffness_and_damping(e, b, sq, m))
-            }
+        let normal_law = move |e, b, sq, m| normal.stiffness_and_damping(e, b, sq, m);
+        match self.tangential {
+            Tangential::Mindlin => lanes::<true>(c, dt, normal_law),
+            Tangential::None => lanes::<false>(c, dt, normal_law),
         }
     }
 }

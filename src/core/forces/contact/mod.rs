@@ -265,14 +265,12 @@ impl Contact {
 
     fn apply_pairs(&mut self, ctx: &Context, p: &Particles, out: &mut Forces, diag: &mut ContactDiagnostics) {
         let history = std::mem::take(&mut out.contacts.pairs);
-        let n = out.force.len();
-        let shares = if parallel::worth_it(n) { n.div_ceil(parallel::share(n)) } else { 1 };
+        let (shares, size) = parallel::split_of(out.force.len());
         let mut slots = std::mem::take(&mut self.shares);
         slots.resize_with(shares.max(slots.len()), Default::default);
         // The first share writes the next history in place; the others are appended to it.
         *slots[0].get_mut().expect("no share running") =
             (std::mem::take(&mut self.spare_pairs), ContactDiagnostics::default());
-        let size = if shares > 1 { parallel::share(n) } else { n.max(1) };
         parallel::for_each_share((&mut *out.force, &mut *out.torque), |lo, parts| {
             let mut slot = slots[lo / size].lock().expect("one share per slot");
             self.share_pass(ctx, p, &history, lo, parts, &mut slot);
