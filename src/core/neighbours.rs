@@ -235,7 +235,8 @@ pub enum PairRange {
 /// layer. A skin changes how often candidates are rebuilt, never which pairs a search returns.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Skins {
-    /// Contact and shielding lists (range about one diameter): 0.2, as in the reference decks.
+    /// Contact and shielding lists (range about one diameter): 0.2, as in the reference decks,
+    /// or a whole range in dilute scenes ([`Skins::for_density`]).
     pub near: f64,
     /// Magnetic lists (dipole cut-off, the paper's 15-diameter neighbourhood): 1/15, one diameter
     /// at 15 diameters.
@@ -247,6 +248,25 @@ impl Default for Skins {
         Skins { near: 0.2, magnetic: 1.0 / 15.0 }
     }
 }
+
+impl Skins {
+    /// The skins for `density` particles per m³ and a near range `range`: the default, with the
+    /// near skin widened to a whole range where even then a particle has on average fewer than
+    /// [`DILUTE_CANDIDATES`] candidates. A rebuild costs a cell search over every particle, and
+    /// in a dilute suspension the fastest particle (two dipoles snapping together at m/s) sets
+    /// it off every few steps for all; a wider skin there adds candidates that cost nearly
+    /// nothing to filter. In 33 675 particles at 2.25 mg/ml a rebuild took 6-7 ms, every 10
+    /// steps with the 0.2 skin.
+    pub fn for_density(density: f64, range: f64) -> Self {
+        let wide = 1.0;
+        let candidates = density * 4.0 / 3.0 * std::f64::consts::PI * (range * (1.0 + wide)).powi(3);
+        let default = Self::default();
+        Skins { near: if candidates < DILUTE_CANDIDATES { wide } else { default.near }, ..default }
+    }
+}
+
+/// Mean candidates per particle below which [`Skins::for_density`] widens the near skin.
+pub const DILUTE_CANDIDATES: f64 = 1.0;
 
 /// One pair list of the neighbour layer.
 #[derive(Debug, Default, Clone)]
@@ -369,6 +389,18 @@ mod tests {
             }
             assert!(list.rebuilds > 1 && list.rebuilds < 40, "{} rebuilds", list.rebuilds);
         }
+    }
+
+    /// The paper's suspensions (336 particles of 11 µm in a 484 µm cube: 0.13 candidates per
+    /// particle within two ranges) get the wide near skin; a packed bed (FCC of touching spheres,
+    /// √2/d³) keeps 0.2; the magnetic skin is the default either way.
+    #[test]
+    fn dilute_scenes_widen_the_near_skin_and_dense_ones_do_not() {
+        let d = 11.0e-6;
+        let case1 = Skins::for_density(336.0 / 484.0e-6f64.powi(3), d);
+        assert_eq!(case1, Skins { near: 1.0, ..Skins::default() });
+        let packed = Skins::for_density(std::f64::consts::SQRT_2 / d.powi(3), d);
+        assert_eq!(packed, Skins::default());
     }
 
     #[test]

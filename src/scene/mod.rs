@@ -244,12 +244,13 @@ impl Scene {
         let spec = &self.spec;
         let fluid = spec.fluid.clone().unwrap_or(FluidSpec { density: 0.0, viscosity: 0.0, velocity: [0.0; 3] });
         let f = &spec.forces;
-        let skins = Skins::default();
-        let mut terms = self.magnetic_terms(skins);
         // One near-pair search for contact and shielding: the largest contact distance, times
         // 1 + the shielding's touch tolerance.
         let touch_tolerance = f.drag.as_ref().map_or(0.0, |d| d.touch_tolerance);
         let range = self.largest_diameter() * (1.0 + touch_tolerance.max(1e-9));
+        let volume: f64 = self.domain.length().iter().product();
+        let skins = Skins::for_density(self.initial.len() as f64 / volume, range);
+        let mut terms = self.magnetic_terms(skins);
         let near = PairRange::Within { range, skin: skins.near * range };
         let medium = Fluid { density: fluid.density, viscosity: fluid.viscosity, velocity: Vec3::from(fluid.velocity) };
         if let Some(d) = f.drag.as_ref().filter(|d| d.law == DragLawSpec::Rpy) {
