@@ -104,6 +104,10 @@ enum Command {
         /// the files route, --exchange-every).
         #[arg(long, value_name = "N", default_value_t = 1)]
         mpi: usize,
+        /// LAMMPS: the fixed-moment model in LAMMPS' own dipole pair style, no magdem in the loop
+        /// (induction "none", a dipole cut-off, no gradient; runs under --mpi N).
+        #[arg(long, conflicts_with = "exchange_every")]
+        native: bool,
         /// Continue an interrupted run from the output file's checkpoint.
         #[arg(long)]
         resume: bool,
@@ -128,6 +132,10 @@ enum Command {
         /// Directory for the deck.
         #[arg(short, long)]
         output: PathBuf,
+        /// LAMMPS: the fixed-moment model in LAMMPS' own dipole pair style, for `mpirun -np N lmp`
+        /// without magdem (induction "none", a dipole cut-off, no gradient).
+        #[arg(long)]
+        native: bool,
     },
     /// Numerical studies of the solver: accuracy (error against dt and run time), stability.
     Study {
@@ -227,6 +235,7 @@ fn main() -> ExitCode {
             engine,
             exchange_every,
             mpi,
+            native,
             resume,
             overwrite,
             timings,
@@ -234,9 +243,10 @@ fn main() -> ExitCode {
             abort_after_frame,
         } => {
             let options = RunOptions { resume, overwrite, progress: !quiet, timings, abort_after_frame };
-            cli::run::run(&scene, &output, engine, exchange_every, mpi, &options)
+            let coupling = cli::run::CouplingChoice { exchange_every, mpi, native };
+            cli::run::run(&scene, &output, engine, coupling, &options)
         }
-        Command::Deck { scene, engine, output } => cli::scene::deck(&scene, engine, &output),
+        Command::Deck { scene, engine, output, native } => cli::scene::deck(&scene, engine, &output, native),
         Command::Study { study: SolverStudy::Accuracy { report } } => cli::verify::accuracy(&report),
         Command::Study { study: SolverStudy::Stability { report } } => cli::verify::stability(&report),
         Command::Verify { study: Study::Contacts { report, work } } => cli::verify::contacts(&report, &work),

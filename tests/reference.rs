@@ -307,3 +307,82 @@ fn files_route_agrees_with_the_callback_route_to_first_order_in_the_lag() {
         assert!(rows[0].1 < 2e-6, "{rows:?}");
     }
 }
+
+/// The case-1 scene at 2.25 mg/ml as LAMMPS runs it natively (`--native`: fixed moments in
+/// `lj/cut/dipole/cut`, no magdem in the loop), with induction "none", Stokes drag and friction 0
+/// (LAMMPS turns its fixed dipoles' torque into spin, which friction would couple into contacts;
+/// magdem's induced moments feel none). For 2 000 steps, on one and on two MPI processes, the
+/// positions stay within 1e-15 m of magdem's (measured 8e-19 and 1.3e-18 m: round-off, and the
+/// two process counts differ from each other by as much).
+#[test]
+fn native_lammps_deck_runs_the_fixed_moment_model_on_one_and_two_processes() {
+    if engines().is_none() {
+        return;
+    }
+    let text = case1_fixed_moments();
+    let scene = Scene::parse(&text, "native").unwrap();
+    let work = workdir("native");
+    let dir = work.path();
+    let native = dir.join("magdem.h5");
+    magdem::run::run(&scene, &native, &Default::default()).unwrap();
+    let x = magdem::io::trajectory::Trajectory::open(&native).unwrap().all_vectors("position").unwrap();
+    let moved = (0..x.shape()[1])
+        .flat_map(|i| (0..3).map(move |c| (i, c)))
+        .map(|(i, c)| (x[[2, i, c]] - x[[0, i, c]]).abs())
+        .fold(0.0, f64::max);
+    assert!(moved > 1e-6, "some pair should snap together in the run ({moved:e} m)");
+    let coupling = reference::deck::Coupling::Native;
+    for procs in [1, 2] {
+        let out = dir.join(format!("lammps-np{procs}.h5"));
+        reference::run_binary(Engine::Lammps, &scene, &dir.join(format!("np{procs}")), &out, &coupling, procs).unwrap();
+        let t = magdem::io::trajectory::Trajectory::open(&out).unwrap();
+        assert!(t.attr_string("integrator").unwrap().contains("lj/cut/dipole/cut"));
+        let y = t.all_vectors("position").unwrap();
+        let worst = x.iter().zip(y.iter()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        println!("lammps native, {procs} process(es): largest position difference to magdem {worst:.3e} m (largest move {moved:.3e} m)");
+        assert!(worst < 1e-15, "np {procs}: {worst:e} m");
+    }
+}
+
+fn case1_fixed_moments() -> String {
+    magdem::verify::magnetic::case1_fixed_moments(2.0e-5, 1.0e-5).unwrap()
+}
+
+/// A native deck is refused, by name, for what LAMMPS' fixed dipoles cannot hold.
+#[test]
+fn native_decks_refuse_induction_gradients_and_uncut_sums() {
+    let base = case1_fixed_moments();
+    let cases = [
+        (base.replace("induction = \"none\"", "induction = \"paper\""), "induction"),
+        (base.replace("cutoff_diameters = 15.0", ""), "cutoff_diameters"),
+        (
+            base.replace(
+                "b0 = [0.4, 0.0, 0.0]",
+                "b0 = [0.4, 0.0, 0.0]\ngradient = [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]]",
+            ),
+            "gradient",
+        ),
+    ];
+    for (text, named) in cases {
+        let scene = Scene::parse(&text, "refused").unwrap();
+        let err = reference::deck::write_with(
+            Engine::Lammps,
+            &scene,
+            workdir("refused").path(),
+            &reference::deck::Coupling::Native,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(err.contains(named), "{named}: {err}");
+    }
+    let scene = Scene::parse(&base, "liggghts").unwrap();
+    let err = reference::deck::write_with(
+        Engine::Liggghts,
+        &scene,
+        workdir("refused").path(),
+        &reference::deck::Coupling::Native,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("native"), "{err}");
+}

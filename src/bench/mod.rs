@@ -118,6 +118,68 @@ pub fn magnetic_scene(n: usize, cutoff: Option<f64>, steps: u64) -> String {
     )
 }
 
+/// Particles per chain of the paper-physics scene ([`paper_scene`]).
+pub const PAPER_CHAIN: usize = 10;
+
+/// Overlap of neighbours in the paper-physics scene's chains, as a fraction of the diameter:
+/// about where the dipole attraction of two touching 11 µm spheres at 0.4 T (≈ 1e-5 N) holds the
+/// Hertz contact (3e-3 d), so the chains start near rest.
+pub const PAPER_CHAIN_OVERLAP: f64 = 1e-3;
+
+/// The paper's case-1 physics at scale, about `n` particles: the 2.25 mg/ml box scaled by
+/// (n/336)^(1/3) per side, periodic along x and y, walls at the bottom and top; the paper's
+/// induction within 15 diameters, dipole forces, Schiller–Naumann drag with the shielded area,
+/// gravity, Hertz–Mindlin contacts; r-RESPA with the magnetic forces every 10 steps (as the 100×
+/// runs). The particles start as the field leaves them: straight chains of [`PAPER_CHAIN`]
+/// touching spheres along the field (x), placed at random without coming within two diameters of
+/// another chain (the placement is seeded by `n`), so contacts, shielding and the dipole sums
+/// all work from the first step: 2 (c − 1)/c contacts per particle in chains of c.
+pub fn paper_scene(n: usize, steps: u64) -> String {
+    use rand::{RngExt, SeedableRng};
+    let d = 11.0e-6;
+    let edge = 4.84e-4 * (n as f64 / 336.0).cbrt();
+    let spacing = d * (1.0 - PAPER_CHAIN_OVERLAP);
+    let chains = n.div_ceil(PAPER_CHAIN);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(n as u64);
+    // A chain is refused where it would come within 2 d of another, sideways (periodic in y)
+    // and along x (periodic); chains are looked up in a grid of 2 d cells in y–z.
+    let (gap, length) = (2.0 * d, (PAPER_CHAIN - 1) as f64 * spacing);
+    let cells = ((edge / gap).floor() as i64).max(1);
+    let mut grid: std::collections::HashMap<(i64, i64), Vec<[f64; 3]>> = Default::default();
+    let apart = |a: &[f64; 3], b: &[f64; 3]| {
+        let dy = (a[1] - b[1]) - edge * ((a[1] - b[1]) / edge).round();
+        let dx = (b[0] - a[0]).rem_euclid(edge);
+        dy * dy + (a[2] - b[2]).powi(2) >= gap * gap || (dx >= length + gap && dx <= edge - length - gap)
+    };
+    let mut positions = Vec::with_capacity(chains * PAPER_CHAIN);
+    let mut attempts = 0;
+    while positions.len() < chains * PAPER_CHAIN && attempts < 1000 * chains {
+        attempts += 1;
+        let chain =
+            [rng.random::<f64>() * edge, rng.random::<f64>() * edge, d + rng.random::<f64>() * (edge - 2.0 * d)];
+        let (cy, cz) = (((chain[1] / gap) as i64).min(cells - 1), (chain[2] / gap) as i64);
+        let neighbours = (-1..=1).flat_map(|dy| (-1..=1).map(move |dz| ((cy + dy).rem_euclid(cells), cz + dz)));
+        if !neighbours.flat_map(|c| grid.get(&c)).flatten().all(|other| apart(&chain, other)) {
+            continue;
+        }
+        grid.entry((cy, cz)).or_default().push(chain);
+        for k in 0..PAPER_CHAIN {
+            let x = (chain[0] + k as f64 * spacing).rem_euclid(edge);
+            positions.push(format!("[{x:e}, {:e}, {:e}]", chain[1], chain[2]));
+        }
+    }
+    let end = steps as f64 * 1e-8;
+    format!(
+        "version = 1\nname = \"bench-paper-{n}\"\nseed = 1\n[domain]\nlo = [0.0, 0.0, 0.0]\nhi = [{edge:e}, {edge:e}, {edge:e}]\n\
+         boundary = {{ x = \"periodic\", y = \"periodic\", z = \"wall\" }}\n\
+         [fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n[field]\nb0 = [0.4, 0.0, 0.0]\n{SPECIES}[[particles]]\nspecies = \"fe3o4\"\n\
+         positions = [{}]\n[forces.contact]\nwalls = true\n[forces.dipole]\ninduction = \"paper\"\ncutoff_diameters = 15.0\n\
+         [forces.drag]\nlaw = \"schiller-naumann\"\nshielding = \"paper\"\n[forces.gravity]\ng = [0.0, 0.0, -9.81]\n\
+         [integration]\nscheme = \"respa\"\nslow_every = 10\ndt = 1.0e-8\nend_time = {end:e}\n[output]\ninterval = {end:e}\n",
+        positions.join(", ")
+    )
+}
+
 /// Min, median and max of repeated measurements.
 #[derive(Debug, Clone, Copy)]
 pub struct Spread {
@@ -275,13 +337,7 @@ pub fn loop_time(log: &str) -> Option<f64> {
 /// Runs `in_file` in `dir` with the engine's binary (under `mpirun -np procs` when procs > 1)
 /// and returns its loop time.
 pub fn time_engine(engine: Engine, dir: &Path, in_file: &str, procs: usize) -> Result<f64, Error> {
-    let mut command = if procs > 1 {
-        let mut c = Command::new("mpirun");
-        c.args(["--allow-run-as-root", "--oversubscribe", "-np", &procs.to_string(), engine.binary()]);
-        c
-    } else {
-        Command::new(engine.binary())
-    };
+    let mut command = crate::reference::engine_command(engine, procs);
     let out = command.args(["-in", in_file, "-log", "log.bench"]).current_dir(dir).output()?;
     let log = std::fs::read_to_string(dir.join("log.bench")).unwrap_or_default();
     match (out.status.success(), loop_time(&log)) {
@@ -327,4 +383,36 @@ pub fn scene_in(dir: &Path, name: &str, text: &str) -> Result<Scene, Error> {
 pub fn bitwise_equal(a: &Simulation, b: &Simulation) -> bool {
     let (p, q) = (&a.state.particles, &b.state.particles);
     p.position == q.position && p.velocity == q.velocity && p.angular_velocity == q.angular_velocity
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The paper-physics scene holds ⌈n/10⌉ chains of ten touching spheres and nothing else that
+    /// touches: exactly 9 contacts per chain (1.8 per particle), each overlapping by
+    /// [`PAPER_CHAIN_OVERLAP`] of a diameter, and no two chains within a diameter of each other.
+    #[test]
+    fn the_paper_scene_starts_as_straight_chains_that_touch_only_themselves() {
+        let n = 2000;
+        let scene = Scene::parse(&paper_scene(n, 10), "paper").unwrap();
+        let p = &scene.initial;
+        assert_eq!(p.len(), n);
+        let d = 2.0 * p.radius[0];
+        let mut pairs = vec![];
+        crate::core::neighbours::CellList::default().pairs_within(
+            &p.position,
+            &scene.domain,
+            Some(2.0 * d),
+            &mut pairs,
+        );
+        let touching: Vec<_> = pairs.iter().filter(|q| q.dist < d).collect();
+        assert_eq!(touching.len(), n / PAPER_CHAIN * (PAPER_CHAIN - 1));
+        for q in &touching {
+            assert!((d - q.dist - PAPER_CHAIN_OVERLAP * d).abs() < 1e-9 * d, "overlap {:e}", d - q.dist);
+            assert_eq!(q.i / PAPER_CHAIN as u32, q.j / PAPER_CHAIN as u32, "a contact between chains");
+        }
+        let apart = pairs.iter().filter(|q| q.i / PAPER_CHAIN as u32 != q.j / PAPER_CHAIN as u32).map(|q| q.dist);
+        assert!(apart.fold(f64::INFINITY, f64::min) >= d, "chains closer than a diameter");
+    }
 }

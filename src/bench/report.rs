@@ -47,6 +47,8 @@ struct Bench<'a> {
     dipole_pairs: Vec<(usize, usize)>,
     engine_versions: Vec<String>,
     mpi: Vec<MpiRun>,
+    /// The native LAMMPS deck beside magdem on the same fixed-moment scene.
+    native: Vec<NativeRun>,
     /// Per case: the machine's own two-core gains, run in turns with the case.
     ceilings: Vec<(String, Ceilings)>,
     /// Per case: each phase's median seconds per step on one thread and on two.
@@ -69,6 +71,16 @@ struct MpiRun {
     largest: usize,
     /// Largest position difference to the 1-process run of the same engine (m).
     max_difference: Option<f64>,
+}
+
+/// One run of the native-deck comparison: its last frame's statistics, how far its positions are
+/// from magdem's, and its cost (loop seconds per particle-step, and for LAMMPS, `Loop time`).
+struct NativeRun {
+    stats: MpiRun,
+    /// Largest position difference to magdem's run over all frames (m).
+    to_magdem: Option<f64>,
+    /// Loop time per particle-step (ns) over the comparison's steps.
+    ns_per_particle_step: f64,
 }
 
 /// What the machine itself gains from a second core, measured in the same minutes as a case:
@@ -349,6 +361,34 @@ impl Bench<'_> {
         Ok(agreement)
     }
 
+    /// The paper's physics ([`paper_scene`]) at 10³, 10⁴ and 10⁵ particles (up to the scaling
+    /// study's largest), 10⁷ particle-steps per run (at least 100 steps), one and two threads;
+    /// the phase shares at the middle size.
+    fn paper_cases(&mut self, progress: &indicatif::ProgressBar) -> Result<(), Error> {
+        for n in paper_sizes(self.options.max_particles) {
+            let case = format!("paper physics {n}");
+            progress.set_message(case.clone());
+            let steps = ((1e6 / n as f64).round() as u64).max(10) * 10;
+            let scene = scene_in(&self.options.work.join(format!("paper-{n}")), "scene", &paper_scene(n, steps))?;
+            let one = self.magdem(&case, &scene, 1, Work::Steps)?;
+            self.memory.push((case.clone(), n, one.memory as f64 / n as f64));
+            let two = self.magdem(&case, &scene, 2, Work::Steps)?;
+            self.bitwise.push((case.clone(), bitwise_equal(&one.simulation, &two.simulation)));
+            let (state, particles) = (&one.simulation.state, n as f64);
+            self.contacts.push((
+                case.clone(),
+                state.contacts.pairs.len() as f64 / particles,
+                state.contacts.walls.len() as f64 / particles,
+            ));
+            drop((one, two));
+            if n == 10_000 {
+                self.profile(&case, &scene, Work::Steps)?;
+            }
+            progress.inc(1);
+        }
+        Ok(())
+    }
+
     fn scaling(&mut self, progress: &indicatif::ProgressBar) -> Result<(), Error> {
         for n in scaling_sizes(self.options.max_particles) {
             progress.set_message(format!("scaling {n}"));
@@ -423,6 +463,52 @@ fn mpi_demo(bench: &mut Bench, progress: &indicatif::ProgressBar) -> Result<(), 
     Ok(())
 }
 
+/// The native LAMMPS deck (`magdem run --engine lammps --native --mpi N`): the fixed-moment
+/// case-1 scene at 2.25 mg/ml (`verify::magnetic::case1_fixed_moments`, 2 ms) in magdem and in
+/// LAMMPS' own `lj/cut/dipole/cut` on one and two processes, no magdem in LAMMPS' loop.
+fn native_demo(bench: &mut Bench, progress: &indicatif::ProgressBar) -> Result<(), Error> {
+    if !Engine::Lammps.available() || !mpirun_available() {
+        bench.notes.push("native LAMMPS deck: lmp or mpirun is not installed".into());
+        return Ok(());
+    }
+    let dir = bench.options.work.join("mpi-native");
+    let scene = scene_in(&dir, "scene", &crate::verify::magnetic::case1_fixed_moments(2e-3, 1e-4)?)?;
+    let particle_steps = scene.initial.len() as f64 * scene.total_steps() as f64;
+    progress.set_message("native LAMMPS deck: magdem".to_string());
+    let reference = dir.join("magdem.h5");
+    let options = crate::run::RunOptions { overwrite: true, ..Default::default() };
+    crate::run::run(&scene, &reference, &options)?;
+    let x = crate::io::trajectory::Trajectory::open(&reference)?.all_vectors("position")?;
+    let seconds = time_magdem(&scene, 1, Work::Steps, false)?.seconds;
+    bench.native.push(NativeRun {
+        stats: last_frame(&reference, "magdem", "induced moments without induction", 1)?,
+        to_magdem: None,
+        ns_per_particle_step: seconds / particle_steps * 1e9,
+    });
+    for procs in [1, 2] {
+        progress.set_message(format!("native LAMMPS deck: mpirun -np {procs} lmp"));
+        let output = dir.join(format!("lammps-np{procs}.h5"));
+        let coupling = deck::Coupling::Native;
+        let run = crate::reference::run_binary(
+            Engine::Lammps,
+            &scene,
+            &dir.join(format!("np{procs}")),
+            &output,
+            &coupling,
+            procs,
+        )?;
+        let y = crate::io::trajectory::Trajectory::open(&output)?.all_vectors("position")?;
+        let log = std::fs::read_to_string(&run.log).unwrap_or_default();
+        bench.native.push(NativeRun {
+            stats: last_frame(&output, "lammps", "fixed moments, lj/cut/dipole/cut", procs)?,
+            to_magdem: Some((&x - &y).iter().fold(0.0_f64, |m, d| m.max(d.abs()))),
+            ns_per_particle_step: loop_time(&log).map_or(f64::NAN, |t| t / particle_steps * 1e9),
+        });
+    }
+    progress.inc(1);
+    Ok(())
+}
+
 /// Statistics of a trajectory's last frame (gap tolerance 1e-3 of the radius).
 fn last_frame(path: &Path, engine: &str, route: &'static str, procs: usize) -> Result<MpiRun, Error> {
     let trajectory = crate::io::trajectory::Trajectory::open(path)?;
@@ -477,6 +563,11 @@ fn arithmetic_seconds(threads: usize) -> f64 {
 
 fn mpirun_available() -> bool {
     Command::new("mpirun").arg("--version").output().is_ok()
+}
+
+/// Sizes of the paper-physics cases: 10³, 10⁴, 10⁵ up to `max`.
+fn paper_sizes(max: usize) -> Vec<usize> {
+    [1_000, 10_000, 100_000].into_iter().filter(|&n| n <= max.max(1_000)).collect()
 }
 
 fn scaling_sizes(max: usize) -> Vec<usize> {
@@ -588,18 +679,25 @@ pub fn write(options: &Options) -> Result<PathBuf, Error> {
         dipole_pairs: vec![],
         engine_versions: vec![],
         mpi: vec![],
+        native: vec![],
         ceilings: vec![],
         phases_on_both_cores: vec![],
         notes: vec![],
     };
-    let total = 6 + 2 + scaling_sizes(options.max_particles).len() as u64 + options.mpi as u64;
+    let total = 6
+        + 2
+        + paper_sizes(options.max_particles).len() as u64
+        + scaling_sizes(options.max_particles).len() as u64
+        + 2 * options.mpi as u64;
     let progress = indicatif::ProgressBar::new(total)
         .with_style(indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} cases {elapsed} {msg}")?);
     bench.contact_cases(&progress)?;
     let agreement = bench.magnetic_cases(&progress)?;
+    bench.paper_cases(&progress)?;
     bench.scaling(&progress)?;
     if options.mpi {
         mpi_demo(&mut bench, &progress)?;
+        native_demo(&mut bench, &progress)?;
     }
     progress.finish_and_clear();
 
@@ -878,6 +976,77 @@ fn dipole_section(bench: &Bench, agreement: &[(String, f64)]) -> String {
 }
 
 /// Cost and memory per particle against N.
+/// The native LAMMPS deck beside magdem, and what a 10⁶-particle run would need.
+fn native_section(bench: &Bench) -> String {
+    let mut s = String::new();
+    if bench.native.is_empty() {
+        return s;
+    }
+    s += "\n## Beyond one machine without magdem: LAMMPS' own dipoles\n\n`magdem run --engine lammps --native --mpi N` (or `magdem deck --engine lammps --native`, then `mpirun -np N lmp -in in.scene`) writes case 1 in LAMMPS' own pair styles: `pair_style hybrid/overlay granular lj/cut/dipole/cut` with ε = 0 and the 15-diameter cut-off, the moments magdem's at t = 0 as electric dipoles (`atom_style hybrid sphere dipole`, p = m √(1e-7/k_e)), `fix viscous`, `fix gravity`, `fix wall/gran`, `fix nve/sphere` without `update dipole` (the moments stay along the field). No magdem process is in the loop, so it runs unchanged on a cluster. It holds fixed moments only: mutual induction stays magdem's, and without it the sensitivity study of `reports/paper/README.md` moves the 2.25 mg/ml mean length by −16 ± 34 % (3 seeds, paired). LAMMPS also applies the torque p × E to its fixed dipoles, which magdem's induced moments do not feel; the comparison scene has friction 0, so that the spin this gives cannot reach the contacts. Scene: `case1-c2.25` with induction \"none\", Stokes drag without shielding or rotational drag, friction 0, 2 ms (`verify::magnetic::case1_fixed_moments`). Statistics of the last frame (gap tolerance 1e-3 of the radius); cost = loop time per particle-step (magdem's one-thread step loop; LAMMPS' `Loop time`).\n\n| engine | moments | processes | aggregates | mean length (µm) | std (µm) | largest (particles) | max position difference to magdem (m) | ns per particle-step |\n|---|---|---|---|---|---|---|---|---|\n";
+    for r in &bench.native {
+        let m = &r.stats;
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {:.2} | {:.2} | {} | {} | {:.0} |",
+            m.engine,
+            m.route,
+            m.procs,
+            m.aggregates,
+            m.mean_length,
+            m.std_length,
+            m.largest,
+            r.to_magdem.map_or("–".into(), |d| format!("{d:.1e}")),
+            r.ns_per_particle_step
+        );
+    }
+    let lammps = |procs: usize| bench.native.iter().find(|r| r.stats.engine == "lammps" && r.stats.procs == procs);
+    if let (Some(one), Some(two)) = (lammps(1), lammps(2)) {
+        let efficiency = one.ns_per_particle_step / two.ns_per_particle_step / 2.0;
+        let core_hours = one.ns_per_particle_step * 1e-9 * 1e6 * 5e5 / 3600.0;
+        let _ = writeln!(
+            s,
+            "\nA 10⁶-particle, 5 ms run (500 000 steps at dt = 1e-8 s) at this deck's measured cost is {core_hours:.0} core-hours of LAMMPS on one process ({:.0} ns per particle-step; a cut-off pair style's cost per particle does not grow with N at fixed concentration). Two processes ran at {:.0} % parallel efficiency here; at that efficiency 256 cores would take {:.1} h and 1 024 cores {:.1} h. The efficiency on a cluster is not measured here: with the 15-diameter cut-off each process also holds the atoms of a 0.17 mm shell around its sub-domain, for sub-domains of 4 000 atoms (1.1 mm cubes at 2.25 mg/ml) 1.2 times as many ghosts as its own, so expect it to fall as the cores grow.",
+            one.ns_per_particle_step,
+            100.0 * efficiency,
+            core_hours / (256.0 * efficiency),
+            core_hours / (1024.0 * efficiency)
+        );
+    }
+    s
+}
+
+/// The paper's physics at scale: cost per particle-step, memory, two threads, and what a 5 ms run
+/// of that size takes.
+fn paper_section(bench: &Bench) -> String {
+    let mut s = String::new();
+    s += "\n## The paper's physics at scale\n\nCase 1 at 2.25 mg/ml with every term of the paper's model (`paper_scene` in `src/bench/mod.rs`): the paper's induction within 15 diameters, dipole forces, Schiller–Naumann drag with the shielded area, gravity, Hertz–Mindlin contacts and walls; the box scaled at equal concentration, periodic along x and y; r-RESPA with the magnetic forces every 10 steps, dt = 1e-8 s, as the 100× runs. The particles start as the field leaves them, in straight chains of ten touching spheres along the field placed at random (1.8 contacts per particle, 2 × (pairs) below), so contact, shielding and the dipole sums all work from the first step. 10⁷ particle-steps per run (at least 100 steps). The 5 ms column is the two-thread cost times the particles times 500 000 steps. The paper's own runs (about 300 particles) are cheaper per particle than these and run one per core: `make reproduce` runs its ensembles two at a time, one thread each.\n\n";
+    s += "| particles | steps | contacts per particle (pairs × 2 + walls) | 1 thread (ns per particle-step) | 2 threads (ns per particle-step) | 2 threads ÷ 1 | 1 and 2 threads bitwise equal | memory per particle | a 5 ms run on 2 threads |\n|---|---|---|---|---|---|---|---|---|\n";
+    for n in paper_sizes(bench.options.max_particles) {
+        let case = format!("paper physics {n}");
+        let (Some(one), Some(two)) = (bench.find(&case, "magdem", 1), bench.find(&case, "magdem", 2)) else { continue };
+        let contacts = bench
+            .contacts
+            .iter()
+            .find(|(c, _, _)| *c == case)
+            .map_or("–".into(), |(_, pairs, walls)| format!("{:.2} + {walls:.2}", 2.0 * pairs));
+        let bitwise =
+            bench.bitwise.iter().find(|(c, _)| *c == case).map_or("–", |(_, b)| if *b { "yes" } else { "no" });
+        let memory =
+            bench.memory.iter().find(|(c, _, _)| *c == case).map_or("–".into(), |(_, _, b)| format!("{b:.0} B"));
+        let five_ms = two.ns_per_particle_step() * 1e-9 * n as f64 * 5e5;
+        let _ = writeln!(
+            s,
+            "| {n} | {} | {contacts} | {:.0} | {:.0} | {:.2}× | {bitwise} | {memory} | {:.0} min |",
+            one.steps,
+            one.ns_per_particle_step(),
+            two.ns_per_particle_step(),
+            one.seconds.median / two.seconds.median,
+            five_ms / 60.0
+        );
+    }
+    s
+}
+
 fn scaling_section(bench: &Bench) -> String {
     let o = bench.options;
     let mut s = String::new();
@@ -1021,6 +1190,7 @@ fn markdown(bench: &Bench, agreement: &[(String, f64)]) -> String {
 
     s += &both_cores(bench);
     s += &dipole_section(bench, agreement);
+    s += &paper_section(bench);
     s += &scaling_section(bench);
     s += &profile_section(bench);
     if !bench.mpi.is_empty() {
@@ -1046,6 +1216,7 @@ fn markdown(bench: &Bench, agreement: &[(String, f64)]) -> String {
             s += "\nThe callback rows (the same point with the forces every step, for comparison) come from the experiment's own runs, which are not in `runs/` here: `magdem experiment experiments/paper/reference.toml` (or `make reproduce`) adds them.\n";
         }
     }
+    s += &native_section(bench);
     if let Some(t) = reproduce_wall_time() {
         let _ = writeln!(s, "\n## The default `make reproduce` ensemble\n\nThe committed paper report (`reports/paper/README.md`) was produced by a `make reproduce` whose runs took {t} s of wall time ({:.1} min) when it was generated (that report names its commit; this bench does not rerun the ensemble); the time before this work is in the history.", t as f64 / 60.0);
     }

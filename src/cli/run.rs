@@ -15,14 +15,22 @@ pub enum EngineChoice {
     Lammps,
 }
 
-/// Runs the scene at `path` into `output` with the chosen engine; `exchange_every` and `mpi`
-/// apply to the reference codes only.
+/// How a reference code gets its magnetic forces and how many processes it runs on.
+pub struct CouplingChoice {
+    /// The files route every K steps.
+    pub exchange_every: Option<u64>,
+    pub mpi: usize,
+    /// LAMMPS' own dipole pair style ([`Coupling::Native`]).
+    pub native: bool,
+}
+
+/// Runs the scene at `path` into `output` with the chosen engine; `coupling` applies to the
+/// reference codes only.
 pub fn run(
     path: &Path,
     output: &Path,
     engine: EngineChoice,
-    exchange_every: Option<u64>,
-    mpi: usize,
+    coupling: CouplingChoice,
     options: &RunOptions,
 ) -> ExitCode {
     let scene = match load(path) {
@@ -31,16 +39,18 @@ pub fn run(
     };
     match engine {
         EngineChoice::Magdem => run_native(&scene, output, options),
-        EngineChoice::Liggghts => run_reference(Engine::Liggghts, &scene, output, exchange_every, mpi),
-        EngineChoice::Lammps => run_reference(Engine::Lammps, &scene, output, exchange_every, mpi),
+        EngineChoice::Liggghts => run_reference(Engine::Liggghts, &scene, output, coupling),
+        EngineChoice::Lammps => run_reference(Engine::Lammps, &scene, output, coupling),
     }
 }
 
 /// A reference code on the scene's deck (beside the output, `OUTPUT.ENGINE.deck/`): in process
 /// for magnetic scenes, its binary otherwise, by the files route with `--exchange-every`.
-fn run_reference(engine: Engine, scene: &Scene, output: &Path, exchange_every: Option<u64>, mpi: usize) -> ExitCode {
+fn run_reference(engine: Engine, scene: &Scene, output: &Path, coupling: CouplingChoice) -> ExitCode {
     let dir = output.with_extension(format!("{}.deck", engine.name()));
+    let CouplingChoice { exchange_every, mpi, native } = coupling;
     let result = match exchange_every {
+        _ if native => reference::run_binary(engine, scene, &dir, output, &Coupling::Native, mpi),
         Some(every) => {
             reference::run_binary(engine, scene, &dir, output, &Coupling::Files { magdem: current_exe(), every }, mpi)
         }

@@ -46,12 +46,13 @@ fn describe(scene: &Scene) {
 }
 
 /// `magdem deck SCENE --engine E -o DIR`: the scene as a LIGGGHTS or LAMMPS input deck.
-pub fn deck(path: &Path, engine: Engine, output: &Path) -> ExitCode {
+pub fn deck(path: &Path, engine: Engine, output: &Path, native: bool) -> ExitCode {
     let scene = match load(path) {
         Ok(s) => s,
         Err(code) => return code,
     };
-    match reference::deck::write(engine, &scene, output) {
+    let coupling = if native { reference::deck::Coupling::Native } else { reference::deck::Coupling::Callback };
+    match reference::deck::write_with(engine, &scene, output, &coupling) {
         Ok(deck) => {
             println!(
                 "wrote {}, its fix.* include files and {} in {}",

@@ -98,13 +98,7 @@ pub fn run_binary(
     let start = std::time::Instant::now();
     std::fs::create_dir_all(dir)?;
     let written = deck::write_with(engine, scene, dir, coupling)?;
-    let mut command = if procs > 1 {
-        let mut mpirun = Command::new("mpirun");
-        mpirun.args(["--allow-run-as-root", "--oversubscribe", "-np", &procs.to_string(), engine.binary()]);
-        mpirun
-    } else {
-        Command::new(engine.binary())
-    };
+    let mut command = engine_command(engine, procs);
     let result = command.arg("-in").arg(&written.input).arg("-log").arg("log.engine").current_dir(dir).output()?;
     let log = output.with_extension(format!("{}.log", engine.name()));
     let engine_log = dir.join("log.engine");
@@ -126,10 +120,30 @@ pub fn run_binary(
         deck::Coupling::Files { every, .. } if scene.magnetic_force_field().is_some() => {
             format!("velocity-verlet (nve/sphere), magnetic forces from magdem by file exchange every {every} steps, {procs} MPI process(es)")
         }
+        deck::Coupling::Native => format!(
+            "velocity-verlet (nve/sphere), fixed moments in LAMMPS' lj/cut/dipole/cut (no magdem in the loop), {procs} MPI process(es)"
+        ),
         _ => "velocity-verlet (nve/sphere)".to_string(),
     };
     store(engine, &integrator, scene, output, &frames, start.elapsed())?;
     Ok(ReferenceRun { frames: frames.len(), log, wall_time: start.elapsed() })
+}
+
+/// The engine's binary, under `mpirun -np procs` when procs > 1. The MPI environment of this
+/// process is not passed on: after an in-process engine has initialised MPI here (the callback
+/// route), its OMPI_/PMIX_ variables would make the child `mpirun` fail as a nested launch.
+pub fn engine_command(engine: Engine, procs: usize) -> Command {
+    if procs <= 1 {
+        return Command::new(engine.binary());
+    }
+    let mut mpirun = Command::new("mpirun");
+    mpirun.args(["--allow-run-as-root", "--oversubscribe", "-np", &procs.to_string(), engine.binary()]);
+    for (name, _) in std::env::vars_os() {
+        if name.to_str().is_some_and(|n| ["OMPI_", "PMIX_", "PMI_"].iter().any(|p| n.starts_with(p))) {
+            mpirun.env_remove(name);
+        }
+    }
+    mpirun
 }
 
 /// Writes a finished reference run's frames as a completed trajectory in magdem's schema.

@@ -52,27 +52,57 @@ end_time = 2.0e-4
 interval = 2.0e-6
 "#;
 
-/// The shipped case-1 scene at 4.5 mg/ml with the drag the reference codes can express, run for
-/// `end_time` seconds.
-pub fn case1_scene(end_time: f64) -> Result<String, String> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/scenes/case1-c4.5.toml");
+/// A shipped case-1 scene with `edits` (text replacements, each of which must apply).
+fn edited_scene(name: &str, edits: &[(&str, String)]) -> Result<String, String> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("experiments/scenes/{name}.toml"));
     let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let replace = |text: String, from: &str, to: &str| -> Result<String, String> {
+    edits.iter().try_fold(text, |text, (from, to)| {
         if text.contains(from) {
             Ok(text.replacen(from, to, 1))
         } else {
             Err(format!("{} lacks {from:?}", path.display()))
         }
-    };
-    let text = replace(
-        text,
-        "law = \"schiller-naumann\"\nshielding = \"paper\"",
-        "law = \"stokes\"\nshielding = \"none\"\nrotational = false",
+    })
+}
+
+/// The drag edits that make a case-1 scene expressible in the reference decks.
+const STOKES: (&str, &str) =
+    ("law = \"schiller-naumann\"\nshielding = \"paper\"", "law = \"stokes\"\nshielding = \"none\"\nrotational = false");
+
+/// The shipped case-1 scene at 4.5 mg/ml with the drag the reference codes can express, run for
+/// `end_time` seconds.
+pub fn case1_scene(end_time: f64) -> Result<String, String> {
+    let text = edited_scene(
+        "case1-c4.5",
+        &[
+            (STOKES.0, STOKES.1.into()),
+            ("end_time = 5.0e-3", format!("end_time = {end_time:e}")),
+            ("interval = 5.0e-5", format!("interval = {:e}", end_time / 50.0)),
+            ("name = \"case1-c4.5\"", "name = \"case1-c4.5-stokes\"".into()),
+        ],
     )?;
-    let text = replace(text, "end_time = 5.0e-3", &format!("end_time = {end_time:e}"))?;
-    let text = replace(text, "interval = 5.0e-5", &format!("interval = {:e}", end_time / 50.0))?;
-    let text = replace(text, "name = \"case1-c4.5\"", "name = \"case1-c4.5-stokes\"")?;
     Ok(format!("# verify magnetic: case1-c4.5.toml with Stokes drag, no shielding, no rotational drag\n{text}"))
+}
+
+/// The 2.25 mg/ml case-1 scene as LAMMPS' native deck can hold it (`--native`): fixed moments
+/// (induction "none"), Stokes drag without shielding or rotational drag, and friction 0 (LAMMPS
+/// turns its fixed dipoles' torque into spin, which friction would couple into the contacts;
+/// magdem's induced moments feel no torque), to `end_time` with frames every `interval`.
+pub fn case1_fixed_moments(end_time: f64, interval: f64) -> Result<String, String> {
+    let text = edited_scene(
+        "case1-c2.25",
+        &[
+            ("induction = \"paper\"", "induction = \"none\"".into()),
+            (STOKES.0, STOKES.1.into()),
+            ("friction = 0.5", "friction = 0.0".into()),
+            ("end_time = 5.0e-3", format!("end_time = {end_time:e}")),
+            ("interval = 5.0e-5", format!("interval = {interval:e}")),
+            ("name = \"case1-c2.25\"", "name = \"case1-c2.25-fixed-moments\"".into()),
+        ],
+    )?;
+    Ok(format!(
+        "# case1-c2.25.toml with fixed moments, Stokes drag, no shielding or rotational drag, friction 0\n{text}"
+    ))
 }
 
 /// Per-frame maximum and median over particles of |x_engine − x_magdem|.
