@@ -363,26 +363,15 @@ fn native_decks_refuse_induction_gradients_and_uncut_sums() {
             "gradient",
         ),
     ];
+    let refusal = |engine: Engine, text: &str| {
+        let scene = Scene::parse(text, "refused").unwrap();
+        let coupling = reference::deck::Coupling::Native;
+        reference::deck::write_with(engine, &scene, workdir("refused").path(), &coupling).unwrap_err().to_string()
+    };
     for (text, named) in cases {
-        let scene = Scene::parse(&text, "refused").unwrap();
-        let err = reference::deck::write_with(
-            Engine::Lammps,
-            &scene,
-            workdir("refused").path(),
-            &reference::deck::Coupling::Native,
-        )
-        .unwrap_err()
-        .to_string();
+        let err = refusal(Engine::Lammps, &text);
         assert!(err.contains(named), "{named}: {err}");
     }
-    let scene = Scene::parse(&base, "liggghts").unwrap();
-    let err = reference::deck::write_with(
-        Engine::Liggghts,
-        &scene,
-        workdir("refused").path(),
-        &reference::deck::Coupling::Native,
-    )
-    .unwrap_err()
-    .to_string();
+    let err = refusal(Engine::Liggghts, &base);
     assert!(err.contains("native"), "{err}");
 }
