@@ -363,9 +363,7 @@ pub fn time_engine_scene(engine: Engine, scene: &Scene, dir: &Path, procs: usize
 /// particles hold still, as in magdem's [`Work::Forces`]).
 pub fn time_lammps_dipoles(scene: &Scene, dir: &Path) -> Result<f64, Error> {
     let cutoff = scene.spec.forces.dipole.as_ref().ok_or("the scene has no dipole term")?.cutoff_diameters;
-    let mut field = scene.magnetic_force_field().ok_or("the scene has no magnetic term")?;
-    let mut state = scene.initial_state();
-    field.evaluate(&mut state, scene.dt());
+    let state = scene.initial_magnetic_state().ok_or("the scene has no magnetic term")?;
     let rc = dipole_check::lammps_cutoff(scene, cutoff)?;
     dipole_check::write_deck(&state, &scene.domain, rc, dir, &scene.hash, Some((scene.total_steps(), scene.dt())))?;
     time_engine(Engine::Lammps, dir, "in.dipole", 1)

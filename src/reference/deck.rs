@@ -328,7 +328,13 @@ pub const SCENE_COPY: &str = "scene.toml";
 pub const FIX_ID: &str = "magnetic";
 
 /// LAMMPS' Coulomb constant in SI units (its `qqr2e`, force.cpp, `units si`).
-pub const LAMMPS_COULOMB: f64 = 8.9876e9;
+const LAMMPS_COULOMB: f64 = 8.9876e9;
+
+/// The electric dipole p that LAMMPS' dipole styles need per unit magnetic moment m for the
+/// same force: p = m √(μ0/(4π k_e)) = m √(1e-7/k_e) (REFERENCE-CODES.md).
+pub fn electric_per_magnetic() -> f64 {
+    (1e-7 / LAMMPS_COULOMB).sqrt()
+}
 
 /// The moments of the native deck: magdem's at t = 0 (induction `none`: χ_eff V H_ext, capped
 /// by any saturation law), refused for what LAMMPS' fixed dipoles cannot hold.
@@ -357,10 +363,7 @@ fn native_moments(engine: Engine, scene: &Scene) -> Result<Vec<crate::core::stat
             "the moments would vary with position and the gradient force has no LAMMPS equivalent",
         );
     }
-    let mut field = scene.magnetic_force_field().expect("a scene with a dipole term has magnetic forces");
-    let mut state = crate::core::state::State::new(scene.initial.clone());
-    field.evaluate(&mut state, scene.dt());
-    Ok(state.fields.moment)
+    Ok(scene.initial_magnetic_state().expect("a scene with a dipole term has magnetic forces").fields.moment)
 }
 
 /// The initial particles, in the `atom_style granular` / `sphere` data format (id type diameter
@@ -381,7 +384,7 @@ fn data_file(scene: &Scene, moments: Option<&[crate::core::state::Vec3]>) -> Str
         let _ = writeln!(s, "{:.17e} {:.17e} {axis}lo {axis}hi", d.lo[k], d.hi[k]);
     }
     s += if moments.is_some() { "\nAtoms # hybrid\n\n" } else { "\nAtoms\n\n" };
-    let electric = (1e-7 / LAMMPS_COULOMB).sqrt();
+    let electric = electric_per_magnetic();
     for i in 0..p.len() {
         let sp = &scene.species[p.species[i] as usize];
         let (x, id, ty, d) = (p.position[i], i + 1, p.species[i] + 1, 2.0 * p.radius[i]);
@@ -436,7 +439,7 @@ fn input_deck(engine: Engine, scene: &Scene, data: &Path, dump: &str, coupling: 
     };
     let comm = if engine == Engine::Liggghts { "communicate single vel yes" } else { "comm_modify vel yes" };
     // The callback and the files route exchange forces in atom order, so atoms stay unsorted; a
-    // native deck lets LAMMPS sort them in space (up to 2.6x faster at 34 000 atoms, §10.7).
+    // native deck lets LAMMPS sort them in space (2.4-2.7x faster at 34 000 atoms, §10.7).
     let sort = if native { "" } else { " sort 0 0" };
     let _ = writeln!(s, "units si\natom_style {atom_style}\natom_modify map array{sort}");
     let _ = writeln!(

@@ -12,9 +12,6 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::process::Command;
 
-/// LAMMPS' Coulomb constant in SI units (its `qqr2e`, force.cpp, `units si`).
-const COULOMB: f64 = 8.9876e9;
-
 /// The cut-off radius LAMMPS needs for magdem's dipole sum: the scene's cut-off, or for all
 /// pairs one beyond the box diagonal (walls only: a periodic box uses magdem's minimum image,
 /// which LAMMPS matches only with a cut-off below half the box).
@@ -45,7 +42,7 @@ pub fn write_deck(
     std::fs::create_dir_all(dir)?;
     let p = &state.particles;
     let largest_d = p.radius.iter().fold(0.0_f64, |a, r| a.max(2.0 * r));
-    let scale = (1e-7 / COULOMB).sqrt();
+    let scale = super::deck::electric_per_magnetic();
     let mut data = format!("magdem dipole deck (scene sha256 {origin})\n\n{} atoms\n1 atom types\n\n", p.len());
     for k in 0..3 {
         let _ = writeln!(data, "{:.17e} {:.17e} {}lo {}hi", d.lo[k], d.hi[k], ["x", "y", "z"][k], ["x", "y", "z"][k]);

@@ -170,6 +170,15 @@ impl Scene {
         State::new(self.initial.clone())
     }
 
+    /// The initial state with the magnetic forces evaluated once (the moments at t = 0 in
+    /// `fields.moment`), or `None` without a magnetic term.
+    pub fn initial_magnetic_state(&self) -> Option<State> {
+        let mut field = self.magnetic_force_field()?;
+        let mut state = self.initial_state();
+        field.evaluate(&mut state, self.dt());
+        Some(state)
+    }
+
     fn largest_diameter(&self) -> f64 {
         crate::core::state::largest_diameter(&self.species)
     }
