@@ -206,6 +206,7 @@ fn run_in_pool(scene: &Scene, output: &Path, options: &RunOptions) -> Result<Run
     }
     bar.set_position(sim.state.step);
     let end_time = total as f64 * scene.dt();
+    let checkpoint_multiple = scene.checkpoint_multiple();
 
     while sim.state.step < total {
         if let Err(e) = sim.step() {
@@ -229,7 +230,7 @@ fn run_in_pool(scene: &Scene, output: &Path, options: &RunOptions) -> Result<Run
             bar.set_position(step);
             bar.set_message(format!("{:.4e} / {:.4e} s", sim.state.time, end_time));
         }
-        if INTERRUPTED.load(Ordering::Relaxed) {
+        if INTERRUPTED.load(Ordering::Relaxed) && step % checkpoint_multiple == 0 {
             bar.abandon();
             writer.write_checkpoint(&sim.state)?;
             writer.finish(status::INTERRUPTED, "interrupted by the user", start.elapsed())?;

@@ -168,11 +168,35 @@ fn resume_after_kill(name: &str, text: &str) {
 
 #[test]
 fn ctrl_c_checkpoints_and_the_run_resumes_to_the_same_end() {
-    let work = workdir("sigint");
+    ctrl_c_and_resume("sigint", &scene_text(), 1);
+}
+
+/// With the RPY mobility refactorised every 16 steps, Ctrl-C checkpoints on a multiple of 16
+/// (where the factor is refreshed), so the resumed run is bitwise equal too.
+#[test]
+fn ctrl_c_with_rpy_drag_checkpoints_on_a_refactorisation_and_resumes_bitwise() {
+    let text = scene_text()
+        .replace("[forces.drag]", "[forces.drag]\nlaw = \"rpy\"\nshielding = \"none\"\nrefactor_every = 16");
+    ctrl_c_and_resume("sigint-rpy", &text, 16);
+}
+
+/// A kill after frame 6 and `--resume` end bitwise equal with the RPY drag refactorised every 10
+/// steps.
+#[test]
+fn resume_after_kill_is_bitwise_equal_with_rpy_drag_refactored_every_k_steps() {
+    let text = scene_text()
+        .replace("[forces.drag]", "[forces.drag]\nlaw = \"rpy\"\nshielding = \"none\"\nrefactor_every = 10");
+    resume_after_kill("resume-rpy", &text);
+}
+
+/// Interrupts a longer run of `text` with SIGINT, checks that its checkpoint falls on a multiple
+/// of `multiple` steps, resumes it and compares it bitwise with an uninterrupted run.
+fn ctrl_c_and_resume(name: &str, text: &str, multiple: u64) {
+    let work = workdir(name);
     let dir = work.path();
     let scene = dir.join("scene.toml");
     let (full, interrupted) = (dir.join("full.h5"), dir.join("interrupted.h5"));
-    let long = scene_text().replace("end_time = 3.0e-4", "end_time = 1.5e-3");
+    let long = text.replace("end_time = 3.0e-4", "end_time = 1.5e-3");
     std::fs::write(&scene, &long).unwrap();
     let mut child = Command::new(env!("CARGO_BIN_EXE_magdem"))
         .args(["run", path(&scene), "-q", "-o", path(&interrupted)])
@@ -193,6 +217,7 @@ fn ctrl_c_checkpoints_and_the_run_resumes_to_the_same_end() {
     assert_eq!(state, "interrupted");
     let (ck, _) = t.checkpoint().unwrap();
     assert!(ck.step > 0 && ck.step < 150_000);
+    assert_eq!(ck.step % multiple, 0, "checkpoint at step {}", ck.step);
     drop(t);
     let out = magdem(&["run", path(&scene), "-q", "-o", path(&interrupted), "--resume"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));

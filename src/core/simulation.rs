@@ -160,6 +160,7 @@ impl Simulation {
             let started = self.field.timers.start();
             let eval_before = self.field.evaluation_time;
             let (field, dt) = (&mut self.field, self.dt);
+            field.terms.iter_mut().for_each(|t| t.begin_step(&self.state));
             self.integrator.step(&mut self.state, dt, &mut |s, group, h| field.evaluate_group(s, h, group));
             if let Some(t0) = started {
                 // The integrator's own work: the step's time less its force evaluations.

@@ -177,8 +177,8 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
 
 /// fix viscous: linear drag towards rest, 6π μ a per type.
 fn check_drag(engine: Engine, drag: &DragSpec, fluid_velocity: Option<&[f64; 3]>) -> Result<(), ReferenceError> {
-    // The touch tolerance only serves the shielding.
-    let DragSpec { law, shielding, rotational, touch_tolerance: _ } = drag;
+    // The touch tolerance only serves the shielding, the refactorisation interval the RPY law.
+    let DragSpec { law, shielding, rotational, touch_tolerance: _, refactor_every: _ } = drag;
     match law {
         DragLawSpec::Stokes => {}
         DragLawSpec::SchillerNaumann => {

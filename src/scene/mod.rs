@@ -161,8 +161,13 @@ impl Scene {
 
     /// Steps between output frames (≥ 1).
     pub fn steps_per_frame(&self) -> u64 {
-        let interval = self.spec.output.interval.unwrap_or(self.spec.integration.end_time / 100.0);
-        ((interval / self.dt()).round() as u64).max(1)
+        steps_per_frame(&self.spec)
+    }
+
+    /// Steps whose multiples a run checkpoints at when interrupted, so that the resumed run is
+    /// bitwise equal: the RPY factor's refactorisation interval, else 1.
+    pub fn checkpoint_multiple(&self) -> u64 {
+        self.spec.forces.drag.as_ref().filter(|d| d.law == DragLawSpec::Rpy).map_or(1, |d| d.refactor_every)
     }
 
     /// The initial state (forces not yet evaluated).
@@ -263,7 +268,7 @@ impl Scene {
         let near = PairRange::Within { range, skin: skins.near * range };
         let medium = Fluid { density: fluid.density, viscosity: fluid.viscosity, velocity: Vec3::from(fluid.velocity) };
         if let Some(d) = f.drag.as_ref().filter(|d| d.law == DragLawSpec::Rpy) {
-            terms.push(Box::new(RpyDrag::new(medium, d.rotational)));
+            terms.push(Box::new(RpyDrag::new(medium, d.rotational, d.refactor_every)));
         } else if let Some(d) = &f.drag {
             let law = match d.law {
                 DragLawSpec::Stokes => DragLaw::Stokes,
@@ -297,6 +302,12 @@ impl Scene {
             estimate: self.estimate.clone(),
         }
     }
+}
+
+/// Steps between output frames of `spec` (≥ 1).
+fn steps_per_frame(spec: &SceneSpec) -> u64 {
+    let interval = spec.output.interval.unwrap_or(spec.integration.end_time / 100.0);
+    ((interval / spec.integration.dt).round() as u64).max(1)
 }
 
 fn field_of(spec: &SceneSpec) -> (Vec3, Matrix3<f64>) {
@@ -461,6 +472,38 @@ fn check_forces(
                 "paper",
                 "the RPY mobility replaces the shielded area; use shielding = \"none\" with law = \"rpy\"",
             ));
+        }
+        if d.refactor_every != 1 && d.law != DragLawSpec::Rpy {
+            return Err(invalid(
+                "forces.drag.refactor_every",
+                d.refactor_every,
+                "only law = \"rpy\" factorises a mobility; remove the key or set it to 1",
+            ));
+        }
+        if d.law == DragLawSpec::Rpy {
+            let per_frame = steps_per_frame(spec);
+            let integration = &spec.integration;
+            let per_call = if integration.scheme.multiple_time_stepping() { integration.slow_every } else { 1 };
+            if d.refactor_every > 1 && d.refactor_every % per_call != 0 {
+                return Err(invalid(
+                    "forces.drag.refactor_every",
+                    d.refactor_every,
+                    format!(
+                        "must be a multiple of integration.slow_every = {per_call}: the factor is renewed at the start \
+                         of an outer step"
+                    ),
+                ));
+            }
+            if d.refactor_every == 0 || per_frame % d.refactor_every != 0 {
+                return Err(invalid(
+                    "forces.drag.refactor_every",
+                    d.refactor_every,
+                    format!(
+                        "must be a positive divisor of the {per_frame} steps per output frame, so that every \
+                         checkpoint falls on a refactorisation and a resumed run stays bitwise equal"
+                    ),
+                ));
+            }
         }
         if d.law == DragLawSpec::Rpy && spec.integration.scheme.integrates_linear_drag() {
             return Err(invalid(

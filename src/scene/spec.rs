@@ -294,7 +294,7 @@ pub enum DragLawSpec {
     Stokes,
     SchillerNaumann,
     /// Stokes flow with hydrodynamic interactions: the Rotne–Prager–Yamakawa mobility of all
-    /// spheres, factorised at every force evaluation (dense, O(N³)).
+    /// spheres, factorised every `refactor_every` steps (dense, O(N³)).
     Rpy,
 }
 
@@ -322,6 +322,11 @@ pub struct DragSpec {
     /// smaller radius (default 1e-3).
     #[serde(default = "default_touch_tolerance")]
     pub touch_tolerance: f64,
+    /// With `law = "rpy"`: steps between refactorisations of the mobility (default 1, every
+    /// force evaluation); the drag uses each evaluation's velocities with the factor of the
+    /// positions at the last step divisible by it. Must divide the steps per output frame.
+    #[serde(default = "default_refactor_every")]
+    pub refactor_every: u64,
 }
 
 fn default_drag_law() -> DragLawSpec {
@@ -332,6 +337,9 @@ fn default_shielding() -> ShieldingSpec {
 }
 fn default_touch_tolerance() -> f64 {
     1e-3
+}
+fn default_refactor_every() -> u64 {
+    1
 }
 
 /// Weight minus buoyancy.

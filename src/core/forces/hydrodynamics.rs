@@ -9,12 +9,12 @@
 //! - self: M_ii = I/(6π μ a_i)
 //!
 //! The 3N × 3N mobility is symmetric positive definite for any configuration; the drag is
-//! F_h = −R (U − u_f) with R = M⁻¹, applied through a Cholesky factor of M (faer). docs/model.md §7.
+//! F_h = −R (U − u_f) with R = M⁻¹, formed from a Cholesky factor of M (faer). docs/model.md §7.
 
 use super::drag::Fluid;
-use super::{Context, ForceTerm, Forces};
-use crate::core::state::{Particles, Vec3};
-use faer::linalg::solvers::Solve;
+use super::{Context, ForceTerm, Forces, InductionError};
+use crate::core::state::{Particles, State, Vec3};
+use faer::linalg::solvers::DenseSolveCore;
 use nalgebra::Matrix3;
 use std::f64::consts::PI;
 
@@ -56,9 +56,11 @@ pub fn mobility(positions: &[Vec3], radii: &[f64], viscosity: f64) -> faer::Mat<
     m
 }
 
-/// A factorised mobility: solves M F = U for the forces that move the spheres at U.
+/// The resistance R = M⁻¹ of a configuration, from the Cholesky factor of its mobility: the
+/// forces R U that move the spheres at U. Kept explicit so that each drag is one matrix–vector
+/// product (a refreshed factor serves many steps).
 pub struct Resistance {
-    factor: faer::linalg::solvers::Llt<f64>,
+    inverse: faer::Mat<f64>,
 }
 
 /// The mobility is not positive definite (it always is for RPY: a failure means non-finite
@@ -73,31 +75,46 @@ impl Resistance {
     pub fn new(positions: &[Vec3], radii: &[f64], viscosity: f64) -> Result<Self, NotPositiveDefinite> {
         let m = mobility(positions, radii, viscosity);
         let factor = m.llt(faer::Side::Lower).map_err(|_| NotPositiveDefinite { particles: positions.len() })?;
-        Ok(Self { factor })
+        Ok(Self { inverse: factor.inverse() })
     }
 
     /// The hydrodynamic forces F_h = −M⁻¹ (U − u_f) on spheres moving at `velocity`.
     pub fn drag(&self, velocity: &[Vec3], fluid_velocity: Vec3) -> Vec<Vec3> {
-        let n = velocity.len();
-        let rhs = faer::Mat::<f64>::from_fn(3 * n, 1, |k, _| velocity[k / 3][k % 3] - fluid_velocity[k % 3]);
-        let f = self.factor.solve(&rhs);
-        (0..n).map(|i| -Vec3::new(f[(3 * i, 0)], f[(3 * i + 1, 0)], f[(3 * i + 2, 0)])).collect()
+        let mut f = vec![Vec3::zeros(); velocity.len()];
+        let out: &mut [f64] = bytemuck::cast_slice_mut(&mut f);
+        // F = −Σ_k R[:, k] u_k over R's contiguous columns (R is symmetric).
+        for (k, v) in velocity.iter().enumerate() {
+            let u = v - fluid_velocity;
+            for c in 0..3 {
+                let column = self.inverse.col_as_slice(3 * k + c);
+                out.iter_mut().zip(column).for_each(|(o, r)| *o -= r * u[c]);
+            }
+        }
+        f
     }
 }
 
-/// Drag with hydrodynamic interactions (RPY): F_h = −M⁻¹ (U − u_f) on every sphere, M factorised
-/// at every force evaluation (so the drag is a function of the state and a resumed run is
-/// bitwise equal); with `rotational`, each sphere's own rotational Stokes drag −8π μ a³ ω (no
-/// rotational coupling). A factorisation failure (non-finite positions) leaves the force
-/// non-finite, which the run's monitor reports.
+/// Drag with hydrodynamic interactions (RPY): F_h = −M⁻¹ (U − u_f) on every sphere, with each
+/// evaluation's velocities. With `refactor_every` = 1 the mobility is factorised at every
+/// evaluation; with K > 1 at the first evaluation of every step call that starts on a multiple
+/// of K (K must be a multiple of the integrator's steps per call), from the positions of that
+/// evaluation. A run checkpoints between calls on multiples of K, and a resumed run, which starts
+/// without a factor, forms it at the same evaluation as the uninterrupted one: bitwise equal.
+/// With `rotational`, each sphere's own rotational Stokes drag −8π μ a³ ω (no rotational
+/// coupling). A factorisation failure (non-finite positions) leaves the force non-finite, which
+/// the run's monitor reports.
 pub struct RpyDrag {
     pub fluid: Fluid,
     pub rotational: bool,
+    pub refactor_every: u64,
+    resistance: Option<Result<Resistance, NotPositiveDefinite>>,
+    /// The step call began on a multiple of `refactor_every`: renew at the next evaluation.
+    due: bool,
 }
 
 impl RpyDrag {
-    pub fn new(fluid: Fluid, rotational: bool) -> Self {
-        Self { fluid, rotational }
+    pub fn new(fluid: Fluid, rotational: bool, refactor_every: u64) -> Self {
+        Self { fluid, rotational, refactor_every: refactor_every.max(1), resistance: None, due: false }
     }
 }
 
@@ -105,8 +122,19 @@ impl ForceTerm for RpyDrag {
     fn name(&self) -> &'static str {
         "drag"
     }
+    fn begin_step(&mut self, state: &State) {
+        self.due = state.step % self.refactor_every == 0;
+    }
+    fn prepare(&mut self, _ctx: &Context, state: &State) -> Result<(), InductionError> {
+        if self.refactor_every == 1 || self.due || self.resistance.is_none() {
+            let p = &state.particles;
+            self.resistance = Some(Resistance::new(&p.position, &p.radius, self.fluid.viscosity));
+            self.due = false;
+        }
+        Ok(())
+    }
     fn apply(&mut self, _ctx: &Context, p: &Particles, out: &mut Forces) {
-        match Resistance::new(&p.position, &p.radius, self.fluid.viscosity) {
+        match self.resistance.as_ref().expect("prepared before applied") {
             Ok(r) => {
                 for (f, d) in out.force.iter_mut().zip(r.drag(&p.velocity, self.fluid.velocity)) {
                     *f += d;

@@ -77,6 +77,9 @@ pub trait ForceTerm: Send {
     fn constant_force(&mut self, _particles: &Particles) -> Option<ConstantForce<'_>> {
         None
     }
+    /// Called once at the start of every integrator step call (between two calls a run may
+    /// checkpoint): a term that caches work over several steps decides here when to renew it.
+    fn begin_step(&mut self, _state: &State) {}
     /// Work that reads the whole state before any term adds forces (the moments' induction
     /// solve); an error stops the run after the step.
     fn prepare(&mut self, _ctx: &Context, _state: &State) -> Result<(), InductionError> {
