@@ -230,7 +230,7 @@ fn run_in_pool(scene: &Scene, output: &Path, options: &RunOptions) -> Result<Run
             bar.set_position(step);
             bar.set_message(format!("{:.4e} / {:.4e} s", sim.state.time, end_time));
         }
-        if INTERRUPTED.load(Ordering::Relaxed) && step % checkpoint_multiple == 0 {
+        if INTERRUPTED.load(Ordering::Relaxed) && step.is_multiple_of(checkpoint_multiple) {
             bar.abandon();
             writer.write_checkpoint(&sim.state)?;
             writer.finish(status::INTERRUPTED, "interrupted by the user", start.elapsed())?;

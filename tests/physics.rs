@@ -655,3 +655,39 @@ fn rpy_refactorisation_every_k_steps_has_a_first_order_error_in_k() {
     let relative_change = 40.0 * 1.0e-7 * separation.abs() / 2.0e-3 / 2.0e-5;
     assert!(e40 < relative_change * fell, "K = 40 error {e40:.3e} m, bound {:.3e} m", relative_change * fell);
 }
+
+/// A dense sphere sedimenting parallel to a plane wall (`forces.drag.wall`, face x-, gravity
+/// along −z) reaches U∞ / f_∥ with f_∥ the exact values of O'Neill (1964) / Goldman, Cox & Brenner
+/// (1967) at h/a = 1.1276 … 10.0677, to 1e-3 (the terminal velocity after 20 relaxation times);
+/// it does not drift towards or away from the wall (the normal component has no parallel
+/// factor); a sphere closer than the scene's smallest gap (1e-2 a) moves as one at that gap.
+#[test]
+fn a_sphere_sedimenting_beside_a_wall_slows_by_the_published_factor() {
+    let (a, rho, mu) = (5.0e-6_f64, 5000.0, 1.0e-3);
+    let free = 2.0 / 9.0 * (rho - 1000.0) * 9.81 * a * a / mu;
+    let terminal = |h_over_a: f64| -> (f64, f64) {
+        let x = -1.0e-3 + h_over_a * a;
+        let text = format!(
+            "version = 1\n[domain]\nlo = [-1e-3, -1e-3, -1e-3]\nhi = [1e-3, 1e-3, 1e-3]\n{WATER}\
+             [[species]]\nname = \"p\"\ndiameter = {:e}\ndensity = {rho}\nyoungs_modulus = 1.0e9\npoisson_ratio = 0.5\n\
+             friction = 0.5\nrestitution = 0.5\n[[particles]]\nspecies = \"p\"\npositions = [[{x:e}, 0.0, 0.0]]\n\
+             [forces.gravity]\n[forces.drag]\nlaw = \"stokes\"\nshielding = \"none\"\n[forces.drag.wall]\nface = \"x-\"\n\
+             [integration]\ndt = 1.0e-7\nend_time = 6.0e-4\n",
+            2.0 * a
+        );
+        let scene = Scene::parse(&text, "wall").unwrap_or_else(|e| panic!("{e}"));
+        let mut sim = scene.simulation(None);
+        sim.initialise().unwrap();
+        while sim.state.step < scene.total_steps() {
+            sim.step().unwrap();
+        }
+        (-sim.state.particles.velocity[0].z / free, sim.state.particles.position[0].x - x)
+    };
+    for (h, f) in [(1.1276, 2.1514), (1.5431, 1.5675), (2.3524, 1.3079), (3.7622, 1.1738), (10.0677, 1.0591)] {
+        let (ratio, drift) = terminal(h);
+        println!("h/a = {h}: U/U∞ = {ratio:.5}, published 1/f = {:.5}", 1.0 / f);
+        assert!((ratio * f - 1.0).abs() < 1e-3, "h/a = {h}: U/U∞ = {ratio}, published {}", 1.0 / f);
+        assert!(drift.abs() < 1e-15, "h/a = {h}: drifted {drift} m across the wall normal");
+    }
+    assert_eq!(terminal(1.001).0.to_bits(), terminal(1.01).0.to_bits(), "the gap is not clamped at 1e-2 a");
+}

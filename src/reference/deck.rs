@@ -178,7 +178,14 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
 /// fix viscous: linear drag towards rest, 6π μ a per type.
 fn check_drag(engine: Engine, drag: &DragSpec, fluid_velocity: Option<&[f64; 3]>) -> Result<(), ReferenceError> {
     // The touch tolerance only serves the shielding, the refactorisation interval the RPY law.
-    let DragSpec { law, shielding, rotational, touch_tolerance: _, refactor_every: _ } = drag;
+    let DragSpec { law, shielding, rotational, touch_tolerance: _, refactor_every: _, wall } = drag;
+    if wall.is_some() {
+        return Err(unsupported(
+            engine,
+            "forces.drag.wall",
+            "fix viscous applies one isotropic coefficient per type, not a wall factor per particle and direction",
+        ));
+    }
     match law {
         DragLawSpec::Stokes => {}
         DragLawSpec::SchillerNaumann => {
@@ -899,6 +906,14 @@ mod tests {
                 ),
                 ("shielded drag", vec![("forces.drag.shielding", s("paper"))], [Some("forces.drag.shielding"); 2]),
                 ("RPY drag", vec![("forces.drag.law", s("rpy"))], [Some("forces.drag.law"); 2]),
+                (
+                    "wall drag",
+                    vec![(
+                        "forces.drag.wall",
+                        Some(Value::Table([("face".into(), Value::String("z-".into()))].into_iter().collect())),
+                    )],
+                    [Some("forces.drag.wall"); 2],
+                ),
                 ("rotational drag", vec![("forces.drag.rotational", b(true))], [Some("forces.drag.rotational"); 2]),
                 ("drag touch tolerance", vec![("forces.drag.touch_tolerance", f(1e-2))], [None, None]),
                 ("no drag", vec![("forces.drag", None)], [None, None]),

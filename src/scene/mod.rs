@@ -13,6 +13,7 @@ use crate::core::forces::drag::{Drag, DragLaw, Fluid, Shielding};
 use crate::core::forces::gradient::GradientForce;
 use crate::core::forces::gravity::GravityBuoyancy;
 use crate::core::forces::hydrodynamics::RpyDrag;
+use crate::core::forces::wall_drag::WallCorrection;
 use crate::core::forces::ForceTerm;
 use crate::core::integrators;
 use crate::core::magnetisation::{Induction, Magnetisation, MU0};
@@ -281,6 +282,11 @@ impl Scene {
             };
             let mut drag = Drag::new(law, shielding, d.rotational, medium);
             drag.exclude_linear = spec.integration.scheme.integrates_linear_drag();
+            drag.wall = d.wall.as_ref().map(|w| {
+                let (axis, high) = w.face.axis_and_side();
+                let position = if high { self.domain.hi[axis] } else { self.domain.lo[axis] };
+                WallCorrection { axis, position, min_gap: w.min_gap }
+            });
             terms.push(Box::new(drag));
         }
         if let Some(g) = &f.gravity {
@@ -473,6 +479,27 @@ fn check_forces(
                 "the RPY mobility replaces the shielded area; use shielding = \"none\" with law = \"rpy\"",
             ));
         }
+        if let Some(w) = &d.wall {
+            positive("forces.drag.wall.min_gap", w.min_gap)?;
+            let (axis, _) = w.face.axis_and_side();
+            if spec.domain.boundary.axis(axis) == Boundary::Periodic {
+                return Err(invalid("forces.drag.wall.face", w.face, "that face is periodic, not a wall"));
+            }
+            if d.law == DragLawSpec::Rpy {
+                return Err(invalid(
+                    "forces.drag.wall",
+                    w.face,
+                    "the RPY mobility is that of an unbounded fluid; a wall needs its image system (Blake), not included",
+                ));
+            }
+            if spec.integration.scheme.integrates_linear_drag() {
+                return Err(invalid(
+                    "integration.scheme",
+                    spec.integration.scheme,
+                    "integrates a lone sphere's free-fluid Stokes drag exactly; a wall changes that drag",
+                ));
+            }
+        }
         if d.refactor_every != 1 && d.law != DragLawSpec::Rpy {
             return Err(invalid(
                 "forces.drag.refactor_every",
@@ -484,7 +511,7 @@ fn check_forces(
             let per_frame = steps_per_frame(spec);
             let integration = &spec.integration;
             let per_call = if integration.scheme.multiple_time_stepping() { integration.slow_every } else { 1 };
-            if d.refactor_every > 1 && d.refactor_every % per_call != 0 {
+            if d.refactor_every > 1 && !d.refactor_every.is_multiple_of(per_call) {
                 return Err(invalid(
                     "forces.drag.refactor_every",
                     d.refactor_every,
@@ -494,7 +521,7 @@ fn check_forces(
                     ),
                 ));
             }
-            if d.refactor_every == 0 || per_frame % d.refactor_every != 0 {
+            if d.refactor_every == 0 || !per_frame.is_multiple_of(d.refactor_every) {
                 return Err(invalid(
                     "forces.drag.refactor_every",
                     d.refactor_every,

@@ -69,6 +69,13 @@ impl Default for BoundarySpec {
     }
 }
 
+impl BoundarySpec {
+    /// The boundary of axis 0, 1 or 2.
+    pub fn axis(&self, k: usize) -> Boundary {
+        [self.x, self.y, self.z][k]
+    }
+}
+
 /// `[fluid]`: the still (or uniformly moving) carrier fluid.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -327,6 +334,59 @@ pub struct DragSpec {
     /// positions at the last step divisible by it. Must divide the steps per output frame.
     #[serde(default = "default_refactor_every")]
     pub refactor_every: u64,
+    /// Stokes drag near one plane wall of the box (with `law` stokes or schiller-naumann).
+    pub wall: Option<WallDragSpec>,
+}
+
+/// `[forces.drag.wall]`: the parallel-wall drag factor (Faxén; Goldman, Cox & Brenner) on the
+/// velocity components parallel to one face of the box.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WallDragSpec {
+    /// The face that is the wall (case 2's substrate: `z-`).
+    pub face: FaceSpec,
+    /// Smallest sphere–wall gap used, as a fraction of the radius (default 0.01): a sphere
+    /// resting on the wall keeps a gap set by its roughness; the factor diverges at contact.
+    #[serde(default = "default_min_gap")]
+    pub min_gap: f64,
+}
+
+/// A face of the box.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+pub enum FaceSpec {
+    #[serde(rename = "x-")]
+    XLow,
+    #[serde(rename = "x+")]
+    XHigh,
+    #[serde(rename = "y-")]
+    YLow,
+    #[serde(rename = "y+")]
+    YHigh,
+    #[serde(rename = "z-")]
+    ZLow,
+    #[serde(rename = "z+")]
+    ZHigh,
+}
+
+impl FaceSpec {
+    /// The face's axis and whether it is the high one.
+    pub fn axis_and_side(self) -> (usize, bool) {
+        match self {
+            FaceSpec::XLow => (0, false),
+            FaceSpec::XHigh => (0, true),
+            FaceSpec::YLow => (1, false),
+            FaceSpec::YHigh => (1, true),
+            FaceSpec::ZLow => (2, false),
+            FaceSpec::ZHigh => (2, true),
+        }
+    }
+}
+
+impl std::fmt::Display for FaceSpec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let (axis, high) = self.axis_and_side();
+        write!(f, "{}{}", ["x", "y", "z"][axis], if high { "+" } else { "-" })
+    }
 }
 
 fn default_drag_law() -> DragLawSpec {
@@ -340,6 +400,9 @@ fn default_touch_tolerance() -> f64 {
 }
 fn default_refactor_every() -> u64 {
     1
+}
+fn default_min_gap() -> f64 {
+    1e-2
 }
 
 /// Weight minus buoyancy.

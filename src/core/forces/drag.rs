@@ -3,9 +3,11 @@
 //!
 //! C_d = 24/Re (Stokes) or 24/Re (1 + 0.15 Re^0.687) (Schiller–Naumann), Re = ρ_f |u| d / μ.
 //! Written as F = −12 μ u A/d · f(Re), which is exact Stokes (6π μ a u) for A = π a².
-//! With shielding `paper`, A = A_eff of [`super::shielding`].
+//! With shielding `paper`, A = A_eff of [`super::shielding`]. With a wall, the components of u
+//! parallel to it are multiplied by the parallel-wall factor of [`super::wall_drag`].
 
 use super::shielding::shadow_area;
+use super::wall_drag::WallCorrection;
 use super::{Context, ForceTerm, Forces};
 use crate::core::neighbours::PairRange;
 use crate::core::parallel;
@@ -50,13 +52,24 @@ pub struct Drag {
     /// Leave out the linear Stokes parts −6π μ a (v − u_f) and −8π μ a³ ω, which an exponential
     /// integrator applies exactly; only the shielding and Schiller–Naumann corrections remain.
     pub exclude_linear: bool,
+    /// Drag near a plane wall (parallel components), or none.
+    pub wall: Option<WallCorrection>,
     shadow: Vec<f64>,
     flow_direction: Vec<Vec3>,
 }
 
 impl Drag {
     pub fn new(law: DragLaw, shielding: Shielding, rotational: bool, fluid: Fluid) -> Self {
-        Self { law, shielding, rotational, fluid, exclude_linear: false, shadow: vec![], flow_direction: vec![] }
+        Self {
+            law,
+            shielding,
+            rotational,
+            fluid,
+            exclude_linear: false,
+            wall: None,
+            shadow: vec![],
+            flow_direction: vec![],
+        }
     }
 
     /// Linear drag coefficient 6π μ a (kg/s) of an unshielded sphere in Stokes flow.
@@ -118,7 +131,7 @@ impl ForceTerm for Drag {
         if let Shielding::Paper { touch_tolerance, near } = self.shielding {
             self.compute_shadows(ctx, p, touch_tolerance, near);
         }
-        let Particles { velocity, angular_velocity, radius, .. } = p;
+        let Particles { position, velocity, angular_velocity, radius, .. } = p;
         let (force, torque) = (&mut *out.force, &mut *out.torque);
         let drag = |i: usize, f: &mut Vec3, t: &mut Vec3| {
             let a = radius[i];
@@ -135,7 +148,11 @@ impl ForceTerm for Drag {
                 }
             };
             let linear = if self.exclude_linear { Self::stokes_coefficient(self.fluid.viscosity, a) } else { 0.0 };
-            *f -= (12.0 * self.fluid.viscosity * area / (2.0 * a) * correction - linear) * u;
+            let coefficient = 12.0 * self.fluid.viscosity * area / (2.0 * a) * correction;
+            match &self.wall {
+                None => *f -= (coefficient - linear) * u,
+                Some(w) => *f -= coefficient * w.scale_parallel(u, w.factor(&position[i], a)) - linear * u,
+            }
             if self.rotational && !self.exclude_linear {
                 *t -= 8.0 * PI * self.fluid.viscosity * a.powi(3) * angular_velocity[i];
             }

@@ -123,7 +123,7 @@ impl ForceTerm for RpyDrag {
         "drag"
     }
     fn begin_step(&mut self, state: &State) {
-        self.due = state.step % self.refactor_every == 0;
+        self.due = state.step.is_multiple_of(self.refactor_every);
     }
     fn prepare(&mut self, _ctx: &Context, state: &State) -> Result<(), InductionError> {
         if self.refactor_every == 1 || self.due || self.resistance.is_none() {

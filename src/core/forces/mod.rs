@@ -9,6 +9,7 @@ pub mod gradient;
 pub mod gravity;
 pub mod hydrodynamics;
 pub mod shielding;
+pub mod wall_drag;
 
 use super::domain::Domain;
 use super::neighbours::{Neighbours, PairRange};
