@@ -81,6 +81,26 @@ enum Report {
         #[arg(long)]
         wall_time: Option<f64>,
     },
+    /// The paper's shielded-area drag against Stokes flow with hydrodynamic interactions (RPY):
+    /// chain drag, the mobility's cost and refactorisation error (computed here, about two
+    /// minutes), and case 2 under each drag model from the runs of experiments/hydrodynamics/*.toml.
+    Hydrodynamics {
+        /// Directory of the experiment files (its opt-in/ folder is read too).
+        #[arg(long, default_value = "experiments/hydrodynamics")]
+        experiments: PathBuf,
+        /// The case-2 scene of the refactorisation study.
+        #[arg(long, default_value = "experiments/scenes/case2.toml")]
+        case2_scene: PathBuf,
+        /// The paper's Table 2 (CSV), whose first row is the experiment.
+        #[arg(long, default_value = "reference/paper/table2_case2.csv")]
+        reference: PathBuf,
+        /// Report directory.
+        #[arg(long, default_value = "reports/hydrodynamics")]
+        out: PathBuf,
+        /// Aggregate gap tolerance, as a fraction of the smaller radius.
+        #[arg(long, default_value_t = 1e-3)]
+        gap: f64,
+    },
 }
 
 #[derive(Subcommand)]
@@ -269,6 +289,15 @@ fn main() -> ExitCode {
                 out,
                 gap,
                 wall_time,
+            })
+        }
+        Command::Report(Report::Hydrodynamics { experiments, case2_scene, reference, out, gap }) => {
+            cli::report::hydrodynamics(&magdem::report::hydrodynamics::HydrodynamicsReportOptions {
+                experiments,
+                case2_scene,
+                reference,
+                out,
+                gap,
             })
         }
         Command::Info { file } => cli::trajectory::info(&file),

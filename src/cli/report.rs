@@ -1,4 +1,4 @@
-//! `magdem report paper` and `magdem bench`: commands that write a report and name it.
+//! `magdem report paper`, `magdem report hydrodynamics` and `magdem bench`: commands that write a report and name it.
 
 use super::report_written;
 use magdem::report::paper::PaperReportOptions;
@@ -7,6 +7,11 @@ use std::process::ExitCode;
 /// `magdem report paper`.
 pub fn paper(options: &PaperReportOptions) -> ExitCode {
     report_written(magdem::report::paper::write_report(options))
+}
+
+/// `magdem report hydrodynamics`.
+pub fn hydrodynamics(options: &magdem::report::hydrodynamics::HydrodynamicsReportOptions) -> ExitCode {
+    report_written(magdem::report::hydrodynamics::write_report(options))
 }
 
 /// `magdem bench` (at least one repeat per measurement).

@@ -5,14 +5,14 @@
 use super::convergence::{self, Effect, Targets};
 use super::figures;
 use super::runs::{experiment_files, load_runs, Run};
-use super::tables::{col, markdown, same, scol, ucol, write};
+use super::tables::{col, floats, frame, markdown, read_csv, same, scol, ucol, write};
 use crate::analysis::stats::{ci95_half_width, summary};
 use crate::plot::{
     bar_panels, box_panels, engine_colour, line_chart_with_legend, palette, BarGroup, BarPanel, BoxPanel, BoxStats,
     RGBColor, Series, SeriesLabelPosition,
 };
 use crate::scene::Scene;
-use polars::prelude::{Column, CsvReadOptions, DataFrame, DataType, PolarsResult, SerReader};
+use polars::prelude::{DataFrame, PolarsResult};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -38,20 +38,8 @@ struct Paper {
     table4: DataFrame,
 }
 
-fn read_csv(path: &Path) -> PolarsResult<DataFrame> {
-    CsvReadOptions::default().with_has_header(true).try_into_reader_with_file_path(Some(path.to_path_buf()))?.finish()
-}
-
-fn floats(df: &DataFrame, name: &str) -> PolarsResult<Vec<f64>> {
-    Ok(df.column(name)?.cast(&DataType::Float64)?.f64()?.into_iter().map(|v| v.unwrap_or(f64::NAN)).collect())
-}
-
 fn strings(df: &DataFrame, name: &str) -> PolarsResult<Vec<String>> {
     Ok(df.column(name)?.str()?.into_iter().map(|v| v.unwrap_or_default().to_string()).collect())
-}
-
-fn frame(columns: Vec<Column>) -> PolarsResult<DataFrame> {
-    DataFrame::new(columns)
 }
 
 /// Mean, NaN for no values.

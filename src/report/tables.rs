@@ -4,6 +4,21 @@
 use polars::prelude::*;
 use std::path::Path;
 
+/// A CSV file with a header row.
+pub fn read_csv(path: &Path) -> PolarsResult<DataFrame> {
+    CsvReadOptions::default().with_has_header(true).try_into_reader_with_file_path(Some(path.to_path_buf()))?.finish()
+}
+
+/// Column `name` of `df` as floats (NaN where missing).
+pub fn floats(df: &DataFrame, name: &str) -> PolarsResult<Vec<f64>> {
+    Ok(df.column(name)?.cast(&DataType::Float64)?.f64()?.into_iter().map(|v| v.unwrap_or(f64::NAN)).collect())
+}
+
+/// A DataFrame of `columns`.
+pub fn frame(columns: Vec<Column>) -> PolarsResult<DataFrame> {
+    DataFrame::new(columns)
+}
+
 /// A float column.
 pub fn col(name: &str, values: Vec<f64>) -> Column {
     Column::new(name.into(), values)
