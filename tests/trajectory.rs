@@ -464,3 +464,26 @@ fn every_state_field_round_trips_through_the_checkpoint() {
     }
     assert!(restored == state, "the restored state differs from the written one");
 }
+
+/// `magdem info FILE | head` with the reader gone: the process ends by SIGPIPE, as other
+/// command-line tools do, not with a panic in its printing.
+#[test]
+fn a_closed_output_pipe_ends_the_command_quietly() {
+    use std::os::unix::process::ExitStatusExt;
+    let work = workdir("pipe");
+    let dir = work.path();
+    let (scene, file) = (dir.join("scene.toml"), dir.join("run.h5"));
+    std::fs::write(&scene, scene_text().replace("end_time = 3.0e-4", "end_time = 4.0e-5")).unwrap();
+    assert!(magdem(&["run", path(&scene), "-q", "-o", path(&file)]).status.success());
+    let mut child = Command::new(env!("CARGO_BIN_EXE_magdem"))
+        .args(["analyse", path(&file)])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(out.status.signal(), Some(libc::SIGPIPE), "status {:?}", out.status);
+}
