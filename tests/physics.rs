@@ -272,6 +272,7 @@ fn chain(n: usize, mu_r: f64) -> (Particles, Species) {
         susceptibility: 3.0 * (mu_r - 1.0) / (mu_r + 2.0),
         saturation: None,
         permanent_moment: None,
+        size: None,
     };
     let mut p = Particles::default();
     for k in 0..n {
@@ -690,4 +691,81 @@ fn a_sphere_sedimenting_beside_a_wall_slows_by_the_published_factor() {
         assert!(drift.abs() < 1e-15, "h/a = {h}: drifted {drift} m across the wall normal");
     }
     assert_eq!(terminal(1.001).0.to_bits(), terminal(1.01).0.to_bits(), "the gap is not clamped at 1e-2 a");
+}
+
+/// A polydisperse scene of `count` particles (or a concentration) in a 2 mm box, diameters from
+/// `size`, with contacts and a dipole term without induction (each moment is χ_eff V H).
+fn polydisperse(size: &str, placement: &str) -> Scene {
+    let text = format!(
+        "version = 1\nseed = 3\n[domain]\nlo = [0.0, 0.0, 0.0]\nhi = [2e-3, 2e-3, 2e-3]\n{WATER}[field]\nb0 = [0.1, 0.0, 0.0]\n\
+         [[species]]\nname = \"p\"\ndiameter = 10.0e-6\ndensity = 1050.0\nyoungs_modulus = 1.0e9\npoisson_ratio = 0.5\n\
+         friction = 0.5\nrestitution = 0.5\nsusceptibility = 1.0\nsize = {size}\n\
+         [[particles]]\nspecies = \"p\"\n{placement}\n[forces.contact]\n[forces.dipole]\ninduction = \"none\"\ncutoff_diameters = 2.0\n\
+         [integration]\ndt = 1.0e-8\nend_time = 1.0e-7\n"
+    );
+    Scene::parse(&text, "polydisperse").unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// 10 000 particles with normal diameters (cv 0.1, the default truncation at ±3σ) reproduce the
+/// mean to within 4 standard errors and the standard deviation of a normal truncated at ±3σ
+/// (0.9866 σ) to 3 % (its standard error is 0.7 %); log-normal diameters (cv 0.2, truncation wide
+/// enough to be negligible) their mean and standard deviation likewise. Each particle's mass is
+/// ρ V, its inertia 2/5 m a², its moment χ_eff V H; a concentration gives that mass concentration
+/// to 1.5 % (the sampling error of the mean volume is 0.3 %); and the stable-step estimate, taken
+/// at the smallest diameter, is below the monodisperse one.
+#[test]
+fn a_polydisperse_placement_reproduces_its_distribution_and_masses() {
+    let n = 10_000.0_f64;
+    let d = 10.0e-6;
+    let stats = |s: &Scene| {
+        let x: Vec<f64> = s.initial.radius.iter().map(|a| 2.0 * a).collect();
+        let mean = x.iter().sum::<f64>() / x.len() as f64;
+        let std = (x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (x.len() as f64 - 1.0)).sqrt();
+        (mean, std)
+    };
+    let normal = polydisperse("{ law = \"normal\", cv = 0.1 }", "count = 10000");
+    let (mean, std) = stats(&normal);
+    assert_eq!(normal.initial.len(), 10_000);
+    assert!((mean - d).abs() < 4.0 * 0.1 * d / n.sqrt(), "normal mean {mean:e}");
+    assert!((std / (0.9866 * 0.1 * d) - 1.0).abs() < 0.03, "normal std {std:e}");
+    assert!(normal.initial.radius.iter().all(|&a| (0.35 * d..=0.65 * d).contains(&a)), "truncation at ±3σ");
+
+    let log = polydisperse(
+        "{ law = \"log-normal\", cv = 0.2, min_diameter = 1.0e-6, max_diameter = 5.0e-5 }",
+        "count = 10000",
+    );
+    let (mean, std) = stats(&log);
+    assert!((mean - d).abs() < 4.0 * 0.2 * d / n.sqrt(), "log-normal mean {mean:e}");
+    assert!((std / (0.2 * d) - 1.0).abs() < 0.05, "log-normal std {std:e}");
+
+    let mut sim = normal.simulation(None);
+    sim.initialise().unwrap();
+    let (p, h) = (&sim.state.particles, 0.1 / magdem::core::magnetisation::MU0);
+    let chi_eff = 3.0 * 1.0 / (1.0 + 3.0);
+    for i in 0..p.len() {
+        let v = 4.0 / 3.0 * PI * p.radius[i].powi(3);
+        assert!((p.mass[i] / (1050.0 * v) - 1.0).abs() < 1e-12);
+        assert!((p.inertia[i] / (0.4 * p.mass[i] * p.radius[i].powi(2)) - 1.0).abs() < 1e-12);
+        assert!((sim.state.fields.moment[i].x / (chi_eff * v * h) - 1.0).abs() < 1e-9, "moment {i}");
+    }
+
+    let by_mass = polydisperse("{ law = \"normal\", cv = 0.1 }", "concentration = 1.0");
+    let total: f64 = by_mass.initial.mass.iter().sum();
+    let c = total / 8e-9;
+    assert!(by_mass.initial.len() > 5_000, "{} particles", by_mass.initial.len());
+    assert!((c - 1.0).abs() < 0.015, "mass concentration {c} kg/m³ for 1.0");
+
+    let mono = Scene::parse(
+        &polydisperse("{ law = \"normal\", cv = 0.1 }", "count = 10")
+            .text
+            .replace("size = { law = \"normal\", cv = 0.1 }\n", ""),
+        "mono",
+    )
+    .unwrap();
+    assert!(
+        normal.estimate.stable_dt < mono.estimate.stable_dt,
+        "{} vs {}",
+        normal.estimate.stable_dt,
+        mono.estimate.stable_dt
+    );
 }

@@ -62,6 +62,87 @@ pub struct Species {
     pub saturation: Option<Saturation>,
     /// Permanent moment (A·m²) each particle of the species carries, in its body frame at t = 0.
     pub permanent_moment: Option<Vec3>,
+    /// Radii drawn per particle from a distribution (polydisperse), or all `radius`.
+    pub size: Option<SizeDistribution>,
+}
+
+/// The law of a polydisperse species' radii.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SizeLaw {
+    Normal,
+    /// ln a normal, with the mean and standard deviation of a itself.
+    LogNormal,
+}
+
+/// Radii a ~ `law` with mean `mean` and standard deviation `std` before truncation, drawn again
+/// until they fall in [`min`, `max`] (m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SizeDistribution {
+    pub law: SizeLaw,
+    pub mean: f64,
+    pub std: f64,
+    pub min: f64,
+    pub max: f64,
+}
+
+impl SizeDistribution {
+    /// The untruncated density at radius `a`.
+    fn density(&self, a: f64) -> f64 {
+        use statrs::distribution::Continuous;
+        match self.law {
+            SizeLaw::Normal => statrs::distribution::Normal::new(self.mean, self.std).map_or(0.0, |d| d.pdf(a)),
+            SizeLaw::LogNormal => {
+                let (mu, sigma) = self.log_parameters();
+                statrs::distribution::LogNormal::new(mu, sigma).map_or(0.0, |d| d.pdf(a))
+            }
+        }
+    }
+
+    /// μ and σ of ln a for the log-normal law: σ² = ln(1 + (std/mean)²), μ = ln mean − σ²/2.
+    fn log_parameters(&self) -> (f64, f64) {
+        let s2 = (1.0 + (self.std / self.mean).powi(2)).ln();
+        (self.mean.ln() - 0.5 * s2, s2.sqrt())
+    }
+
+    /// One radius, by rejection from the untruncated law (Box–Muller from two uniforms).
+    pub fn draw(&self, rng: &mut impl rand::Rng) -> f64 {
+        use rand::RngExt;
+        loop {
+            let (u, v): (f64, f64) = (rng.random(), rng.random());
+            let z = (-2.0 * (1.0 - u).ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos();
+            let a = match self.law {
+                SizeLaw::Normal => self.mean + self.std * z,
+                SizeLaw::LogNormal => {
+                    let (mu, sigma) = self.log_parameters();
+                    (mu + sigma * z).exp()
+                }
+            };
+            if (self.min..=self.max).contains(&a) {
+                return a;
+            }
+        }
+    }
+
+    /// E[a³] over the truncated law (Simpson's rule, 4 000 intervals).
+    pub fn mean_cube(&self) -> f64 {
+        let n = 4000;
+        let h = (self.max - self.min) / n as f64;
+        let (mut z, mut m3) = (0.0, 0.0);
+        for k in 0..=n {
+            let a = self.min + k as f64 * h;
+            let w = if k == 0 || k == n {
+                1.0
+            } else if k % 2 == 1 {
+                4.0
+            } else {
+                2.0
+            };
+            let p = w * self.density(a);
+            z += p;
+            m3 += p * a * a * a;
+        }
+        m3 / z
+    }
 }
 
 /// V = 4/3 π a³.
@@ -71,12 +152,25 @@ pub fn sphere_volume(radius: f64) -> f64 {
 
 /// The largest diameter of `species` (0 for none): the scale of every range given in diameters.
 pub fn largest_diameter(species: &[Species]) -> f64 {
-    species.iter().map(|s| 2.0 * s.radius).fold(0.0, f64::max)
+    species.iter().map(|s| 2.0 * s.largest_radius()).fold(0.0, f64::max)
 }
 
 impl Species {
+    /// The mean particle volume (over the size distribution, if any).
     pub fn volume(&self) -> f64 {
-        sphere_volume(self.radius)
+        match &self.size {
+            None => sphere_volume(self.radius),
+            Some(d) => 4.0 / 3.0 * std::f64::consts::PI * d.mean_cube(),
+        }
+    }
+    /// The largest radius a particle of the species can have.
+    pub fn largest_radius(&self) -> f64 {
+        self.size.map_or(self.radius, |d| d.max)
+    }
+    /// The species with every particle at its smallest radius: the stiffest contacts, the
+    /// fastest drag relaxation, so the stable-step estimate's case.
+    pub fn smallest(&self) -> Species {
+        Species { radius: self.size.map_or(self.radius, |d| d.min), size: None, ..self.clone() }
     }
     pub fn mass(&self) -> f64 {
         self.density * self.volume()
@@ -155,13 +249,21 @@ impl Particles {
         self.position.is_empty()
     }
 
-    /// Adds one particle of `species` (index `species_index`) at rest.
+    /// Adds one particle of `species` (index `species_index`) at rest, of the species' radius.
     pub fn push(&mut self, species_index: u16, species: &Species, position: Vec3, velocity: Vec3) {
+        self.push_sized(species_index, species, species.radius, position, velocity);
+    }
+
+    /// [`Particles::push`] with the particle's own `radius` (a polydisperse species): its mass,
+    /// inertia and (through the volume) moment follow it.
+    pub fn push_sized(&mut self, species_index: u16, species: &Species, radius: f64, position: Vec3, velocity: Vec3) {
+        let mass = species.density * sphere_volume(radius);
+        let inertia = 0.4 * mass * radius * radius;
         self.species.push(species_index);
-        self.radius.push(species.radius);
-        self.mass.push(species.mass());
-        self.inertia.push(species.inertia());
-        self.inverse_masses.push(self.species.len() - 1, 1.0 / species.mass(), 1.0 / species.inertia());
+        self.radius.push(radius);
+        self.mass.push(mass);
+        self.inertia.push(inertia);
+        self.inverse_masses.push(self.species.len() - 1, 1.0 / mass, 1.0 / inertia);
         self.position.push(position);
         self.velocity.push(velocity);
         self.angular_velocity.push(Vec3::zeros());
@@ -329,6 +431,7 @@ pub(crate) fn test_sphere(radius: f64) -> Species {
         susceptibility: 0.0,
         saturation: None,
         permanent_moment: None,
+        size: None,
     }
 }
 

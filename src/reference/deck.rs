@@ -243,9 +243,17 @@ fn check_species(engine: Engine, species: &[SpeciesSpec], wall_contacts: bool) -
             saturation_magnetisation: _,
             saturation_law: _,
             permanent_moment,
+            size,
         } = s;
         if permanent_moment.is_some() {
             return Err(unsupported(engine, "species.permanent_moment", "no dipole atom style is used"));
+        }
+        if size.is_some() {
+            return Err(unsupported(
+                engine,
+                "species.size",
+                "fix viscous gives one drag coefficient per atom type; drawn diameters need one per atom",
+            ));
         }
     }
     let material = |s: &SpeciesSpec| (s.youngs_modulus, s.poisson_ratio, s.restitution, s.friction);

@@ -20,8 +20,9 @@ use crate::core::magnetisation::{Induction, Magnetisation, MU0};
 use crate::core::neighbours::{PairRange, Skins};
 use crate::core::simulation::{ForceField, Simulation};
 use crate::core::stability::{Monitor, StepEstimate, StepEstimateInput};
-use crate::core::state::{Particles, Saturation, SaturationLaw, Species, State, Vec3};
+use crate::core::state::{Particles, Saturation, SaturationLaw, SizeDistribution, SizeLaw, Species, State, Vec3};
 use nalgebra::Matrix3;
+use rand::SeedableRng;
 use sha2::{Digest, Sha256};
 pub use spec::*;
 use std::path::Path;
@@ -110,9 +111,11 @@ impl Scene {
         let initial = place_particles(&spec, &domain, &species)?;
         check_integration(&spec)?;
 
-        let moments = species.iter().map(|s| isolated_moment(&spec, &domain, s)).collect();
+        // A polydisperse species counts at its smallest radius, the strictest for every bound.
+        let smallest: Vec<Species> = species.iter().map(Species::smallest).collect();
+        let moments = smallest.iter().map(|s| isolated_moment(&spec, &domain, s)).collect();
         let estimate = StepEstimate::new(&StepEstimateInput {
-            species: &species,
+            species: &smallest,
             scheme: spec.integration.scheme,
             contact: spec.forces.contact.as_ref().map(contact_law),
             drag_viscosity: spec.forces.drag.as_ref().and(spec.fluid.as_ref()).map(|f| f.viscosity),
@@ -402,6 +405,7 @@ fn check_species(k: usize, s: &SpeciesSpec) -> Result<Species, SceneError> {
         Some(SaturationLawSpec::FrohlichKennelly) => SaturationLaw::FrohlichKennelly,
         Some(SaturationLawSpec::Cap) | None => SaturationLaw::Cap,
     };
+    let size = s.size.as_ref().map(|size| check_size(&key("size"), s.diameter, size)).transpose()?;
     Ok(Species {
         name: s.name.clone(),
         radius: 0.5 * s.diameter,
@@ -414,7 +418,39 @@ fn check_species(k: usize, s: &SpeciesSpec) -> Result<Species, SceneError> {
         susceptibility: 3.0 * chi / (chi + 3.0),
         saturation: s.saturation_magnetisation.map(|ms| Saturation { ms, law }),
         permanent_moment: s.permanent_moment.map(Vec3::from),
+        size,
     })
+}
+
+/// A species' size distribution, in radii, checked (`key` is `species[k].size`).
+fn check_size(key: &str, diameter: f64, size: &SizeSpec) -> Result<SizeDistribution, SceneError> {
+    let std = match (size.cv, size.std) {
+        (Some(cv), None) => {
+            positive(&format!("{key}.cv"), cv)?;
+            cv * diameter
+        }
+        (None, Some(std)) => {
+            positive(&format!("{key}.std"), std)?;
+            std
+        }
+        (Some(cv), Some(_)) => return Err(invalid(format!("{key}.cv"), cv, "give cv or std, not both")),
+        (None, None) => return Err(invalid(key, "{ ... }", "needs cv or std")),
+    };
+    let min = size.min_diameter.unwrap_or((diameter - 3.0 * std).max(0.1 * diameter));
+    let max = size.max_diameter.unwrap_or(diameter + 3.0 * std);
+    positive(&format!("{key}.min_diameter"), min)?;
+    if !(min < diameter && diameter < max) {
+        return Err(invalid(
+            format!("{key}.max_diameter"),
+            max,
+            format!("the truncation [{min:e}, {max:e}] m must hold the mean diameter {diameter:e} m inside it"),
+        ));
+    }
+    let law = match size.law {
+        SizeLawSpec::Normal => SizeLaw::Normal,
+        SizeLawSpec::LogNormal => SizeLaw::LogNormal,
+    };
+    Ok(SizeDistribution { law, mean: 0.5 * diameter, std: 0.5 * std, min: 0.5 * min, max: 0.5 * max })
 }
 
 fn check_forces(
@@ -732,7 +768,8 @@ fn checked_count(
 }
 
 /// Group `g`'s particles placed at random in its region `lo..hi`, clear of the `existing`
-/// particles of earlier groups, from the scene's seed.
+/// particles of earlier groups, from the scene's seed: their centres and radii (drawn from a
+/// second stream of the seed for a polydisperse species).
 fn random_sites(
     spec: &SceneSpec,
     domain: &Domain,
@@ -741,11 +778,18 @@ fn random_sites(
     group: &ParticleGroupSpec,
     (lo, hi): (Vec3, Vec3),
     existing: &[(Vec3, f64)],
-) -> Result<Vec<Vec3>, SceneError> {
+) -> Result<(Vec<Vec3>, Vec<f64>), SceneError> {
     let key = |name: &str| format!("particles[{g}].{name}");
     let count = random_count(spec, domain, s, g, group, (lo, hi), existing.len())?;
     let seed = spec.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(g as u64);
-    placement::place_random(count, s.radius, lo, hi, domain, existing, seed).map_err(|k| {
+    let radii: Vec<f64> = match &s.size {
+        None => vec![s.radius; count],
+        Some(size) => {
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x5349_5a45_5349_5a45);
+            (0..count).map(|_| size.draw(&mut rng)).collect()
+        }
+    };
+    let placed = placement::place_random(&radii, lo, hi, domain, existing, seed).map_err(|k| {
         let l = hi - lo;
         let fraction = count as f64 * s.volume() / (l.x * l.y * l.z);
         invalid(
@@ -756,7 +800,8 @@ fn random_sites(
                 placement::MAX_ATTEMPTS
             ),
         )
-    })
+    })?;
+    Ok((placed, radii))
 }
 
 /// The sites of group `g`'s lattice in its region `lo..hi`, checked: the spacing against the
@@ -884,6 +929,13 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
             ));
         }
         if let Some(positions) = &group.positions {
+            if s.size.is_some() {
+                return Err(invalid(
+                    key("positions"),
+                    "[...]",
+                    "a species with `size` draws its diameters; explicit positions take the species' one diameter",
+                ));
+            }
             place_explicit(spec, domain, (si, s), g, group, positions, &mut particles)?;
             continue;
         }
@@ -910,16 +962,26 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
         };
         let existing: Vec<(Vec3, f64)> =
             (0..particles.len()).map(|j| (particles.position[j], particles.radius[j])).collect();
-        let placed = match &group.lattice {
-            Some(lattice) => lattice_sites(spec, domain, s, g, lattice, (lo, hi), &existing)?,
-            None => random_sites(spec, domain, s, g, group, (lo, hi), &existing)?,
+        let (placed, radii) =
+            match &group.lattice {
+                Some(_) if s.size.is_some() => return Err(invalid(
+                    key("lattice"),
+                    &group.species,
+                    "a lattice holds spheres of one size; a species with `size` is placed by count or concentration",
+                )),
+                Some(lattice) => {
+                    let sites = lattice_sites(spec, domain, s, g, lattice, (lo, hi), &existing)?;
+                    let radii = vec![s.radius; sites.len()];
+                    (sites, radii)
+                }
+                None => random_sites(spec, domain, s, g, group, (lo, hi), &existing)?,
+            };
+        let order: Vec<usize> = match group.order {
+            ParticleOrder::Placement => (0..placed.len()).collect(),
+            ParticleOrder::Spatial => placement::morton_order(&placed, 2.0 * s.radius, domain),
         };
-        let placed = match group.order {
-            ParticleOrder::Placement => placed,
-            ParticleOrder::Spatial => placement::morton_order(placed, 2.0 * s.radius, domain),
-        };
-        for x in placed {
-            particles.push(si as u16, s, x, Vec3::zeros());
+        for i in order {
+            particles.push_sized(si as u16, s, radii[i], placed[i], Vec3::zeros());
         }
     }
     Ok(particles)

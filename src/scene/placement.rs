@@ -12,12 +12,11 @@ type Grid = HashMap<(i64, i64, i64), Vec<(Vec3, f64)>>;
 /// Attempts per particle before placement gives up.
 pub const MAX_ATTEMPTS: usize = 100_000;
 
-/// Places `count` spheres of `radius` uniformly in `[lo, hi]` (centres kept a radius from wall
-/// faces), avoiding `existing` spheres (centre, radius). Returns the index of the first particle
+/// Places spheres of `radii` uniformly in `[lo, hi]` (centres kept their radius from wall faces),
+/// in order, avoiding `existing` spheres (centre, radius). Returns the index of the first particle
 /// that could not be placed on failure.
 pub fn place_random(
-    count: usize,
-    radius: f64,
+    radii: &[f64],
     lo: Vec3,
     hi: Vec3,
     domain: &Domain,
@@ -25,16 +24,20 @@ pub fn place_random(
     seed: u64,
 ) -> Result<Vec<Vec3>, usize> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let (mut lo_c, mut hi_c) = (lo, hi);
-    for k in 0..3 {
-        if !domain.periodic[k] {
-            lo_c[k] = lo[k].max(domain.lo[k] + radius);
-            hi_c[k] = hi[k].min(domain.hi[k] - radius);
+    let clamp = |radius: f64| {
+        let (mut lo_c, mut hi_c) = (lo, hi);
+        for k in 0..3 {
+            if !domain.periodic[k] {
+                lo_c[k] = lo[k].max(domain.lo[k] + radius);
+                hi_c[k] = hi[k].min(domain.hi[k] - radius);
+            }
         }
-    }
-    let mut placed: Vec<Vec3> = Vec::with_capacity(count);
-    let mut grid = SphereGrid::new(radius, existing);
-    for k in 0..count {
+        (lo_c, hi_c)
+    };
+    let mut placed: Vec<Vec3> = Vec::with_capacity(radii.len());
+    let mut grid = SphereGrid::new(radii.iter().copied().fold(0.0, f64::max), existing);
+    for (k, &radius) in radii.iter().enumerate() {
+        let (lo_c, hi_c) = clamp(radius);
         let mut ok = false;
         for _ in 0..MAX_ATTEMPTS {
             let x = Vec3::from_fn(|a, _| lo_c[a] + (hi_c[a] - lo_c[a]) * rng.random::<f64>());
@@ -160,17 +163,19 @@ pub fn first_overlap(sites: &[Vec3], radius: f64, existing: &[(Vec3, f64)], doma
     let grid = SphereGrid::new(radius, existing);
     sites.iter().position(|x| grid.overlaps(x, radius, domain))
 }
-/// `positions` sorted along a Morton (Z-order) curve through cubic cells of edge `cell` from the
-/// box's low corner (ties keep their order): neighbours in space become neighbours in memory.
-pub fn morton_order(mut positions: Vec<Vec3>, cell: f64, domain: &Domain) -> Vec<Vec3> {
+/// The order of `positions` (their indices) along a Morton (Z-order) curve through cubic cells of
+/// edge `cell` from the box's low corner (ties keep their order): neighbours in space become
+/// neighbours in memory.
+pub fn morton_order(positions: &[Vec3], cell: f64, domain: &Domain) -> Vec<usize> {
     // Spreads the low 21 bits of v to every third bit.
     let spread = |v: u64| (0..21).fold(0u64, |out, b| out | ((v >> b) & 1) << (3 * b));
     let key = |x: &Vec3| {
         let c = |k: usize| (((x[k] - domain.lo[k]) / cell).max(0.0) as u64).min((1 << 21) - 1);
         spread(c(0)) | spread(c(1)) << 1 | spread(c(2)) << 2
     };
-    positions.sort_by_cached_key(key);
-    positions
+    let mut order: Vec<usize> = (0..positions.len()).collect();
+    order.sort_by_cached_key(|&i| key(&positions[i]));
+    order
 }
 
 /// The position and its periodic images one box length away along periodic axes.

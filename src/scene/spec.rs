@@ -126,6 +126,33 @@ pub struct SpeciesSpec {
     pub saturation_law: Option<SaturationLawSpec>,
     /// Permanent moment (A·m²), turning with the particle.
     pub permanent_moment: Option<[f64; 3]>,
+    /// Diameters drawn per particle (polydisperse); `diameter` is then their mean.
+    pub size: Option<SizeSpec>,
+}
+
+/// `size = { law = "normal", cv = 0.1 }`: each randomly placed particle's diameter is drawn from
+/// the scene seed, from `law` with mean `diameter` and standard deviation `cv` × `diameter` (or
+/// `std`), drawn again while outside [`min_diameter`, `max_diameter`] (default `diameter` ×
+/// (1 ∓ 3 cv), the lower at least a tenth of `diameter`).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SizeSpec {
+    /// `normal` | `log-normal` (of the diameter, with its mean and standard deviation).
+    pub law: SizeLawSpec,
+    /// Coefficient of variation: the standard deviation over the mean.
+    pub cv: Option<f64>,
+    /// Or the standard deviation itself (m).
+    pub std: Option<f64>,
+    /// Truncation (m).
+    pub min_diameter: Option<f64>,
+    pub max_diameter: Option<f64>,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum SizeLawSpec {
+    Normal,
+    LogNormal,
 }
 
 /// `species.saturation_law`.
