@@ -82,7 +82,7 @@ enum Report {
         wall_time: Option<f64>,
     },
     /// The paper's shielded-area drag against Stokes flow with hydrodynamic interactions (RPY):
-    /// chain drag, the mobility's cost and refactorisation error (computed here, about two
+    /// chain drag, the mobility's cost and refactorisation error (computed here, about three
     /// minutes), and case 2 under each drag model from the runs of experiments/hydrodynamics/*.toml.
     Hydrodynamics {
         /// Directory of the experiment files (its opt-in/ folder is read too).
