@@ -12,11 +12,7 @@ fn pair(scheme: &str, dt: f64, slow_every: u64) -> Scene {
 }
 
 fn final_separation(scene: &Scene) -> f64 {
-    let mut sim = scene.simulation(None);
-    sim.initialise().unwrap();
-    while sim.state.step < scene.total_steps() {
-        sim.step().unwrap();
-    }
+    let sim = scene.run_to_end().unwrap();
     let p = &sim.state.particles;
     (p.position[1] - p.position[0]).norm()
 }

@@ -634,12 +634,7 @@ fn rpy_refactorisation_every_k_steps_has_a_first_order_error_in_k() {
              [forces.gravity]\n[forces.drag]\nlaw = \"rpy\"\nshielding = \"none\"\nrefactor_every = {k}\n\
              [integration]\ndt = 1.0e-7\nend_time = 2.0e-3\n[output]\ninterval = 2.0e-5\n"
         );
-        let scene = Scene::parse(&text, "sediment").unwrap_or_else(|e| panic!("{e}"));
-        let mut sim = scene.simulation(None);
-        sim.initialise().unwrap();
-        while sim.state.step < scene.total_steps() {
-            sim.step().unwrap();
-        }
+        let sim = Scene::parse(&text, "sediment").unwrap_or_else(|e| panic!("{e}")).run_to_end().unwrap();
         let fell = -sim.state.particles.position[0].z;
         (sim.state.particles.position.clone(), fell)
     };
@@ -676,12 +671,7 @@ fn a_sphere_sedimenting_beside_a_wall_slows_by_the_published_factor() {
              [integration]\ndt = 1.0e-7\nend_time = 6.0e-4\n",
             2.0 * a
         );
-        let scene = Scene::parse(&text, "wall").unwrap_or_else(|e| panic!("{e}"));
-        let mut sim = scene.simulation(None);
-        sim.initialise().unwrap();
-        while sim.state.step < scene.total_steps() {
-            sim.step().unwrap();
-        }
+        let sim = Scene::parse(&text, "wall").unwrap_or_else(|e| panic!("{e}")).run_to_end().unwrap();
         (-sim.state.particles.velocity[0].z / free, sim.state.particles.position[0].x - x)
     };
     for (h, f) in [(1.1276, 2.1514), (1.5431, 1.5675), (2.3524, 1.3079), (3.7622, 1.1738), (10.0677, 1.0591)] {

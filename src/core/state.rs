@@ -145,6 +145,11 @@ impl SizeDistribution {
     }
 }
 
+/// I = 2/5 m a², a solid sphere's moment of inertia.
+pub fn sphere_inertia(mass: f64, radius: f64) -> f64 {
+    0.4 * mass * radius * radius
+}
+
 /// V = 4/3 π a³.
 pub fn sphere_volume(radius: f64) -> f64 {
     4.0 / 3.0 * std::f64::consts::PI * radius.powi(3)
@@ -174,10 +179,6 @@ impl Species {
     }
     pub fn mass(&self) -> f64 {
         self.density * self.volume()
-    }
-    /// Moment of inertia of a solid sphere, I = 2/5 m a².
-    pub fn inertia(&self) -> f64 {
-        0.4 * self.mass() * self.radius * self.radius
     }
     /// Shear modulus G = E / (2(1 + ν)).
     pub fn shear_modulus(&self) -> f64 {
@@ -258,7 +259,7 @@ impl Particles {
     /// inertia and (through the volume) moment follow it.
     pub fn push_sized(&mut self, species_index: u16, species: &Species, radius: f64, position: Vec3, velocity: Vec3) {
         let mass = species.density * sphere_volume(radius);
-        let inertia = 0.4 * mass * radius * radius;
+        let inertia = sphere_inertia(mass, radius);
         self.species.push(species_index);
         self.radius.push(radius);
         self.mass.push(mass);
@@ -274,7 +275,7 @@ impl Particles {
 
     /// Sets the masses, and from them and the radii the inertias (solid spheres) and inverses.
     pub fn set_masses(&mut self, mass: Vec<f64>) {
-        self.inertia = mass.iter().zip(&self.radius).map(|(m, a)| 0.4 * m * a * a).collect();
+        self.inertia = mass.iter().zip(&self.radius).map(|(&m, &a)| sphere_inertia(m, a)).collect();
         self.inverse_masses = InverseMasses::default();
         for (k, (m, i)) in mass.iter().zip(&self.inertia).enumerate() {
             self.inverse_masses.push(k, 1.0 / m, 1.0 / i);
@@ -449,12 +450,17 @@ mod tests {
         p.push(0, &small, Vec3::zeros(), Vec3::zeros());
         assert_eq!(
             p.inverse_masses,
-            InverseMasses::Uniform { mass: 1.0 / small.mass(), inertia: 1.0 / small.inertia() }
+            InverseMasses::Uniform {
+                mass: 1.0 / small.mass(),
+                inertia: 1.0 / sphere_inertia(small.mass(), small.radius)
+            }
         );
         p.push(1, &large, Vec3::zeros(), Vec3::zeros());
         let InverseMasses::PerParticle { mass, inertia } = &p.inverse_masses else { panic!("{:?}", p.inverse_masses) };
         assert_eq!(mass, &[1.0 / small.mass(), 1.0 / small.mass(), 1.0 / large.mass()]);
-        assert_eq!(inertia, &[1.0 / small.inertia(), 1.0 / small.inertia(), 1.0 / large.inertia()]);
+        let (i_small, i_large) =
+            (sphere_inertia(small.mass(), small.radius), sphere_inertia(large.mass(), large.radius));
+        assert_eq!(inertia, &[1.0 / i_small, 1.0 / i_small, 1.0 / i_large]);
         let mut restored = Particles { radius: p.radius.clone(), ..Particles::default() };
         restored.set_masses(p.mass.clone());
         assert_eq!(restored.inverse_masses, p.inverse_masses);

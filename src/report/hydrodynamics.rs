@@ -10,6 +10,7 @@ use crate::core::forces::hydrodynamics::Resistance;
 use crate::core::state::Vec3;
 use crate::plot::{chart, palette, Legend, RGBColor, Scale, Series, SeriesLabelPosition};
 use crate::scene::Scene;
+use crate::study::timed;
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
@@ -202,19 +203,6 @@ fn lattice(n: usize, d: f64) -> Vec<Vec3> {
         .collect()
 }
 
-/// Median of `repeats` timings of `f` (s).
-fn median_time(repeats: usize, mut f: impl FnMut()) -> f64 {
-    let mut times: Vec<f64> = (0..repeats)
-        .map(|_| {
-            let t0 = Instant::now();
-            f();
-            t0.elapsed().as_secs_f64()
-        })
-        .collect();
-    times.sort_by(f64::total_cmp);
-    times[times.len() / 2]
-}
-
 /// The cost section, and the measured cost per step (s) at 300 particles with the factor renewed
 /// every 10 steps.
 fn cost_section(tables: &Path) -> Result<(String, f64), Error> {
@@ -225,13 +213,15 @@ fn cost_section(tables: &Path) -> Result<(String, f64), Error> {
         let radii = vec![0.5 * d; n];
         let velocity: Vec<Vec3> = (0..n).map(|k| Vec3::new(1e-5, 1e-6 * (k % 3) as f64, 0.0)).collect();
         let repeats = if n > 500 { 3 } else { 7 };
-        let factor = median_time(repeats, || {
+        let factor = timed(repeats, || {
             std::hint::black_box(Resistance::new(&x, &radii, mu).expect("RPY is positive definite"));
-        });
+        })
+        .1;
         let r = Resistance::new(&x, &radii, mu)?;
-        let solve = median_time(15, || {
+        let solve = timed(15, || {
             std::hint::black_box(r.drag(&velocity, Vec3::zeros()));
-        });
+        })
+        .1;
         rows[0].push(n as f64);
         rows[1].push(1e3 * factor);
         rows[2].push(1e3 * solve);
@@ -279,12 +269,8 @@ fn refactor_section(case2: &Path, tables: &Path) -> Result<String, Error> {
             .replace("end_time = 1.25", &format!("end_time = {end_time:e}"))
             .replace("interval = 1.0e-2", "interval = 1.0e-3");
         let scene = Scene::parse(&text, "case 2, RPY")?;
-        let mut sim = scene.simulation(None);
-        sim.initialise()?;
         let t0 = Instant::now();
-        while sim.state.step < scene.total_steps() {
-            sim.step()?;
-        }
+        let sim = scene.run_to_end()?;
         let wall = t0.elapsed().as_secs_f64();
         Ok((scene.initial.position.clone(), sim.state.particles.position.clone(), wall))
     };
@@ -319,7 +305,7 @@ fn refactor_section(case2: &Path, tables: &Path) -> Result<String, Error> {
          sphere moves {:.2e} m in the first {} s ({:.0} steps of {:.0e} s). With `refactor_every = K` the factor is renewed at \
          every outer step that starts on a multiple of K, and every step multiplies its own velocities by it. Case 2 (55 particles, \
          r-RESPA with magnetic forces every 10 steps, RPY, seed 1) for {} s, the largest position error against K = 1 and \
-         the loop's wall time on one thread (tests/physics.rs asserts the error's first order in K − 1 on a sedimenting \
+         the run's wall time on one thread (tests/physics.rs asserts the error's first order in K − 1 on a sedimenting \
          pair):\n\n",
         moved,
         end_time,

@@ -174,6 +174,17 @@ impl Scene {
         self.spec.forces.drag.as_ref().filter(|d| d.law == DragLawSpec::Rpy).map_or(1, |d| d.refactor_every)
     }
 
+    /// Runs the scene in memory from t = 0 to its end (no trajectory file): the finished
+    /// simulation, or where it went unstable.
+    pub fn run_to_end(&self) -> Result<Simulation, crate::core::simulation::RunError> {
+        let mut sim = self.simulation(None);
+        sim.initialise()?;
+        while sim.state.step < self.total_steps() {
+            sim.step()?;
+        }
+        Ok(sim)
+    }
+
     /// The initial state (forces not yet evaluated).
     pub fn initial_state(&self) -> State {
         State::new(self.initial.clone())

@@ -11,6 +11,7 @@
 //!   dt = 1e-10 s (second order, checked in tests/integrators.rs), relative to the distance
 //!   travelled.
 
+use super::timed;
 use crate::core::integrators::Scheme;
 use crate::plot::{line_chart_with_legend, Series};
 use crate::scene::Scene;
@@ -141,28 +142,9 @@ fn run_problem(problem: &Problem, scheme: Scheme, dt: f64, reference: Option<f64
     })
 }
 
-/// Wall times of `runs` repetitions of `f`: (median, min, max) in seconds.
-fn timed<T>(runs: usize, mut f: impl FnMut() -> T) -> (T, f64, f64, f64) {
-    let mut times = vec![];
-    let mut out = None;
-    for _ in 0..runs {
-        let start = std::time::Instant::now();
-        out = Some(f());
-        times.push(start.elapsed().as_secs_f64());
-    }
-    times.sort_by(f64::total_cmp);
-    (out.expect("at least one run"), times[times.len() / 2], times[0], times[times.len() - 1])
-}
-
 /// Runs a scene text to its end; the finished simulation.
 fn run_text(text: &str, origin: &str) -> Result<crate::core::simulation::Simulation, String> {
-    let scene = Scene::parse(text, origin).map_err(|e| e.to_string())?;
-    let mut sim = scene.simulation(None);
-    sim.initialise().map_err(|e| e.to_string())?;
-    while sim.state.step < scene.total_steps() {
-        sim.step().map_err(|e| e.to_string())?;
-    }
-    Ok(sim)
+    Scene::parse(text, origin).map_err(|e| e.to_string())?.run_to_end().map_err(|e| e.to_string())
 }
 
 /// The dipole problem's error: separation error relative to the distance travelled.
