@@ -163,6 +163,29 @@ fn report_tables_are_the_analysis_of_the_runs() {
     assert_eq!(status.iter().filter(|s| *s == "unreadable").count(), 1, "{status:?}");
     let table3 = read_csv(&out.join("tables/table3.csv"));
     assert_eq!(table3.column("runs").unwrap().cast(&DataType::UInt64).unwrap().u64().unwrap().get(row), Some(2));
+
+    // Runs whose trajectories are gone are read from the report's digests, which the first
+    // report made: the table is the first one, to the bit.
+    std::fs::remove_file(&damaged).unwrap();
+    std::fs::remove_file(runs.join("case1-c0.563__seed-2.h5")).unwrap();
+    let readme = write_report(&PaperReportOptions {
+        experiments: dir.join("experiments"),
+        reference: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("reference/paper"),
+        out: out.clone(),
+        gap: 1e-3,
+        wall_time: None,
+    })
+    .unwrap();
+    let text = std::fs::read_to_string(&readme).unwrap();
+    assert!(text.contains("1 runs read there, 2 from the report's"), "provenance stated");
+    let parquet = ParquetReader::new(std::fs::File::open(out.join("tables/table3.parquet")).unwrap()).finish().unwrap();
+    assert_eq!(parquet.column("runs").unwrap().cast(&DataType::UInt64).unwrap().u64().unwrap().get(row), Some(3));
+    assert_eq!(parquet.column("magdem_mean_length_um").unwrap().f64().unwrap().get(row), Some(reported));
+    let runs_table = read_csv(&out.join("tables/runs.csv"));
+    let source: Vec<String> =
+        runs_table.column("source").unwrap().str().unwrap().into_no_null_iter().map(str::to_string).collect();
+    assert_eq!(source.iter().filter(|s| *s == "digest").count(), 2, "{source:?}");
+    assert!(out.join("digests/paper-table3/aggregates.parquet").exists());
 }
 
 #[test]

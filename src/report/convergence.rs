@@ -822,6 +822,7 @@ pub fn measurement_section(
     t: &Targets,
     tables: &Path,
     effects: &mut Vec<Effect>,
+    gap: f64,
 ) -> Result<String, Error> {
     let mut md = String::from("## Measurement: what an image of the same chains gives\n\n");
     let imaging = Imaging { axes: [0, 1], pixel: 0.5e-6 };
@@ -829,13 +830,14 @@ pub fn measurement_section(
     let mut table: Vec<Vec<Estimate>> = vec![];
     let mut done = vec![];
     for (&c, &exp) in t.concentration.iter().zip(&t.experiment) {
-        let here = table3_runs(runs, c);
+        // Images need the particles' positions: the runs whose trajectories are here.
+        let here: Vec<&Run> = table3_runs(runs, c).into_iter().filter(|r| r.has_trajectory()).collect();
         if here.is_empty() {
             continue;
         }
         let mut per_run: Vec<[f64; 6]> = vec![];
         for r in &here {
-            per_run.push(measures(r, &imaging)?);
+            per_run.push(measures(r, &imaging, gap)?);
         }
         let column = |k: usize| Estimate::of(&per_run.iter().map(|m| m[k]).collect::<Vec<_>>());
         table.push((0..6).map(column).collect());
@@ -894,13 +896,14 @@ pub fn measurement_section(
 
 /// The six measures of one run's last frame (µm): 3-D, projected and image lengths, each over
 /// all aggregates and over those of two or more particles.
-fn measures(r: &Run, imaging: &Imaging) -> Result<[f64; 6], Error> {
+fn measures(r: &Run, imaging: &Imaging, gap: f64) -> Result<[f64; 6], Error> {
     let t = crate::io::trajectory::Trajectory::open(&r.file)?;
     let reader = crate::analysis::trajectory::FrameReader::new(&t)?;
     let radius = reader.radius().to_vec();
     let position = t.frame_vectors("position", reader.times.len() - 1)?;
     let m = |v: Vec<f64>| if v.is_empty() { f64::NAN } else { 1e6 * summary(&v).mean };
-    let finite: Vec<&crate::analysis::aggregates::Aggregate> = r.last.iter().filter(|a| !a.percolating).collect();
+    let (_, last) = reader.aggregates(-1, gap)?;
+    let finite: Vec<&crate::analysis::aggregates::Aggregate> = last.iter().filter(|a| !a.percolating).collect();
     let projected = |a: &&crate::analysis::aggregates::Aggregate| {
         imaging.major_axis(&a.positions, &a.members.iter().map(|&i| radius[i]).collect::<Vec<_>>())
     };

@@ -2,6 +2,7 @@
 //! hydrodynamics study.
 
 pub mod convergence;
+pub mod digest;
 pub mod figures;
 pub mod hydrodynamics;
 pub mod paper;

@@ -4,7 +4,7 @@
 
 use super::convergence::{self, Effect, Targets};
 use super::figures;
-use super::runs::{experiment_files, load_runs, Run};
+use super::runs::{experiment_files, load_runs_digested, Run};
 use super::tables::{col, floats, frame, markdown, read_csv, same, scol, ucol, write};
 use crate::analysis::stats::{ci95_half_width, summary};
 use crate::plot::{
@@ -71,7 +71,7 @@ fn table3_ensemble(runs: &[Run]) -> Vec<&Run> {
 /// Writes the report; returns the path of its README.md.
 pub fn write_report(options: &PaperReportOptions) -> Result<PathBuf, Error> {
     let files = experiment_files(&options.experiments, true)?;
-    let runs = load_runs(&files, options.gap)?;
+    let runs = load_runs_digested(&files, options.gap, &options.out.join("digests"))?;
     let paper = Paper {
         table2: read_csv(&options.reference.join("table2_case2.csv"))?,
         table3: read_csv(&options.reference.join("table3_case1_lengths.csv"))?,
@@ -92,7 +92,8 @@ pub fn write_report(options: &PaperReportOptions) -> Result<PathBuf, Error> {
     md += &convergence::seeds_section(&runs, &targets, &tables, &mut effects)?;
     md += &table4_section(&runs, &paper, out, &tables)?;
     md += &box_section(&runs, &paper, out)?;
-    let mut seed1: Vec<&Run> = table3_ensemble(&runs).into_iter().filter(|r| r.seed == 1).collect();
+    let mut seed1: Vec<&Run> =
+        table3_ensemble(&runs).into_iter().filter(|r| r.seed == 1 && r.has_trajectory()).collect();
     seed1.sort_by(|a, b| a.concentration.total_cmp(&b.concentration));
     md += &figures::chain_figures(&seed1, out)?;
     md += &figures::paraview_section(
@@ -102,13 +103,13 @@ pub fn write_report(options: &PaperReportOptions) -> Result<PathBuf, Error> {
     md += &convergence::finite_size_section(&runs, &targets, out, &tables, &mut effects)?;
     md += &convergence::growth_section(&runs, &targets, out, &tables, &mut effects)?;
     md += &convergence::magnetisation_section(&runs, &targets, out, &tables, &mut effects)?;
-    md += &convergence::measurement_section(&runs, &targets, &tables, &mut effects)?;
+    md += &convergence::measurement_section(&runs, &targets, &tables, &mut effects, options.gap)?;
     md += &sensitivity_section(&runs, out, &tables, &mut effects)?;
     md += &convergence::ranking_section(&effects, &targets, &runs, &tables)?;
     md += &figures::shielding_figure(out)?;
     md += &case2_section(&runs, &paper, out, &tables)?;
     md += &figures::case2_figure(
-        runs.iter().find(|r| r.experiment == "paper-case2" && r.seed == 1 && r.completed()),
+        runs.iter().find(|r| r.experiment == "paper-case2" && r.seed == 1 && r.completed() && r.has_trajectory()),
         out,
     )?;
     md += &approach_section(&runs, out)?;
@@ -136,7 +137,7 @@ fn header(runs: &[Run], files: &[PathBuf], options: &PaperReportOptions) -> Stri
          Reproduce: `make reproduce` (runs `experiments/paper/*.toml`, then this report). The opt-in studies in \
          `experiments/paper/opt-in/` enter the report when their runs exist (`magdem experiment experiments/paper/opt-in/FILE.toml`, \
          then `magdem report paper`).\n\n\
-         Every number below is computed from the trajectories in `runs/paper-*` and from the paper's tables in \
+         Every number below is computed from the trajectories in `runs/paper-*` ({}), and from the paper's tables in \
          `reference/paper/` (transcribed, with sources, in its README). Tables are also written as CSV and Parquet in \
          [`tables/`](tables/).\n\n\
          Definitions (assumptions where the paper is silent): an aggregate is a connected set of particles whose gaps are at \
@@ -156,6 +157,7 @@ fn header(runs: &[Run], files: &[PathBuf], options: &PaperReportOptions) -> Stri
         },
         core_seconds,
         options.wall_time.map_or(String::new(), |w| format!("; the `make reproduce` call that wrote this report took {:.0} s of wall time ({:.1} min) for its runs", w, w / 60.0)),
+        super::digest::provenance(runs),
         options.gap
     );
     if !unreadable.is_empty() {
@@ -356,9 +358,10 @@ fn gap_sensitivity(runs: &[Run]) -> Result<String, Error> {
     let respa = runs
         .iter()
         .filter(|r| r.experiment == "paper-sensitivity" && r.variant == "respa" && r.seed == 1 && r.completed());
+    let respa = respa.filter(|r| r.has_trajectory());
     // Largest relative change of each run's mean from 1e-3 to 5e-2, and below 1e-3.
     let (mut above, mut below) = (0.0_f64, 0.0_f64);
-    for r in table3_ensemble(runs).into_iter().filter(|r| r.seed == 1).chain(respa) {
+    for r in table3_ensemble(runs).into_iter().filter(|r| r.seed == 1 && r.has_trajectory()).chain(respa) {
         let t = crate::io::trajectory::Trajectory::open(&r.file)?;
         let reader = crate::analysis::trajectory::FrameReader::new(&t)?;
         let values: Vec<f64> = gaps
@@ -594,7 +597,7 @@ fn case2_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Resu
     };
     let instantaneous =
         mean(&here.iter().flat_map(|r| r.last.iter().map(|a| a.com_velocity.x * 1e6)).collect::<Vec<_>>());
-    let walled = here.iter().map(|r| r.at_x_wall.iter().filter(|&&w| w).count()).sum::<usize>();
+    let walled = here.iter().map(|r| r.last.iter().filter(|a| a.at_x_wall).count()).sum::<usize>();
     let total = here.iter().map(|r| r.last.len()).sum::<usize>();
     let mut source = vec![];
     let mut cols: [Vec<f64>; 6] = Default::default();
@@ -632,7 +635,7 @@ fn case2_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Resu
         col("ci95_velocity", vx_ci),
     ])?;
     write(&mut df, tables, "table2")?;
-    let scene = Scene::parse(&here[0].scene_text()?, "case 2")?;
+    let scene = Scene::parse(&here.iter().find(|r| r.has_trajectory()).unwrap_or(&here[0]).scene_text()?, "case 2")?;
     let s = &scene.species[0];
     let b0 = scene.spec.field.as_ref().map_or(0.0, |f| nalgebra::Vector3::from(f.b0).norm());
     let h = b0 / crate::core::magnetisation::MU0;
@@ -688,8 +691,8 @@ fn case2_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Resu
 fn case2_velocity_by_size(here: &[&Run], out: &Path) -> Result<String, Error> {
     let mut by_size: BTreeMap<usize, Vec<f64>> = BTreeMap::new();
     for r in here {
-        for ((a, v), _) in r.last.iter().zip(&r.tracked_vx).zip(&r.at_x_wall).filter(|(_, &w)| !w) {
-            by_size.entry(a.size()).or_default().push(v * 1e6);
+        for a in r.last.iter().filter(|a| !a.at_x_wall) {
+            by_size.entry(a.size).or_default().push(a.tracked_vx * 1e6);
         }
     }
     let single = by_size.get(&1).map_or(f64::NAN, |v| mean(v));
@@ -744,7 +747,7 @@ impl Run {
 }
 
 fn approach_section(runs: &[Run], out: &Path) -> Result<String, Error> {
-    let Some(run) = completed(runs, "paper-approach").into_iter().next() else {
+    let Some(run) = completed(runs, "paper-approach").into_iter().find(|r| r.has_trajectory()) else {
         return Ok("## Approach velocity\n\nNo completed run of `experiments/paper/approach.toml`.\n\n".into());
     };
     let t = crate::io::trajectory::Trajectory::open(&run.file)?;
@@ -1283,6 +1286,7 @@ fn runs_section(runs: &[Run], tables: &Path) -> Result<String, Error> {
         scol("engine", runs.iter().map(|r| r.engine.clone()).collect()),
         ucol("particles", runs.iter().map(|r| r.particles as u64).collect()),
         scol("status", runs.iter().map(|r| r.status.clone()).collect()),
+        scol("source", runs.iter().map(|r| r.source.name().to_string()).collect()),
         scol("message", runs.iter().map(|r| r.message.clone()).collect()),
         col("end_time_s", runs.iter().map(|r| r.times.last().copied().unwrap_or(f64::NAN)).collect::<Vec<_>>()),
         col(

@@ -1,9 +1,10 @@
 //! The runs behind a report: every point of a set of experiment files, with the aggregates of
 //! its last frame and the mean aggregate length at every frame.
 
-use crate::analysis::aggregates::{finite_lengths, Aggregate};
+use crate::analysis::aggregates::{Aggregate, BOX_LIMITED_FRACTION};
 use crate::analysis::stats::summary;
 use crate::analysis::trajectory::FrameReader;
+use crate::core::state::Vec3;
 use crate::io::trajectory::{status, Trajectory};
 use crate::scene::experiment::Experiment;
 use rayon::prelude::*;
@@ -14,6 +15,8 @@ use std::path::{Path, PathBuf};
 pub struct Run {
     pub experiment: String,
     pub id: String,
+    /// SHA-256 of the point's resolved scene (what its trajectory and digest are checked against).
+    pub scene_hash: String,
     /// The base scene's name (e.g. `case1-c2.25`).
     pub scene: String,
     pub variant: String,
@@ -43,14 +46,65 @@ pub struct Run {
     /// The box's extent along the field (m).
     pub box_extent: f64,
     /// Aggregates of the last frame.
-    pub last: Vec<Aggregate>,
-    /// x velocity of each of `last`'s aggregates as its members' mean displacement over the last
-    /// tenth of the run divided by that time (m/s): what tracking an aggregate measures, free of
-    /// the instantaneous velocity of collisions.
-    pub tracked_vx: Vec<f64>,
-    /// Whether each of `last`'s aggregates has a member within one diameter of an x wall (the
-    /// gradient's direction in case 2): such aggregates are held by the wall, not moving freely.
-    pub at_x_wall: Vec<bool>,
+    pub last: Vec<AggregateSummary>,
+    /// Where this run's numbers were read: its trajectory, or the report's digest of it.
+    pub source: Source,
+}
+
+/// Where a [`Run`]'s numbers come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Source {
+    /// Nothing read (missing, stale or unreadable).
+    #[default]
+    None,
+    /// The run's trajectory file.
+    Trajectory,
+    /// A report's digest of a trajectory no longer on this machine ([`super::digest`]).
+    Digest,
+}
+
+impl Source {
+    /// How the runs table names it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Source::None => "",
+            Source::Trajectory => "trajectory",
+            Source::Digest => "digest",
+        }
+    }
+}
+
+/// What a report keeps of one of the last frame's aggregates ([`Aggregate`] without its members'
+/// positions), so that a digest can hold it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AggregateSummary {
+    pub size: usize,
+    /// Length along the principal axis plus one diameter (m), NaN when percolating.
+    pub length: f64,
+    /// Extent of the centres along the field plus one diameter (m).
+    pub field_extent: f64,
+    pub orientation_deg: f64,
+    /// Centre-of-mass velocity at the last frame (m/s).
+    pub com_velocity: Vec3,
+    pub percolating: bool,
+    /// x velocity as the members' mean displacement over the last tenth of the run divided by
+    /// that time (m/s): what tracking an aggregate measures, free of the instantaneous velocity
+    /// of collisions.
+    pub tracked_vx: f64,
+    /// A member within three radii of an x wall (the gradient's direction in case 2): the wall
+    /// holds the aggregate, it does not move freely.
+    pub at_x_wall: bool,
+}
+
+impl AggregateSummary {
+    pub fn size(&self) -> usize {
+        self.size
+    }
+
+    /// As [`Aggregate::box_limited`].
+    pub fn box_limited(&self, box_extent: f64) -> bool {
+        self.percolating || self.field_extent >= BOX_LIMITED_FRACTION * box_extent
+    }
 }
 
 impl Run {
@@ -58,9 +112,14 @@ impl Run {
         self.status == status::COMPLETED
     }
 
+    /// Its trajectory is on this machine (not only its digest): what reads frames needs it.
+    pub fn has_trajectory(&self) -> bool {
+        self.source == Source::Trajectory
+    }
+
     /// Lengths of the last frame's aggregates (µm), percolating ones (no finite length) left out.
     pub fn lengths_um(&self) -> Vec<f64> {
-        finite_lengths(&self.last).iter().map(|l| l * 1e6).collect()
+        self.last.iter().filter(|a| !a.percolating).map(|a| a.length * 1e6).collect()
     }
 
     /// Fraction of the last frame's aggregates that the box caps.
@@ -80,13 +139,7 @@ impl Run {
     /// Tracked x velocities (µm/s) of the last frame's aggregates of `min_size` or more particles
     /// that no x wall holds: the case-2 velocity of Table 2.
     pub fn free_velocities_um_per_s(&self, min_size: usize) -> Vec<f64> {
-        self.last
-            .iter()
-            .zip(&self.tracked_vx)
-            .zip(&self.at_x_wall)
-            .filter(|((a, _), &held)| a.size() >= min_size && !held)
-            .map(|((_, v), _)| v * 1e6)
-            .collect()
+        self.last.iter().filter(|a| a.size >= min_size && !a.at_x_wall).map(|a| a.tracked_vx * 1e6).collect()
     }
 }
 
@@ -117,6 +170,7 @@ fn load(
     let mut run = Run {
         experiment: experiment.spec.name.clone(),
         id: point.id.clone(),
+        scene_hash: point.scene.hash.clone(),
         scene: point.base.file_stem().map_or(String::new(), |s| s.to_string_lossy().to_string()),
         variant: point.variant.clone().unwrap_or_default(),
         variant_overrides: point
@@ -141,8 +195,7 @@ fn load(
         box_limited: vec![],
         box_extent: f64::NAN,
         last: vec![],
-        tracked_vx: vec![],
-        at_x_wall: vec![],
+        source: Source::None,
     };
     if !file.exists() {
         return Ok(run);
@@ -175,14 +228,16 @@ fn read_run(
         let reader = FrameReader::new(&t).map_err(|e| e.to_string())?;
         let frames = reader.times.len();
         run.box_extent = reader.box_extent();
+        let mut last = vec![];
         for k in 0..frames {
             let (time, aggs) = reader.aggregates(k as isize, gap).map_err(|e| e.to_string())?;
+            let finite: Vec<f64> = aggs.iter().filter(|a| !a.percolating).map(|a| a.length).collect();
             run.times.push(time);
-            run.mean_length.push(summary(&finite_lengths(&aggs)).mean);
+            run.mean_length.push(summary(&finite).mean);
             run.box_limited
                 .push(aggs.iter().filter(|a| a.box_limited(run.box_extent)).count() as f64 / aggs.len() as f64);
             if k + 1 == frames {
-                run.last = aggs;
+                last = aggs;
             }
         }
         let times = &reader.times;
@@ -194,26 +249,24 @@ fn read_run(
         );
         let span = times[end] - times[start];
         let domain = reader.domain();
-        run.tracked_vx = run
-            .last
-            .iter()
-            .map(|a| {
-                a.members.iter().map(|&i| domain.displacement(&now[i], &then[i]).x).sum::<f64>()
-                    / (a.members.len() as f64 * span)
-            })
-            .collect();
         let radius = &point.scene.initial.radius;
-        run.at_x_wall = run
-            .last
-            .iter()
-            .map(|a| {
-                !domain.periodic[0]
-                    && a.members
-                        .iter()
-                        .any(|&i| now[i].x - domain.lo.x < 3.0 * radius[i] || domain.hi.x - now[i].x < 3.0 * radius[i])
-            })
-            .collect();
+        let summarise = |a: &Aggregate| AggregateSummary {
+            size: a.size(),
+            length: a.length,
+            field_extent: a.field_extent,
+            orientation_deg: a.orientation_deg,
+            com_velocity: a.com_velocity,
+            percolating: a.percolating,
+            tracked_vx: a.members.iter().map(|&i| domain.displacement(&now[i], &then[i]).x).sum::<f64>()
+                / (a.members.len() as f64 * span),
+            at_x_wall: !domain.periodic[0]
+                && a.members
+                    .iter()
+                    .any(|&i| now[i].x - domain.lo.x < 3.0 * radius[i] || domain.hi.x - now[i].x < 3.0 * radius[i]),
+        };
+        run.last = last.iter().map(summarise).collect();
     }
+    run.source = Source::Trajectory;
     Ok(())
 }
 
@@ -244,4 +297,14 @@ pub fn load_runs(files: &[PathBuf], gap: f64) -> Result<Vec<Run>, Box<dyn std::e
     }
     let runs: Result<Vec<Run>, _> = jobs.par_iter().map(|(e, p)| load(e, p, gap)).collect();
     runs.map_err(|e| e.to_string().into())
+}
+
+/// As [`load_runs`], with the report's digests in `digests` ([`super::digest`]): the finished
+/// runs read from trajectories are recorded there, and the runs whose trajectories are not here
+/// are read from there.
+pub fn load_runs_digested(files: &[PathBuf], gap: f64, digests: &Path) -> Result<Vec<Run>, Box<dyn std::error::Error>> {
+    let mut runs = load_runs(files, gap)?;
+    super::digest::record(&runs, digests, gap)?;
+    super::digest::fill(&mut runs, digests, gap)?;
+    Ok(runs)
 }
