@@ -74,15 +74,17 @@ fn report_tables_are_the_analysis_of_the_runs() {
     run_experiment(&experiment, &ExperimentOptions { jobs: Some(2), ..Default::default() }).unwrap();
 
     let out = dir.join("report");
-    let reference = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("reference/paper");
-    let readme = write_report(&PaperReportOptions {
-        experiments: experiments.clone(),
-        reference,
-        out: out.clone(),
-        gap: 1e-3,
-        wall_time: Some(12.0),
-    })
-    .unwrap();
+    let report = |wall_time| {
+        write_report(&PaperReportOptions {
+            experiments: experiments.clone(),
+            reference: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("reference/paper"),
+            out: out.clone(),
+            gap: 1e-3,
+            wall_time,
+        })
+        .unwrap()
+    };
+    let readme = report(Some(12.0));
     let text = std::fs::read_to_string(&readme).unwrap();
 
     // Independent analysis of the three runs' last frames.
@@ -144,14 +146,7 @@ fn report_tables_are_the_analysis_of_the_runs() {
     let damaged = runs.join("case1-c0.563__seed-3.h5");
     let bytes = std::fs::read(&damaged).unwrap();
     std::fs::write(&damaged, &bytes[..bytes.len() / 3]).unwrap();
-    let readme = write_report(&PaperReportOptions {
-        experiments,
-        reference: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("reference/paper"),
-        out: out.clone(),
-        gap: 1e-3,
-        wall_time: None,
-    })
-    .unwrap();
+    let readme = report(None);
     let text = std::fs::read_to_string(&readme).unwrap();
     assert!(
         text.contains("Unreadable run files") && text.contains("case1-c0.563__seed-3.h5"),
@@ -168,14 +163,7 @@ fn report_tables_are_the_analysis_of_the_runs() {
     // report made: the table is the first one, to the bit.
     std::fs::remove_file(&damaged).unwrap();
     std::fs::remove_file(runs.join("case1-c0.563__seed-2.h5")).unwrap();
-    let readme = write_report(&PaperReportOptions {
-        experiments: dir.join("experiments"),
-        reference: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("reference/paper"),
-        out: out.clone(),
-        gap: 1e-3,
-        wall_time: None,
-    })
-    .unwrap();
+    let readme = report(None);
     let text = std::fs::read_to_string(&readme).unwrap();
     assert!(text.contains("1 runs read there, 2 from the report's"), "provenance stated");
     let parquet = ParquetReader::new(std::fs::File::open(out.join("tables/table3.parquet")).unwrap()).finish().unwrap();

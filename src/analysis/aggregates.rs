@@ -51,8 +51,14 @@ impl Aggregate {
     /// Whether the box caps this aggregate: it percolates, or its field extent is at least
     /// [`BOX_LIMITED_FRACTION`] of `box_extent`, the box's extent along the field.
     pub fn box_limited(&self, box_extent: f64) -> bool {
-        self.percolating || self.field_extent >= BOX_LIMITED_FRACTION * box_extent
+        box_limits(self.percolating, self.field_extent, box_extent)
     }
+}
+
+/// The box caps an aggregate that percolates or whose field extent is at least
+/// [`BOX_LIMITED_FRACTION`] of `box_extent`.
+pub fn box_limits(percolating: bool, field_extent: f64, box_extent: f64) -> bool {
+    percolating || field_extent >= BOX_LIMITED_FRACTION * box_extent
 }
 
 /// The box's extent along `direction`: Σ |dₐ| Lₐ (the edge length for a field along an axis).

@@ -11,7 +11,7 @@
 //! differences) reads trajectories and leaves digest-only runs out, saying so.
 
 use super::runs::{AggregateSummary, Run, Source};
-use super::tables::{col, scol, ucol};
+use super::tables::{col, floats, scol, ucol};
 use crate::core::state::Vec3;
 use crate::io::trajectory::status;
 use polars::prelude::*;
@@ -79,9 +79,6 @@ fn read(dir: &Path) -> Result<BTreeMap<String, Entry>, Error> {
     };
     let strings = |df: &DataFrame, c: &str| -> Result<Vec<String>, Error> {
         Ok(df.column(c)?.str()?.into_iter().map(|s| s.unwrap_or_default().to_string()).collect())
-    };
-    let floats = |df: &DataFrame, c: &str| -> Result<Vec<f64>, Error> {
-        Ok(df.column(c)?.f64()?.into_iter().map(|v| v.unwrap_or(f64::NAN)).collect())
     };
     let (runs, frames, aggs) = (open("runs.parquet")?, open("frames.parquet")?, open("aggregates.parquet")?);
     let (hash, gap, st, msg, wall, extent) = (
@@ -153,7 +150,7 @@ fn encode(entries: &BTreeMap<String, Entry>) -> Result<[Vec<u8>; 3], Error> {
     let all = |f: fn(&Entry) -> f64| entries.values().map(f).collect::<Vec<f64>>();
     let each = |f: fn(&Entry) -> &Vec<f64>| entries.values().flat_map(|e| f(e).iter().copied()).collect::<Vec<f64>>();
     let aggregates = || entries.values().flat_map(|e| e.last.iter());
-    let floats = |f: fn(&AggregateSummary) -> f64| aggregates().map(f).collect::<Vec<f64>>();
+    let per_aggregate = |f: fn(&AggregateSummary) -> f64| aggregates().map(f).collect::<Vec<f64>>();
     let bools = |name: &str, f: fn(&AggregateSummary) -> bool| {
         Column::new(name.into(), aggregates().map(f).collect::<Vec<bool>>())
     };
@@ -175,14 +172,14 @@ fn encode(entries: &BTreeMap<String, Entry>) -> Result<[Vec<u8>; 3], Error> {
     let mut aggs = DataFrame::new(vec![
         scol("id", ids(|e| e.last.len())),
         ucol("size", aggregates().map(|a| a.size as u64).collect()),
-        col("length_m", floats(|a| a.length)),
-        col("field_extent_m", floats(|a| a.field_extent)),
-        col("orientation_deg", floats(|a| a.orientation_deg)),
-        col("vx_m_per_s", floats(|a| a.com_velocity.x)),
-        col("vy_m_per_s", floats(|a| a.com_velocity.y)),
-        col("vz_m_per_s", floats(|a| a.com_velocity.z)),
+        col("length_m", per_aggregate(|a| a.length)),
+        col("field_extent_m", per_aggregate(|a| a.field_extent)),
+        col("orientation_deg", per_aggregate(|a| a.orientation_deg)),
+        col("vx_m_per_s", per_aggregate(|a| a.com_velocity.x)),
+        col("vy_m_per_s", per_aggregate(|a| a.com_velocity.y)),
+        col("vz_m_per_s", per_aggregate(|a| a.com_velocity.z)),
         bools("percolating", |a| a.percolating),
-        col("tracked_vx_m_per_s", floats(|a| a.tracked_vx)),
+        col("tracked_vx_m_per_s", per_aggregate(|a| a.tracked_vx)),
         bools("at_x_wall", |a| a.at_x_wall),
     ])?;
     let bytes = |df: &mut DataFrame| -> Result<Vec<u8>, Error> {
@@ -195,57 +192,53 @@ fn encode(entries: &BTreeMap<String, Entry>) -> Result<[Vec<u8>; 3], Error> {
 
 const FILES: [&str; 3] = ["runs.parquet", "frames.parquet", "aggregates.parquet"];
 
-/// Fills every run of `runs` that has no trajectory here from the digests in `dir` (one
-/// directory per experiment), where the digest was made from the same scene at gap tolerance
-/// `gap`. Returns how many runs were filled.
-pub fn fill(runs: &mut [Run], dir: &Path, gap: f64) -> Result<usize, Error> {
-    let mut filled = 0;
-    let mut cache: BTreeMap<String, BTreeMap<String, Entry>> = BTreeMap::new();
-    for run in runs.iter_mut().filter(|r| r.source == Source::None && !r.file.exists()) {
-        if !cache.contains_key(&run.experiment) {
-            let entries = read(&dir.join(&run.experiment)).map_err(|e| format!("digest {}: {e}", run.experiment))?;
-            cache.insert(run.experiment.clone(), entries);
-        }
-        if let Some(e) = cache[&run.experiment].get(&run.id) {
-            if e.scene_hash == run.scene_hash && e.gap == gap {
-                e.fill(run);
-                filled += 1;
-            }
-        }
-    }
-    Ok(filled)
-}
-
-/// Records every finished run of `runs` read from its trajectory in the digests in `dir`,
-/// replacing the rows of the same ids and keeping the others. A digest is rewritten only when
-/// its content changes. Returns the experiments whose digest changed.
-pub fn record(runs: &[Run], dir: &Path, gap: f64) -> Result<Vec<String>, Error> {
-    let mut by_experiment: BTreeMap<&str, Vec<&Run>> = BTreeMap::new();
-    for r in runs.iter().filter(|r| finished(r)) {
-        by_experiment.entry(&r.experiment).or_default().push(r);
-    }
+/// Brings `runs` and the digests in `dir` (one directory per experiment) together, reading
+/// each experiment's digest once: every finished run read from its trajectory replaces its row
+/// (the others are kept, and a digest is rewritten only when its content changes), and every run
+/// whose trajectory is not here is filled from its row when the row was made from the same scene
+/// at gap tolerance `gap`. Returns the experiments whose digest changed.
+pub fn sync(runs: &mut [Run], dir: &Path, gap: f64) -> Result<Vec<String>, Error> {
+    let mut experiments: Vec<String> = runs.iter().map(|r| r.experiment.clone()).collect();
+    experiments.sort();
+    experiments.dedup();
     let mut changed = vec![];
-    for (experiment, fresh) in by_experiment {
-        let here = dir.join(experiment);
+    for experiment in experiments {
+        let here = dir.join(&experiment);
         let mut entries = read(&here).map_err(|e| format!("digest {experiment}: {e}"))?;
-        for r in fresh {
+        let mut fresh = false;
+        for r in runs.iter().filter(|r| r.experiment == experiment && finished(r)) {
             entries.insert(r.id.clone(), Entry::of(r, gap));
+            fresh = true;
         }
-        let bytes = encode(&entries)?;
-        let same = FILES.iter().zip(&bytes).all(|(f, b)| std::fs::read(here.join(f)).is_ok_and(|old| &old == b));
-        if !same {
-            std::fs::create_dir_all(&here)?;
-            // Each table is written beside its place and renamed into it, so that an interrupted
-            // report leaves the old table or the new one, never half of one.
-            for (f, b) in FILES.iter().zip(&bytes) {
-                let part = here.join(format!("{f}.part"));
-                std::fs::write(&part, b)?;
-                std::fs::rename(&part, here.join(f))?;
+        if fresh && write(&here, &entries)? {
+            changed.push(experiment.clone());
+        }
+        for run in
+            runs.iter_mut().filter(|r| r.experiment == experiment && r.source == Source::None && !r.file.exists())
+        {
+            if let Some(e) = entries.get(&run.id).filter(|e| e.scene_hash == run.scene_hash && e.gap == gap) {
+                e.fill(run);
             }
-            changed.push(experiment.to_string());
         }
     }
     Ok(changed)
+}
+
+/// Writes `entries` as the digest in `here` unless it holds them already; whether it wrote.
+fn write(here: &Path, entries: &BTreeMap<String, Entry>) -> Result<bool, Error> {
+    let bytes = encode(entries)?;
+    if FILES.iter().zip(&bytes).all(|(f, b)| std::fs::read(here.join(f)).is_ok_and(|old| &old == b)) {
+        return Ok(false);
+    }
+    std::fs::create_dir_all(here)?;
+    // Each table is written beside its place and renamed into it, so that an interrupted report
+    // leaves the old table or the new one, never half of one.
+    for (f, b) in FILES.iter().zip(&bytes) {
+        let part = here.join(format!("{f}.part"));
+        std::fs::write(&part, b)?;
+        std::fs::rename(&part, here.join(f))?;
+    }
+    Ok(true)
 }
 
 /// The sentence a report gives on where its runs were read: "N from trajectories here, M from
@@ -312,13 +305,14 @@ mod tests {
     #[test]
     fn a_digest_gives_back_the_numbers_it_was_made_from() {
         let dir = tempfile::tempdir().unwrap();
-        let made = vec![finished_run("a"), finished_run("b"), run("c", "h1")];
-        assert_eq!(record(&made, dir.path(), 1e-3).unwrap(), vec!["e".to_string()]);
+        let mut made = vec![finished_run("a"), finished_run("b"), run("c", "h1")];
+        assert_eq!(sync(&mut made, dir.path(), 1e-3).unwrap(), vec!["e".to_string()]);
         // Unchanged content is not rewritten.
-        assert!(record(&made, dir.path(), 1e-3).unwrap().is_empty());
+        assert!(sync(&mut made, dir.path(), 1e-3).unwrap().is_empty());
 
         let mut read_back = vec![run("a", "h1"), run("b", "other scene"), run("c", "h1")];
-        assert_eq!(fill(&mut read_back, dir.path(), 1e-3).unwrap(), 1);
+        assert!(sync(&mut read_back, dir.path(), 1e-3).unwrap().is_empty());
+        assert_eq!(read_back.iter().filter(|r| r.source == Source::Digest).count(), 1);
         let (a, b, c) = (&read_back[0], &read_back[1], &read_back[2]);
         assert_eq!(a.source, Source::Digest);
         assert_eq!((a.status.as_str(), a.message.as_str()), ("completed", "ok"));
@@ -339,14 +333,16 @@ mod tests {
         assert_eq!(c.source, Source::None);
         // Another gap tolerance is another analysis.
         let mut other_gap = vec![run("a", "h1")];
-        assert_eq!(fill(&mut other_gap, dir.path(), 2e-3).unwrap(), 0);
+        sync(&mut other_gap, dir.path(), 2e-3).unwrap();
+        assert_eq!(other_gap[0].source, Source::None);
 
         // A later report keeps the rows it did not read and replaces those it did.
         let mut again = finished_run("a");
         again.wall_time = 1.0;
-        record(&[again], dir.path(), 1e-3).unwrap();
+        sync(&mut [again], dir.path(), 1e-3).unwrap();
         let mut both = vec![run("a", "h1"), run("b", "h1")];
-        assert_eq!(fill(&mut both, dir.path(), 1e-3).unwrap(), 2);
+        sync(&mut both, dir.path(), 1e-3).unwrap();
+        assert!(both.iter().all(|r| r.source == Source::Digest));
         assert_eq!((both[0].wall_time, both[1].wall_time), (1.0, 12.345));
     }
 }

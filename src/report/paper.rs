@@ -357,8 +357,8 @@ fn gap_sensitivity(runs: &[Run]) -> Result<String, Error> {
     );
     let respa = runs
         .iter()
-        .filter(|r| r.experiment == "paper-sensitivity" && r.variant == "respa" && r.seed == 1 && r.completed());
-    let respa = respa.filter(|r| r.has_trajectory());
+        .filter(|r| r.experiment == "paper-sensitivity" && r.variant == "respa" && r.seed == 1 && r.completed())
+        .filter(|r| r.has_trajectory());
     // Largest relative change of each run's mean from 1e-3 to 5e-2, and below 1e-3.
     let (mut above, mut below) = (0.0_f64, 0.0_f64);
     for r in table3_ensemble(runs).into_iter().filter(|r| r.seed == 1 && r.has_trajectory()).chain(respa) {

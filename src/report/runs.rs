@@ -1,7 +1,7 @@
 //! The runs behind a report: every point of a set of experiment files, with the aggregates of
 //! its last frame and the mean aggregate length at every frame.
 
-use crate::analysis::aggregates::{Aggregate, BOX_LIMITED_FRACTION};
+use crate::analysis::aggregates::{box_limits, Aggregate};
 use crate::analysis::stats::summary;
 use crate::analysis::trajectory::FrameReader;
 use crate::core::state::Vec3;
@@ -103,7 +103,7 @@ impl AggregateSummary {
 
     /// As [`Aggregate::box_limited`].
     pub fn box_limited(&self, box_extent: f64) -> bool {
-        self.percolating || self.field_extent >= BOX_LIMITED_FRACTION * box_extent
+        box_limits(self.percolating, self.field_extent, box_extent)
     }
 }
 
@@ -304,7 +304,6 @@ pub fn load_runs(files: &[PathBuf], gap: f64) -> Result<Vec<Run>, Box<dyn std::e
 /// are read from there.
 pub fn load_runs_digested(files: &[PathBuf], gap: f64, digests: &Path) -> Result<Vec<Run>, Box<dyn std::error::Error>> {
     let mut runs = load_runs(files, gap)?;
-    super::digest::record(&runs, digests, gap)?;
-    super::digest::fill(&mut runs, digests, gap)?;
+    super::digest::sync(&mut runs, digests, gap)?;
     Ok(runs)
 }
