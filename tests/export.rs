@@ -128,12 +128,17 @@ print("arrays", len(names), " ".join(names))
             .unwrap()
     };
     let mut out = render();
-    if !out.status.success() {
-        // pvbatch under a fresh X server occasionally aborts at start-up; one more try.
+    for attempt in 2..=3 {
+        if out.status.success() {
+            break;
+        }
+        // pvbatch under a fresh X server occasionally aborts at start-up ("bad X server
+        // connection"), more often on a loaded machine; two more tries, a second apart.
         println!(
-            "first render failed, trying once more: {}",
+            "render failed, attempt {attempt}: {}",
             String::from_utf8_lossy(&out.stderr).lines().last().unwrap_or("")
         );
+        std::thread::sleep(std::time::Duration::from_secs(1));
         out = render();
     }
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));

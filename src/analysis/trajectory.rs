@@ -21,11 +21,11 @@ pub struct FrameReader<'a> {
 
 impl<'a> FrameReader<'a> {
     pub fn new(t: &'a Trajectory) -> Result<Self, Error> {
-        let scene = Scene::parse(&t.scene_text()?, &t.path)?;
-        let field = scene.spec.field.as_ref().map_or(Vec3::x(), |f| Vec3::from(f.b0));
+        let (spec, domain) = Scene::layout(&t.scene_text()?, &t.path)?;
+        let field = spec.field.as_ref().map_or(Vec3::x(), |f| Vec3::from(f.b0));
         Ok(Self {
             trajectory: t,
-            domain: scene.domain,
+            domain,
             field,
             radius: t.file.dataset("particles/radius")?.read_raw()?,
             mass: t.file.dataset("particles/mass")?.read_raw()?,

@@ -142,13 +142,16 @@ pub struct Simulation {
 }
 
 impl Simulation {
-    /// Evaluates the forces of a fresh state (not needed after a checkpoint restore).
+    /// Evaluates the forces of a fresh state (not needed after a checkpoint restore). Like
+    /// LAMMPS' and LIGGGHTS' setup (pair gran: "do not update shear history during setup"), this
+    /// evaluation does not advance the tangential springs (dt = 0 for them), so a state started
+    /// from a stored contact history sees its springs as stored.
     pub fn initialise(&mut self) -> Result<(), RunError> {
         if self.integrator.splits_forces() {
-            self.field.evaluate_group(&mut self.state, self.dt, ForceGroup::Fast);
-            self.field.evaluate_group(&mut self.state, self.dt, ForceGroup::Slow);
+            self.field.evaluate_group(&mut self.state, 0.0, ForceGroup::Fast);
+            self.field.evaluate_group(&mut self.state, 0.0, ForceGroup::Slow);
         } else {
-            self.field.evaluate(&mut self.state, self.dt);
+            self.field.evaluate(&mut self.state, 0.0);
         }
         self.check()
     }

@@ -71,8 +71,8 @@ pub fn write_xdmf(h5: &Path) -> Result<PathBuf, Error> {
 /// Writes every frame of trajectory `h5` as a LAMMPS text dump to `out`.
 pub fn write_lammps_dump(h5: &Path, out: &Path) -> Result<(), Error> {
     let t = Trajectory::open(h5)?;
-    let scene = Scene::parse(&t.scene_text()?, &h5.display().to_string())?;
-    let (d, frames) = (&scene.domain, t.frames()?);
+    let (_, domain) = Scene::layout(&t.scene_text()?, &h5.display().to_string())?;
+    let (d, frames) = (&domain, t.frames()?);
     let steps: Vec<u64> = t.file.dataset("frames/step")?.read_raw()?;
     let radius: Vec<f64> = t.file.dataset("particles/radius")?.read_raw()?;
     let species: Vec<u16> = t.file.dataset("particles/species")?.read_raw()?;

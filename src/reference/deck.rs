@@ -74,6 +74,9 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
         // velocities, angular velocities, and each species' type, diameter and density.
         seed: _,
         particles,
+        // A started scene's particles are in `scene.initial` like placed ones; its contact
+        // history is not (a data file cannot carry springs): the deck says so.
+        start: _,
         // The box: the data file's bounds, the `boundary` line, granular walls on wall faces.
         domain: DomainSpec { lo: _, hi: _, boundary: BoundarySpec { x, y, z } },
         fluid,
@@ -468,6 +471,15 @@ fn input_deck(engine: Engine, scene: &Scene, data: &Path, dump: &str, coupling: 
         s += "# LIGGGHTS checks 5e6 <= E <= 1e9 unless told otherwise\nhard_particles yes\n";
     }
     let _ = writeln!(s, "read_data {}", data.display());
+    if !scene.initial_contacts.pairs.is_empty() || !scene.initial_contacts.walls.is_empty() {
+        let _ = writeln!(
+            s,
+            "# Started from a trajectory: positions and velocities as stored; the {} pair and {} wall tangential\n\
+             # springs it held start at zero here (magdem keeps them).",
+            scene.initial_contacts.pairs.len(),
+            scene.initial_contacts.walls.len()
+        );
+    }
     let _ = writeln!(
         s,
         "\n# Neighbour skin scaled to the particle size (0.2 diameters).\nneighbor {:.6e} bin",

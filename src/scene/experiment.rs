@@ -210,7 +210,8 @@ impl Experiment {
                     },
                     toml::to_string(&table).map_err(|e| invalid("sweep", "…", e.to_string()))?
                 );
-                let scene = Scene::parse(&text, &format!("{} ({id})", path.display()))?;
+                let origin = format!("{} ({id})", path.display());
+                let scene = Scene::parse_in(&text, &origin, base_path.parent().unwrap_or(Path::new(".")))?;
                 points.push(Point { id, base: base.clone(), variant: variant.clone(), overrides, engine, scene });
             }
         }

@@ -4,6 +4,7 @@
 pub mod experiment;
 pub mod placement;
 pub mod spec;
+mod start;
 
 use crate::core::domain::Domain;
 use crate::core::forces::contact::law::{ContactLaw, Normal, Tangential};
@@ -20,7 +21,9 @@ use crate::core::magnetisation::{Induction, Magnetisation, MU0};
 use crate::core::neighbours::{PairRange, Skins};
 use crate::core::simulation::{ForceField, Simulation};
 use crate::core::stability::{Monitor, StepEstimate, StepEstimateInput};
-use crate::core::state::{Particles, Saturation, SaturationLaw, SizeDistribution, SizeLaw, Species, State, Vec3};
+use crate::core::state::{
+    ContactHistory, Particles, Saturation, SaturationLaw, SizeDistribution, SizeLaw, Species, State, Vec3,
+};
 use nalgebra::Matrix3;
 use rand::SeedableRng;
 use sha2::{Digest, Sha256};
@@ -52,11 +55,13 @@ pub struct Scene {
     pub spec: SceneSpec,
     /// The TOML text as read (stored in every trajectory).
     pub text: String,
-    /// SHA-256 of `text`, hex.
+    /// SHA-256 of `text` (and of the started state, with `[start]`), hex.
     pub hash: String,
     pub domain: Domain,
     pub species: Vec<Species>,
     pub initial: Particles,
+    /// The contact history the run starts with (from `[start]`; else empty).
+    pub initial_contacts: ContactHistory,
     pub estimate: StepEstimate,
     /// Non-fatal findings (e.g. a gradient that is not divergence-free, dt above the estimate).
     pub warnings: Vec<String>,
@@ -66,11 +71,26 @@ impl Scene {
     pub fn from_file(path: &Path) -> Result<Self, SceneError> {
         let text = std::fs::read_to_string(path)
             .map_err(|source| SceneError::Read { path: path.display().to_string(), source })?;
-        Self::parse(&text, &path.display().to_string())
+        Self::parse_in(&text, &path.display().to_string(), path.parent().unwrap_or(Path::new(".")))
     }
 
-    /// Parses and checks `text`; `origin` names it in messages.
+    /// Parses and checks `text`; `origin` names it in messages. A `[start]` trajectory is found
+    /// relative to the current directory.
     pub fn parse(text: &str, origin: &str) -> Result<Self, SceneError> {
+        Self::parse_in(text, origin, Path::new("."))
+    }
+
+    /// The box and the spec of a stored scene, without placing or loading its particles: what
+    /// reading a trajectory needs (its frames hold the particles; a `[start]` file need not be
+    /// on this machine).
+    pub fn layout(text: &str, origin: &str) -> Result<(SceneSpec, Domain), SceneError> {
+        let spec: SceneSpec = toml::from_str(text).map_err(|e| syntax_error(text, origin, &e))?;
+        let domain = check_domain(&spec.domain)?;
+        Ok((spec, domain))
+    }
+
+    /// [`Scene::parse`] with a `[start]` trajectory relative to `dir` (the scene file's).
+    pub fn parse_in(text: &str, origin: &str, dir: &Path) -> Result<Self, SceneError> {
         // Every float anywhere in the scene must be finite (TOML allows nan and inf), and every
         // vector has three components (serde would drop a fourth silently).
         if let Ok(table) = toml::from_str::<toml::Table>(text) {
@@ -83,11 +103,10 @@ impl Scene {
         let spec: SceneSpec = toml::from_str(text).map_err(|e| syntax_error(text, origin, &e))?;
         let mut hasher = Sha256::new();
         hasher.update(text.as_bytes());
-        let hash = hasher.finalize().iter().map(|b| format!("{b:02x}")).collect();
-        Self::build(spec, text.to_string(), hash)
+        Self::build(spec, text.to_string(), hasher, dir)
     }
 
-    fn build(spec: SceneSpec, text: String, hash: String) -> Result<Self, SceneError> {
+    fn build(spec: SceneSpec, text: String, mut hasher: Sha256, dir: &Path) -> Result<Self, SceneError> {
         let mut warnings = vec![];
         if spec.version != 1 {
             return Err(invalid("version", spec.version, "this magdem reads scene version 1"));
@@ -108,7 +127,15 @@ impl Scene {
             }
         }
         check_forces(&spec, &domain, &species, &mut warnings)?;
-        let initial = place_particles(&spec, &domain, &species)?;
+        let (initial, initial_contacts) = match &spec.start {
+            Some(start) => {
+                let started = start::load(&spec, start, dir, &domain, &species, &mut warnings)?;
+                hasher.update(&started.digest);
+                (started.particles, started.contacts)
+            }
+            None => (place_particles(&spec, &domain, &species)?, ContactHistory::default()),
+        };
+        let hash = hasher.finalize().iter().map(|b| format!("{b:02x}")).collect();
         check_integration(&spec)?;
 
         // A polydisperse species counts at its smallest radius, the strictest for every bound.
@@ -138,7 +165,7 @@ impl Scene {
                 OnUnstable::Warn => warnings.push(format!("integration.dt = {dt:e} {why}")),
             }
         }
-        let scene = Self { spec, text, hash, domain, species, initial, estimate, warnings };
+        let scene = Self { spec, text, hash, domain, species, initial, initial_contacts, estimate, warnings };
         let k = scene.spec.integration.slow_every;
         if !scene.steps_per_frame().is_multiple_of(k) || !scene.total_steps().is_multiple_of(k) {
             return Err(invalid(
@@ -187,7 +214,7 @@ impl Scene {
 
     /// The initial state (forces not yet evaluated).
     pub fn initial_state(&self) -> State {
-        State::new(self.initial.clone())
+        State { contacts: self.initial_contacts.clone(), ..State::new(self.initial.clone()) }
     }
 
     /// The initial state with the magnetic forces evaluated once (the moments at t = 0 in

@@ -23,7 +23,11 @@ pub struct SceneSpec {
     pub fluid: Option<FluidSpec>,
     pub field: Option<FieldSpec>,
     pub species: Vec<SpeciesSpec>,
+    /// Placed particles; absent when the scene starts from a trajectory (`[start]`).
+    #[serde(default)]
     pub particles: Vec<ParticleGroupSpec>,
+    /// Start from the state a trajectory ends with, instead of placing `[[particles]]`.
+    pub start: Option<StartSpec>,
     #[serde(default)]
     pub forces: ForcesSpec,
     pub integration: IntegrationSpec,
@@ -31,6 +35,21 @@ pub struct SceneSpec {
     pub output: OutputSpec,
     #[serde(default)]
     pub stability: StabilitySpec,
+}
+
+/// `[start]`: the particles, their velocities and spins, and the contact history (tangential
+/// springs of touching pairs and wall contacts) of the state a magdem trajectory ends with (its
+/// checkpoint: the last frame written). The run's clock starts again at t = 0, step 0. Each
+/// particle keeps its radius and takes its species (matched by name) from this scene: its mass,
+/// inertia and moment follow this scene's density and magnetic properties. Wall springs are kept
+/// only where this scene's box equals the trajectory's. The first forces are evaluated anew, with
+/// the stored (full-step) velocities and springs not advanced, so the started run is a new run
+/// from that state, not a continuation to the bit (that is `magdem run --resume`).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StartSpec {
+    /// The trajectory (HDF5), relative to this scene file.
+    pub trajectory: std::path::PathBuf,
 }
 
 fn default_seed() -> u64 {

@@ -20,7 +20,8 @@ pub struct Context<'a> {
     pub domain: &'a Domain,
     /// Pair lists for the ranges the terms declared ([`ForceTerm::pairs`]), up to date.
     pub neighbours: &'a Neighbours,
-    /// Time step, for history-dependent terms (tangential spring).
+    /// Time step by which history-dependent terms advance (tangential springs); 0 in the setup
+    /// evaluation ([`crate::core::simulation::Simulation::initialise`]).
     pub dt: f64,
 }
 
