@@ -91,8 +91,9 @@ enum Report {
         /// The case-2 scene of the refactorisation study.
         #[arg(long, default_value = "experiments/scenes/case2.toml")]
         case2_scene: PathBuf,
-        /// The paper's Table 2 (CSV), whose first row is the experiment.
-        #[arg(long, default_value = "reference/paper/table2_case2.csv")]
+        /// The paper's tables (table2_case2.csv, whose first row is the experiment, and
+        /// table3_case1_lengths.csv).
+        #[arg(long, default_value = "reference/paper")]
         reference: PathBuf,
         /// Report directory.
         #[arg(long, default_value = "reports/hydrodynamics")]

@@ -23,7 +23,7 @@ pub struct HydrodynamicsReportOptions {
     pub experiments: PathBuf,
     /// The case-2 scene the refactorisation study shortens (`experiments/scenes/case2.toml`).
     pub case2_scene: PathBuf,
-    /// The paper's Table 2 (`reference/paper/table2_case2.csv`): the experiment's row.
+    /// The paper's tables (`reference/paper`): Table 2's experiment row, Table 3's lengths.
     pub reference: PathBuf,
     /// Report directory (`reports/hydrodynamics`).
     pub out: PathBuf,
@@ -67,7 +67,8 @@ pub fn write_report(options: &HydrodynamicsReportOptions) -> Result<PathBuf, Err
     let (cost, per_step_300) = cost_section(&tables)?;
     md += &cost;
     md += &refactor_section(&options.case2_scene, &tables)?;
-    md += &case2_section(&runs, &options.reference, out, &tables)?;
+    md += &case2_section(&runs, &options.reference.join("table2_case2.csv"), out, &tables)?;
+    md += &case1_section(&runs, &options.reference.join("table3_case1_lengths.csv"), out, &tables)?;
     let ran = |variant: &str| {
         runs.iter().any(|r| r.completed() && r.experiment.starts_with("hydro-case2") && r.variant == variant)
     };
@@ -83,14 +84,16 @@ pub fn write_report(options: &HydrodynamicsReportOptions) -> Result<PathBuf, Err
                §2.1) and the sweep of cv 5 / 10 / 20 % is `experiments/hydrodynamics/opt-in/case2-cv.toml` (the \
                experiment's spread is not given); its runs are not made yet.\n";
     }
-    md += &format!(
-        "- Case 1 with RPY, for its cost: at 300 particles a step with the factor renewed every 10 steps \
-         costs {:.1} ms here (cost section), so one 5 ms run of 5 × 10⁵ steps is about {:.0} minutes of one core, ten \
-         seeds about {:.0} core-hours.\n\n",
-        1e3 * per_step_300,
-        5e5 * per_step_300 / 60.0,
-        10.0 * 5e5 * per_step_300 / 3600.0
-    );
+    if !runs.iter().any(|r| r.completed() && r.experiment == "hydro-case1") {
+        md += &format!(
+            "- Case 1 under each drag model: `experiments/hydrodynamics/case1-drag.toml` (2.25 mg/ml, ten seeds); at 300 \
+             particles an RPY step with the factor renewed every 1000 steps costs about {:.2} ms here (cost section), a 5 ms \
+             run about {:.0} minutes of one core; its runs are not made yet.\n",
+            1e3 * per_step_300,
+            5e5 * per_step_300 / 60.0,
+        );
+    }
+    md += "\n";
     let path = out.join("README.md");
     std::fs::write(&path, md)?;
     Ok(path)
@@ -207,7 +210,7 @@ fn lattice(n: usize, d: f64) -> Vec<Vec3> {
 /// every 10 steps.
 fn cost_section(tables: &Path) -> Result<(String, f64), Error> {
     let (d, mu) = (5.5e-6, 1.0e-3);
-    let mut rows: [Vec<f64>; 5] = Default::default();
+    let mut rows: [Vec<f64>; 6] = Default::default();
     for n in [55usize, 300, 1000] {
         let x = lattice(n, d);
         let radii = vec![0.5 * d; n];
@@ -226,34 +229,37 @@ fn cost_section(tables: &Path) -> Result<(String, f64), Error> {
         rows[1].push(1e3 * factor);
         rows[2].push(1e3 * solve);
         rows[3].push(1e3 * (solve + factor / 10.0));
-        rows[4].push(144.0 * (n * n) as f64 / 1e6);
+        rows[4].push(1e3 * (solve + factor / 1000.0));
+        rows[5].push(144.0 * (n * n) as f64 / 1e6);
     }
     let mut df = frame(vec![
         col("particles", rows[0].clone()),
         col("build_factorise_invert_ms", rows[1].clone()),
         col("drag_ms", rows[2].clone()),
         col("per_step_refactor_every_10_ms", rows[3].clone()),
-        col("memory_mb", rows[4].clone()),
+        col("per_step_refactor_every_1000_ms", rows[4].clone()),
+        col("memory_mb", rows[5].clone()),
     ])?;
     write(&mut df, tables, "rpy_cost")?;
     let mut md = String::from("## Cost of the dense mobility\n\n");
     md += "Building the 3N × 3N RPY mobility, its Cholesky factor and the resistance R = M⁻¹, and one drag R·U, on one \
            thread of this machine beside whatever else it runs (medians of 3–15 repeats, spheres on a jittered lattice). \
-           Per step with the factor renewed every 10 steps (`refactor_every = 10`): one drag plus a tenth of a renewal. \
-           The renewal grows as N³, the drag as N², the memory (matrix and resistance) as 144 N² bytes.\n\n";
+           Per step with the factor renewed every K steps (`refactor_every = K`): one drag plus 1/K of a renewal (the \
+           experiments below renew every 1000 steps). The renewal grows as N³, the drag as N², the memory (matrix and resistance) as 144 N² bytes.\n\n";
     md += &markdown(
         &df,
         &[
             "particles",
             "build, factorise, invert (ms)",
             "drag R·U (ms)",
-            "per step, refactor every 10 (ms)",
+            "per step, K = 10 (ms)",
+            "per step, K = 1000 (ms)",
             "memory (MB)",
         ],
-        &[0, 3, 3, 3, 1],
+        &[0, 3, 3, 3, 3, 1],
     )?;
     md += "\n";
-    Ok((md, 1e-3 * rows[3][1]))
+    Ok((md, 1e-3 * rows[4][1]))
 }
 
 /// Case 2 with RPY for `end_time` at each refactorisation interval: the largest position error
@@ -423,19 +429,21 @@ fn case2_section(runs: &[Run], reference: &Path, out: &Path, tables: &Path) -> R
         Legend::above_data(0.6),
         (Scale::Log, Scale::Log),
     )?;
-    let mut df = frame(vec![
-        scol("drag_model", names.clone()),
-        col("seeds", cols[0].clone()),
-        col("aggregates_per_run", cols[1].clone()),
-        col("mean_size_particles", cols[2].clone()),
-        col("ci95_size", cols[3].clone()),
-        col("mean_velocity_um_per_s", cols[4].clone()),
-        col("ci95_velocity", cols[5].clone()),
-        col("single_particle_velocity_um_per_s", cols[6].clone()),
-        col("velocity_5_plus_um_per_s", cols[7].clone()),
-        col("ci95_velocity_5_plus", cols[8].clone()),
-        col("log_slope_velocity_vs_size", cols[9].clone()),
-    ])?;
+    let mut df = model_table(
+        &names,
+        &[
+            ("seeds", &cols[0]),
+            ("aggregates_per_run", &cols[1]),
+            ("mean_size_particles", &cols[2]),
+            ("ci95_size", &cols[3]),
+            ("mean_velocity_um_per_s", &cols[4]),
+            ("ci95_velocity", &cols[5]),
+            ("single_particle_velocity_um_per_s", &cols[6]),
+            ("velocity_5_plus_um_per_s", &cols[7]),
+            ("ci95_velocity_5_plus", &cols[8]),
+            ("log_slope_velocity_vs_size", &cols[9]),
+        ],
+    )?;
     write(&mut df, tables, "case2_drag_models")?;
     let rpy_every = here
         .iter()
@@ -478,6 +486,172 @@ fn case2_section(runs: &[Run], reference: &Path, out: &Path, tables: &Path) -> R
     md += "\n![Velocity by size](case2-velocity-by-size.png)\n\n";
     md += &verdict(&names, &cols, exp_velocity, exp_velocity_std);
     Ok(md)
+}
+
+/// One row per drag model: its name, then the named columns.
+fn model_table(
+    names: &[String],
+    columns: &[(&str, &Vec<f64>)],
+) -> polars::prelude::PolarsResult<polars::prelude::DataFrame> {
+    let mut all = vec![scol("drag_model", names.to_vec())];
+    all.extend(columns.iter().map(|(name, values)| col(name, values.to_vec())));
+    frame(all)
+}
+
+/// The case-1 drag models, by variant name, in the report's order.
+const CASE1_MODELS: [(&str, &str); 3] = [
+    ("a-eff", "Schiller–Naumann with A_eff (the paper's)"),
+    ("stokes", "Stokes on every sphere, no shielding"),
+    ("rpy", "RPY (hydrodynamic interactions)"),
+];
+
+/// Case 1 at 2.25 mg/ml under each drag model: the mean aggregate length at 5 ms (Table 3's
+/// number) per model, its paired change against A_eff by seed, and L(t).
+fn case1_section(runs: &[Run], reference: &Path, out: &Path, tables: &Path) -> Result<String, Error> {
+    let here: Vec<&Run> = runs.iter().filter(|r| r.experiment == "hydro-case1" && r.completed()).collect();
+    if here.is_empty() {
+        return Ok(String::new());
+    }
+    let mut md = String::from("## Case 1 under each drag model\n\n");
+    let table3 = read_csv(reference)?;
+    let row = floats(&table3, "concentration_mg_per_ml")?.iter().position(|c| (c - 2.25).abs() < 1e-9).unwrap_or(2);
+    let at = |key: &str| floats(&table3, key).map(|v| v.get(row).copied().unwrap_or(f64::NAN));
+    let (paper, paper_std, exp, exp_std) =
+        (at("sim_mean_length_um")?, at("sim_std_um")?, at("exp_mean_length_um")?, at("exp_std_um")?);
+    let base: Vec<&Run> = here.iter().copied().filter(|r| r.variant == "a-eff").collect();
+    let (mut names, mut cols): (Vec<String>, [Vec<f64>; 10]) = (vec![], Default::default());
+    // Early growth: the frame nearest 1 ms (runs of one scene share their frame times).
+    let early = base.first().map_or(0, |r| {
+        (0..r.times.len()).min_by(|&a, &b| (r.times[a] - 1e-3).abs().total_cmp(&(r.times[b] - 1e-3).abs())).unwrap_or(0)
+    });
+    let at_early = |r: &Run| r.mean_length.get(early).copied().unwrap_or(f64::NAN);
+    let mut series = vec![];
+    for (k, (variant, label)) in CASE1_MODELS.iter().enumerate() {
+        let group: Vec<&Run> = here.iter().copied().filter(|r| r.variant == *variant).collect();
+        if group.is_empty() {
+            continue;
+        }
+        let lengths: Vec<f64> = group.iter().map(|r| r.mean_length_um()).collect();
+        let spread: Vec<f64> = group.iter().map(|r| summary(&r.lengths_um()).population_std).collect();
+        let change = super::convergence::paired_change(&base, &group);
+        let early_change = super::convergence::Estimate::of(
+            &group
+                .iter()
+                .filter_map(|r| {
+                    base.iter().find(|b| b.seed == r.seed).map(|b| 100.0 * (at_early(r) / at_early(b) - 1.0))
+                })
+                .collect::<Vec<_>>(),
+        );
+        let mut wall: Vec<f64> = group.iter().map(|r| r.wall_time).collect();
+        wall.sort_by(f64::total_cmp);
+        names.push(label.to_string());
+        cols[0].push(group.len() as f64);
+        cols[1].push(summary(&lengths).mean);
+        cols[2].push(ci95_half_width(&lengths));
+        cols[3].push(summary(&spread).mean);
+        cols[4].push(summary(&group.iter().map(|r| r.box_limited_fraction()).collect::<Vec<_>>()).mean);
+        cols[5].push(if *variant == "a-eff" { 0.0 } else { change.mean });
+        cols[6].push(if *variant == "a-eff" { 0.0 } else { change.ci95 });
+        cols[7].push(wall[wall.len() / 2]);
+        cols[8].push(if *variant == "a-eff" { 0.0 } else { early_change.mean });
+        cols[9].push(if *variant == "a-eff" { 0.0 } else { early_change.ci95 });
+        // L(t): the mean over seeds at each frame (runs of one scene share their frame times).
+        let times = &group[0].times;
+        let points = (0..times.len())
+            .filter_map(|f| {
+                let at_f: Vec<f64> = group
+                    .iter()
+                    .filter_map(|r| r.mean_length.get(f))
+                    .map(|l| 1e6 * l)
+                    .filter(|l| l.is_finite())
+                    .collect();
+                (at_f.len() == group.len()).then(|| (1e3 * times[f], summary(&at_f).mean))
+            })
+            .collect();
+        series.push(Series::line(format!("{label}: mean over {} seeds", group.len()), points, palette([0, 1, 3][k])));
+    }
+    for (value, label, grey) in [
+        (exp, format!("experiment {exp:.0} µm (Table 3; its time is not given)"), 0),
+        (paper, format!("paper's simulation {paper:.1} µm at 5 ms"), 140),
+    ] {
+        series.push(Series::line(label, vec![(0.0, value), (5.0, value)], RGBColor(grey, grey, grey)));
+    }
+    chart(
+        &out.join("case1-length-vs-time.png"),
+        "Case 1, 2.25 mg/ml: mean aggregate length under each drag model",
+        ("time (ms)", "mean aggregate length (µm)"),
+        &series,
+        Legend::above_data(0.45),
+        (Scale::Linear, Scale::Linear),
+    )?;
+    let mut df = model_table(
+        &names,
+        &[
+            ("seeds", &cols[0]),
+            ("mean_length_um", &cols[1]),
+            ("ci95_length_um", &cols[2]),
+            ("within_run_std_um", &cols[3]),
+            ("box_limited_fraction", &cols[4]),
+            ("paired_change_vs_a_eff_percent", &cols[5]),
+            ("ci95_paired_change_percent", &cols[6]),
+            ("paired_change_at_1ms_percent", &cols[8]),
+            ("ci95_paired_change_at_1ms_percent", &cols[9]),
+            ("median_wall_time_s", &cols[7]),
+        ],
+    )?;
+    write(&mut df, tables, "case1_drag_models")?;
+    md += &format!(
+        "`experiments/hydrodynamics/case1-drag.toml`: the paper's case 1 at 2.25 mg/ml (`experiments/scenes/case1-c2.25.toml`: \
+         336 spheres of 11 µm in the paper's 484 µm walled box, 0.4 T and its gradient, the paper's induction, velocity Verlet \
+         at dt = 1e-8 s to 5 ms) under three drag models, the same seeds for each (RPY renewing its factor every 1000 \
+         steps). Mean length: each run's mean over its aggregates at 5 ms (single particles included, as Table 3), then the \
+         mean over seeds ± CI95 over seeds; the within-run spread is the population std over a run's aggregates, averaged \
+         over seeds (a different spread: the width of the length distribution, comparable with the paper's ± {paper_std:.1} \
+         and the experiment's ± {exp_std:.0} µm). Paired change: each seed's length against the same seed under A_eff, mean \
+         ± CI95 over seeds. Box-limited: the share of aggregates whose extent along the field is at least 0.9 of the box \
+         edge. The paired change at 1 ms compares each seed's mean length at the frame nearest 1 ms, where chains grow \
+         fastest. Wall times are medians of runs made three at a time on the two cores. Paper's Table 3 at 2.25 mg/ml: simulation {paper:.1} µm, experiment {exp:.0} µm. Converged against: the RPY \
+         renewal interval (the case-2 study above). Not converged against: the box (the paper's, which caps chains: see \
+         the paper report's finite-size section), the stopping time (5 ms; chains still grow), seeds beyond those shown.\n\n"
+    );
+    md += &markdown(
+        &df,
+        &[
+            "drag model",
+            "seeds",
+            "mean length (µm)",
+            "± CI95",
+            "within-run std (µm)",
+            "box-limited",
+            "paired change vs A_eff (%)",
+            "± CI95",
+            "paired change at 1 ms (%)",
+            "± CI95",
+            "wall time/run (s)",
+        ],
+        &[0, 0, 1, 1, 1, 3, 1, 1, 1, 1, 0],
+    )?;
+    md += "\n![Case 1 length against time](case1-length-vs-time.png)\n\n";
+    md += &case1_verdict(&names, &cols);
+    Ok(md)
+}
+
+/// Whether the drag model moves Table 3: each model's paired change against A_eff, and whether
+/// its CI95 excludes zero.
+fn case1_verdict(names: &[String], cols: &[Vec<f64>; 10]) -> String {
+    let mut md = String::new();
+    for k in 1..names.len() {
+        let (change, ci) = (cols[5][k], cols[6][k]);
+        let moved = if change.abs() > ci { "moves the length" } else { "does not move the length measurably" };
+        let (early, early_ci) = (cols[8][k], cols[9][k]);
+        let grows = if early.abs() > early_ci { "grows measurably differently" } else { "grows alike" };
+        md += &format!(
+            "- {}: {moved} at 5 ms against A_eff, {change:+.1} ± {ci:.1} % (paired over {} seeds), mean {:.1} ± {:.1} µm; \
+             at 1 ms it {grows}, {early:+.1} ± {early_ci:.1} %.\n",
+            names[k], cols[0][k], cols[1][k], cols[2][k]
+        );
+    }
+    md + "\n"
 }
 
 /// What each model's velocities say against the experiment, in words: the exponent, where its
