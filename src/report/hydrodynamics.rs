@@ -610,7 +610,7 @@ fn case1_section(runs: &[Run], reference: &Path, out: &Path, tables: &Path) -> R
          and the experiment's ± {exp_std:.0} µm). Paired change: each seed's length against the same seed under A_eff, mean \
          ± CI95 over seeds. Box-limited: the share of aggregates whose extent along the field is at least 0.9 of the box \
          edge. The paired change at 1 ms compares each seed's mean length at the frame nearest 1 ms, where chains grow \
-         fastest. Wall times are medians of runs made three at a time on the two cores. Paper's Table 3 at 2.25 mg/ml: simulation {paper:.1} µm, experiment {exp:.0} µm. Converged against: the RPY \
+         fastest. Wall times are medians over a model's runs, made beside other runs on the same cores. Paper's Table 3 at 2.25 mg/ml: simulation {paper:.1} µm, experiment {exp:.0} µm. Converged against: the RPY \
          renewal interval (the case-2 study above). Not converged against: the box (the paper's, which caps chains: see \
          the paper report's finite-size section), the stopping time (5 ms; chains still grow), seeds beyond those shown.\n\n"
     );

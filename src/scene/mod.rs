@@ -1149,21 +1149,20 @@ fn available_memory() -> Option<u64> {
 pub const MAX_RANDOM_SOLID_FRACTION: f64 = 0.35;
 
 fn check_inside(key: &str, raw: &[f64; 3], x: Vec3, radius: f64, domain: &Domain) -> Result<(), SceneError> {
+    inside(x, radius, 0.0, domain).map_err(|why| invalid(key, fmt3(raw), why))
+}
+
+/// Why a sphere of `radius` at `x` does not fit `domain`: its centre outside the box, or a wall
+/// overlap beyond `allowed` (m).
+fn inside(x: Vec3, radius: f64, allowed: f64, domain: &Domain) -> Result<(), String> {
     for k in 0..3 {
         let axis = ["x", "y", "z"][k];
         if !(x[k] >= domain.lo[k] && x[k] <= domain.hi[k]) {
-            return Err(invalid(
-                key,
-                fmt3(raw),
-                format!("{axis} is outside the box [{:e}, {:e}]", domain.lo[k], domain.hi[k]),
-            ));
+            return Err(format!("{axis} is outside the box [{:e}, {:e}]", domain.lo[k], domain.hi[k]));
         }
-        if !domain.periodic[k] && (x[k] - domain.lo[k] < radius || domain.hi[k] - x[k] < radius) {
-            return Err(invalid(
-                key,
-                fmt3(raw),
-                format!("the sphere (radius {radius:e} m) overlaps a wall normal to {axis}"),
-            ));
+        let overlap = radius - (x[k] - domain.lo[k]).min(domain.hi[k] - x[k]);
+        if !domain.periodic[k] && overlap > allowed {
+            return Err(format!("the sphere (radius {radius:e} m) overlaps a wall normal to {axis} by {overlap:e} m"));
         }
     }
     Ok(())

@@ -64,7 +64,10 @@ pub(super) fn load(
         }
         let mut x = old.position[i];
         domain.wrap(&mut x);
-        check_started(spec, domain, i, x, radius).map_err(fail)?;
+        // A settled bed presses on its floor: wall overlaps up to what the run monitor accepts.
+        let allowed = spec.stability.max_overlap * 2.0 * radius;
+        super::inside(x, radius, allowed, domain)
+            .map_err(|why| fail(format!("particle {i} at {}: {why}", fmt3(&x.into()))))?;
         particles.push_sized(si as u16, s, radius, x, old.velocity[i]);
         *particles.angular_velocity.last_mut().expect("just pushed") = old.angular_velocity[i];
         // A permanent moment keeps the orientation it turned to, with this species' magnitude.
@@ -109,30 +112,4 @@ pub(super) fn load(
         s.iter().for_each(|c| h.update(c.to_le_bytes()));
     }
     Ok(Started { particles, contacts, digest: h.finalize().to_vec() })
-}
-
-/// A started particle's centre lies in the box, and it overlaps a wall by no more than the run
-/// monitor accepts (a settled bed presses on its floor).
-fn check_started(spec: &SceneSpec, domain: &Domain, i: usize, x: Vec3, radius: f64) -> Result<(), String> {
-    let limit = spec.stability.max_overlap * 2.0 * radius;
-    for k in 0..3 {
-        let axis = ["x", "y", "z"][k];
-        if !(x[k] >= domain.lo[k] && x[k] <= domain.hi[k]) {
-            return Err(format!(
-                "particle {i} at {} lies outside the box along {axis} [{:e}, {:e}]",
-                fmt3(&[x.x, x.y, x.z]),
-                domain.lo[k],
-                domain.hi[k]
-            ));
-        }
-        let overlap = radius - (x[k] - domain.lo[k]).min(domain.hi[k] - x[k]);
-        if !domain.periodic[k] && overlap > limit {
-            return Err(format!(
-                "particle {i} overlaps a wall normal to {axis} by {overlap:e} m, more than stability.max_overlap = {} \
-                 of its diameter",
-                spec.stability.max_overlap
-            ));
-        }
-    }
-    Ok(())
 }
