@@ -17,7 +17,7 @@
 
 pub use super::forces::InductionError;
 use super::forces::{Context, ForceTerm, Forces};
-use super::neighbours::{Pair, PairRange, Skins};
+use super::neighbours::{Pair, PairForm, PairNeed, PairRange, Skins};
 use super::parallel;
 use super::state::{sphere_volume, Particles, Saturation, Species, State, Vec3};
 use nalgebra::Matrix3;
@@ -218,8 +218,8 @@ impl ForceTerm for Magnetisation {
     fn is_slow(&self) -> bool {
         true
     }
-    fn pairs(&self) -> Option<PairRange> {
-        self.range
+    fn pairs(&self) -> Option<PairNeed> {
+        self.range.map(|range| PairNeed { range, form: PairForm::Listed })
     }
     fn prepare(&mut self, ctx: &Context, state: &State) -> Result<(), InductionError> {
         let pairs = self.range.map_or(&[][..], |r| ctx.neighbours.pairs(r));

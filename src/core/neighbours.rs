@@ -231,6 +231,47 @@ pub enum PairRange {
     All,
 }
 
+/// How a term reads its pairs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PairForm {
+    /// A list of [`Pair`]s written once per evaluation: for terms that sweep the pairs many
+    /// times (the induction's iterations, then the dipole forces).
+    Listed,
+    /// The Verlet candidates, each filtered by the term in its own pass ([`Candidates`]): for a
+    /// term that reads each pair once, which so never writes the list (contact, shielding).
+    /// Only for [`PairRange::Within`].
+    Candidates,
+}
+
+/// What a force term asks of the neighbour layer.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PairNeed {
+    pub range: PairRange,
+    pub form: PairForm,
+}
+
+/// The Verlet candidates of a [`PairRange::Within`], for a term to filter as it goes: sorted by
+/// (i, j), so the pairs [`Candidates::pair`] keeps come in (i, j) order, the same pairs and
+/// separations, bit for bit, as a listed search of the range.
+#[derive(Debug, Clone, Copy)]
+pub struct Candidates<'a> {
+    pub list: &'a [(u32, u32)],
+    range2: f64,
+    domain: &'a Domain,
+    periodic: bool,
+}
+
+impl Candidates<'_> {
+    /// The candidate (i, j) as a [`Pair`] if it is closer than the range now.
+    #[inline(always)]
+    pub fn pair(&self, positions: &[Vec3], (i, j): (u32, u32)) -> Option<Pair> {
+        let (a, b) = (&positions[i as usize], &positions[j as usize]);
+        let r = if self.periodic { self.domain.displacement(a, b) } else { a - b };
+        let d2 = r.norm_squared();
+        (d2 < self.range2).then(|| Pair { i, j, r, dist: d2.sqrt() })
+    }
+}
+
 /// Verlet skins, as fractions of the range they pad: the one numerical setting of the neighbour
 /// layer. A skin changes how often candidates are rebuilt, never which pairs a search returns.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -268,10 +309,12 @@ impl Skins {
 /// Mean candidates per particle below which [`Skins::for_density`] widens the near skin.
 pub const DILUTE_CANDIDATES: f64 = 1.0;
 
-/// One pair list of the neighbour layer.
-#[derive(Debug, Default, Clone)]
+/// One pair range of the neighbour layer: its candidates, and its pairs if some term lists them.
+#[derive(Debug, Clone)]
 struct Listed {
-    range: Option<PairRange>,
+    range: PairRange,
+    /// Whether some term reads the range as a [`PairForm::Listed`] list.
+    listed: bool,
     verlet: VerletList,
     cells: CellList,
     pairs: Vec<Pair>,
@@ -279,34 +322,46 @@ struct Listed {
     rebuilt: Option<f64>,
 }
 
-/// The neighbour layer: one pair list per distinct range the force terms declare, each brought
-/// up to date once per evaluation that needs it and shared by every term that declared it.
+/// The neighbour layer: one entry per distinct range the force terms declare, brought up to date
+/// once per evaluation that needs it and shared by every term that declared it. A range is
+/// listed (its pairs written) only when some term reads it [`PairForm::Listed`].
 #[derive(Debug, Default, Clone)]
 pub struct Neighbours {
     lists: Vec<Listed>,
 }
 
 impl Neighbours {
-    /// A layer serving `ranges` (equal ranges share one list).
-    pub fn new(ranges: impl IntoIterator<Item = PairRange>) -> Self {
+    /// A layer serving `needs` (equal ranges share one entry).
+    pub fn new(needs: impl IntoIterator<Item = PairNeed>) -> Self {
         let mut lists: Vec<Listed> = vec![];
-        for range in ranges {
-            if !lists.iter().any(|l| l.range == Some(range)) {
-                lists.push(Listed { range: Some(range), ..Listed::default() });
+        for need in needs {
+            let listed = need.form == PairForm::Listed || need.range == PairRange::All;
+            match lists.iter_mut().find(|l| l.range == need.range) {
+                Some(l) => l.listed |= listed,
+                None => lists.push(Listed {
+                    range: need.range,
+                    listed,
+                    verlet: VerletList::default(),
+                    cells: CellList::default(),
+                    pairs: vec![],
+                    rebuilt: None,
+                }),
             }
         }
         Self { lists }
     }
 
-    /// Brings the lists of `ranges` up to date for `positions`.
+    /// Brings the ranges `wanted` selects up to date for `positions`.
     pub fn update(&mut self, positions: &[Vec3], domain: &Domain, wanted: impl Fn(PairRange) -> bool) {
-        for list in &mut self.lists {
-            let Some(range) = list.range.filter(|&r| wanted(r)) else { continue };
-            list.rebuilt = match range {
-                PairRange::Within { range, skin } => {
+        for list in self.lists.iter_mut().filter(|l| wanted(l.range)) {
+            list.rebuilt = match (list.range, list.listed) {
+                (PairRange::Within { range, skin }, true) => {
                     list.verlet.pairs_within(positions, domain, range, skin, &mut list.pairs).then_some(skin)
                 }
-                PairRange::All => {
+                (PairRange::Within { range, skin }, false) => {
+                    list.verlet.update(positions, domain, range, skin).then_some(skin)
+                }
+                (PairRange::All, _) => {
                     list.cells.pairs_within(positions, domain, None, &mut list.pairs);
                     None
                 }
@@ -315,23 +370,33 @@ impl Neighbours {
     }
 
     fn list(&self, range: PairRange) -> Option<&Listed> {
-        self.lists.iter().find(|l| l.range == Some(range))
+        self.lists.iter().find(|l| l.range == range)
     }
 
-    /// The pairs of `range` (i < j, in (i, j) order); empty for a range no term declared.
+    /// The listed pairs of `range` (i < j, in (i, j) order); empty for a range no term lists.
     pub fn pairs(&self, range: PairRange) -> &[Pair] {
-        self.list(range).map_or(&[], |l| &l.pairs)
+        self.list(range).filter(|l| l.listed).map_or(&[], |l| &l.pairs)
     }
 
-    /// The pairs within `range` (`None`: all pairs) when some term declared that range, with any
-    /// skin: a term that can sum over listed pairs reuses them instead of searching again.
+    /// The candidates of `range` (a [`PairRange::Within`]; none for a range no term declared) in
+    /// `domain`, the one the layer was updated for.
+    pub fn candidates<'a>(&'a self, range: PairRange, domain: &'a Domain) -> Candidates<'a> {
+        let (list, range2) = match (self.list(range), range) {
+            (Some(l), PairRange::Within { range, .. }) => (l.verlet.candidates(), range * range),
+            _ => (&[][..], 0.0),
+        };
+        Candidates { list, range2, domain, periodic: domain.periodic != [false; 3] }
+    }
+
+    /// The listed pairs within `range` (`None`: all pairs) when some term lists that range, with
+    /// any skin: a term that can sum over listed pairs reuses them instead of searching again.
     pub fn listed(&self, range: Option<f64>) -> Option<&[Pair]> {
         let same = |r: &PairRange| match (r, range) {
             (PairRange::Within { range: a, .. }, Some(b)) => *a == b,
             (PairRange::All, None) => true,
             _ => false,
         };
-        self.lists.iter().find(|l| l.range.as_ref().is_some_and(same)).map(|l| l.pairs.as_slice())
+        self.lists.iter().find(|l| l.listed && same(&l.range)).map(|l| l.pairs.as_slice())
     }
 
     /// `Some(skin)` when the candidates of `range` were rebuilt in the last update: until the next
@@ -388,6 +453,42 @@ mod tests {
                 }
             }
             assert!(list.rebuilds > 1 && list.rebuilds < 40, "{} rebuilds", list.rebuilds);
+        }
+    }
+
+    /// A term filtering the candidates as it goes gets the listed pairs, bit for bit, in order:
+    /// walled and periodic boxes, as the particles move and the candidates are rebuilt.
+    #[test]
+    fn filtered_candidates_are_the_listed_pairs_bit_for_bit() {
+        for periodic in [[true, false, true], [false; 3]] {
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+            let domain = Domain { lo: Vec3::zeros(), hi: Vec3::new(1.0, 0.8, 0.6), periodic };
+            let mut pos: Vec<Vec3> = (0..300)
+                .map(|_| Vec3::new(rng.random::<f64>(), 0.8 * rng.random::<f64>(), 0.6 * rng.random::<f64>()))
+                .collect();
+            let range = PairRange::Within { range: 0.12, skin: 0.03 };
+            let need = |form| PairNeed { range, form };
+            let mut listed = Neighbours::new([need(PairForm::Listed)]);
+            let mut filtered = Neighbours::new([need(PairForm::Candidates)]);
+            for step in 0..30 {
+                listed.update(&pos, &domain, |_| true);
+                filtered.update(&pos, &domain, |_| true);
+                assert!(filtered.pairs(range).is_empty(), "a range no term lists is not written");
+                let c = filtered.candidates(range, &domain);
+                let got: Vec<Pair> = c.list.iter().filter_map(|&ij| c.pair(&pos, ij)).collect();
+                let want = listed.pairs(range);
+                assert_eq!(got.len(), want.len(), "step {step}, periodic {periodic:?}");
+                assert!(want.len() > 100, "{} pairs", want.len());
+                for (g, w) in got.iter().zip(want) {
+                    assert!((g.i, g.j, g.r, g.dist) == (w.i, w.j, w.r, w.dist), "step {step}: {g:?} vs {w:?}");
+                }
+                for x in pos.iter_mut() {
+                    *x += Vec3::new(rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5)
+                        * 0.01;
+                    domain.wrap(x);
+                    *x = x.zip_map(&domain.hi, |c, hi| c.clamp(0.0, hi));
+                }
+            }
         }
     }
 

@@ -62,7 +62,7 @@ impl ForceField {
             state.particles.position.iter_mut().for_each(|x| self.domain.wrap(x));
         }
         let terms = &self.terms;
-        let wanted = |range| terms.iter().any(|t| group.has(t.as_ref()) && t.pairs() == Some(range));
+        let wanted = |range| terms.iter().any(|t| group.has(t.as_ref()) && t.pairs().is_some_and(|n| n.range == range));
         let (neighbours, positions, domain) = (&mut self.neighbours, &state.particles.position, &self.domain);
         self.timers.time("neighbours", || neighbours.update(positions, domain, wanted));
         let ctx = Context { domain: &self.domain, neighbours: &self.neighbours, dt };

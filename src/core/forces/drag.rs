@@ -9,7 +9,7 @@
 use super::shielding::shadow_area;
 use super::wall_drag::WallCorrection;
 use super::{Context, ForceTerm, Forces};
-use crate::core::neighbours::PairRange;
+use crate::core::neighbours::{PairForm, PairNeed, PairRange};
 use crate::core::parallel;
 use crate::core::state::{Particles, Vec3};
 use std::f64::consts::PI;
@@ -92,7 +92,8 @@ impl Drag {
         }));
         self.shadow.clear();
         self.shadow.resize(p.len(), 0.0);
-        for pair in ctx.neighbours.pairs(near) {
+        let candidates = ctx.neighbours.candidates(near, ctx.domain);
+        for pair in candidates.list.iter().filter_map(|&ij| candidates.pair(&p.position, ij)) {
             let (i, j) = (pair.i as usize, pair.j as usize);
             let (a_i, a_j) = (p.radius[i], p.radius[j]);
             if pair.dist - a_i - a_j > touch_tolerance * a_i.min(a_j) {
@@ -121,10 +122,10 @@ impl ForceTerm for Drag {
     fn name(&self) -> &'static str {
         "drag"
     }
-    fn pairs(&self) -> Option<PairRange> {
+    fn pairs(&self) -> Option<PairNeed> {
         match self.shielding {
             Shielding::None => None,
-            Shielding::Paper { near, .. } => Some(near),
+            Shielding::Paper { near, .. } => Some(PairNeed { range: near, form: PairForm::Candidates }),
         }
     }
     fn apply(&mut self, ctx: &Context, p: &Particles, out: &mut Forces) {

@@ -171,4 +171,34 @@ mod tests {
             assert!((inside - outside).norm() < 1e-10 * outside.norm(), "radii {ai}, {aj}");
         }
     }
+
+    /// Unequal radii, a_2 = λ a_1. Apart, the pair block is the Rotne–Prager truncation of the
+    /// exact two-sphere mobility: Jeffrey & Onishi's (J. Fluid Mech. 139, 261, 1984) far-field
+    /// series, u_1 = [x dd + y (I − dd)] F_2 / (3π μ (a_1 + a_2)) with s = 2r/(a_1 + a_2),
+    /// x = 3/(2s) − 2(1 + λ²)/((1 + λ)² s³) + O(s⁻⁷), y = 3/(4s) + (1 + λ²)/((1 + λ)² s³) + O(s⁻⁵).
+    /// Inside, where the smaller sphere lies within the larger (r ≤ |a_1 − a_2|), the block is the
+    /// larger sphere's self-mobility, and the overlapping form meets it there (Zuk et al. 2014).
+    #[test]
+    fn unequal_spheres_follow_the_published_far_field_series_and_meet_the_inner_limit() {
+        let (a1, mu) = (1.0e-6, 1.0e-3);
+        for lambda in [0.25_f64, 0.5, 2.0, 4.0] {
+            let a2 = lambda * a1;
+            let k = (1.0 + lambda * lambda) / (1.0 + lambda).powi(2);
+            for s in [2.5_f64, 4.0, 10.0, 40.0] {
+                let r = 0.5 * s * (a1 + a2);
+                let m = pair_mobility(a1, a2, &Vec3::new(0.0, 0.0, r), mu) * (3.0 * PI * mu * (a1 + a2));
+                let (x, y) = (1.5 / s - 2.0 * k / s.powi(3), 0.75 / s + k / s.powi(3));
+                assert!((m[(2, 2)] / x - 1.0).abs() < 1e-12, "λ = {lambda}, s = {s}: x {} vs {x}", m[(2, 2)]);
+                assert!((m[(0, 0)] / y - 1.0).abs() < 1e-12, "λ = {lambda}, s = {s}: y {} vs {y}", m[(0, 0)]);
+                assert!(m[(0, 2)].abs() < 1e-15 && m[(0, 1)].abs() < 1e-15, "λ = {lambda}: off-axis coupling");
+            }
+            let inner = (a1 - a2).abs();
+            let self_mobility = 1.0 / (6.0 * PI * mu * a1.max(a2));
+            for d in [0.5 * inner, inner * (1.0 - 1e-12), inner * (1.0 + 1e-12)] {
+                let m = pair_mobility(a1, a2, &Vec3::new(d, 0.0, 0.0), mu);
+                let expected = Matrix3::identity() * self_mobility;
+                assert!((m - expected).norm() < 1e-9 * self_mobility, "λ = {lambda}, r = {d:e}: {m:?}");
+            }
+        }
+    }
 }

@@ -12,7 +12,7 @@ pub mod shielding;
 pub mod wall_drag;
 
 use super::domain::Domain;
-use super::neighbours::{Neighbours, PairRange};
+use super::neighbours::{Neighbours, PairNeed};
 use super::state::{ContactDiagnostics, ContactHistory, Particles, State, Vec3};
 
 /// What a term may read besides the particles during one force evaluation.
@@ -65,8 +65,8 @@ pub trait ForceTerm: Send {
     fn is_slow(&self) -> bool {
         false
     }
-    /// The pairs the term needs from the neighbour layer (`None`: none).
-    fn pairs(&self) -> Option<PairRange> {
+    /// The pairs the term needs from the neighbour layer, and in which form (`None`: none).
+    fn pairs(&self) -> Option<PairNeed> {
         None
     }
     /// Whether the term's force depends on nothing but fixed particle properties (mass,

@@ -7,7 +7,7 @@ pub mod law;
 mod walls;
 
 use super::{Context, ForceTerm, Forces};
-use crate::core::neighbours::{Pair, PairRange};
+use crate::core::neighbours::{Candidates, Pair, PairForm, PairNeed, PairRange};
 use crate::core::parallel;
 use crate::core::state::{ContactDiagnostics, Particles, Species, Vec3, WallFace};
 pub use law::PairMaterial;
@@ -76,9 +76,9 @@ type ShareOut = (Vec<((u32, u32), Vec3)>, ContactDiagnostics);
 
 /// Particle–particle and particle–wall contacts.
 ///
-/// Pairs: one pass per particle share over the near pairs in (i, j) order finds the touching ones
-/// and their springs (a merge with the sorted history), computes them [`LANES`] at a time and
-/// adds them in order (see [`Contact::share_pass`]). Walls: found and merged the same way,
+/// Pairs: one pass per particle share over the near candidates in (i, j) order finds the touching
+/// pairs (no pair list is written) and their springs (a merge with the sorted history), computes
+/// them [`LANES`] at a time and adds them in order (see [`Contact::share_pass`]). Walls: found and merged the same way,
 /// computed in parallel batches when many, added in order. The same bits for any thread count.
 pub struct Contact {
     /// Pair constants indexed `[species_i * n_species + species_j]`.
@@ -187,37 +187,41 @@ impl Contact {
         });
     }
 
-    /// The touching pairs among `pairs` that `keep` selects, in order, their springs merged
-    /// from `history` (sorted, covering them), computed [`LANES`] at a time; `emit(pair,
-    /// outcome)` receives each in order.
-    fn in_lanes<'p>(
+    /// The touching pairs among the `candidates` `in_range` that `keep(j)` selects, in order, their
+    /// springs merged from `history` (sorted, covering them), computed [`LANES`] at a time;
+    /// `emit(pair, outcome)` receives each in order.
+    #[allow(clippy::too_many_arguments)]
+    fn in_lanes(
         &self,
         p: &Particles,
-        pairs: &'p [Pair],
+        candidates: &Candidates,
+        in_range: &[(u32, u32)],
         history: &[((u32, u32), Vec3)],
         dt: f64,
-        keep: impl Fn(&Pair) -> bool,
-        mut emit: impl FnMut(&'p Pair, &ContactOutcome),
+        keep: impl Fn(u32) -> bool,
+        mut emit: impl FnMut(&Pair, &ContactOutcome),
     ) {
-        let (mut lanes, mut batch) = (Lanes::default(), [(0u32, 0.0); LANES]);
+        let (mut lanes, mut batch) = (Lanes::default(), [(Pair::default(), 0.0); LANES]);
         let (mut cache, mut cursor, mut used) = (ReducedCache::default(), 0, 0);
-        let mut flush = |lanes: &mut Lanes, batch: &[(u32, f64)]| {
+        let mut flush = |lanes: &mut Lanes, batch: &[(Pair, f64)]| {
             self.law.apply(lanes, dt);
-            for (l, &(k, diameter)) in batch.iter().enumerate() {
-                emit(&pairs[k as usize], &ContactOutcome::of(lanes, l, diameter));
+            for (l, (pair, diameter)) in batch.iter().enumerate() {
+                emit(pair, &ContactOutcome::of(lanes, l, *diameter));
             }
         };
-        for (k, pair) in pairs.iter().enumerate() {
+        let touching = |&(i, j): &(u32, u32)| {
+            let pair = keep(j).then(|| candidates.pair(&p.position, (i, j))).flatten()?;
+            (pair.dist < p.radius[i as usize] + p.radius[j as usize]).then_some(pair)
+        };
+        for pair in in_range.iter().filter_map(touching) {
             let (i, j) = (pair.i as usize, pair.j as usize);
-            if keep(pair) && pair.dist < p.radius[i] + p.radius[j] {
-                let s = spring(history, &mut cursor, (pair.i, pair.j));
-                let reduced = cache.get((p.radius[i], p.radius[j], p.mass[i], p.mass[j]));
-                batch[used] = (k as u32, self.fill_pair(&mut lanes, used, p, pair, reduced, s));
-                used += 1;
-                if used == LANES {
-                    flush(&mut lanes, &batch);
-                    used = 0;
-                }
+            let s = spring(history, &mut cursor, (pair.i, pair.j));
+            let reduced = cache.get((p.radius[i], p.radius[j], p.mass[i], p.mass[j]));
+            batch[used] = (pair, self.fill_pair(&mut lanes, used, p, &pair, reduced, s));
+            used += 1;
+            if used == LANES {
+                flush(&mut lanes, &batch);
+                used = 0;
             }
         }
         flush(&mut lanes, &batch[..used]);
@@ -238,18 +242,19 @@ impl Contact {
         (force, torque): (&mut [Vec3], &mut [Vec3]),
         (next, diag): &mut ShareOut,
     ) {
-        let near = ctx.neighbours.pairs(self.near);
+        let candidates = ctx.neighbours.candidates(self.near, ctx.domain);
+        let near = candidates.list;
         let hi = lo + force.len();
         let (rows, rest) =
-            (near.partition_point(|q| (q.i as usize) < lo), near.partition_point(|q| (q.i as usize) < hi));
+            (near.partition_point(|q| (q.0 as usize) < lo), near.partition_point(|q| (q.0 as usize) < hi));
         let split = history.partition_point(|h| (h.0 .0 as usize) < lo);
-        let within = |j: usize| (lo..hi).contains(&j);
         self.in_lanes(
             p,
+            &candidates,
             &near[..rows],
             &history[..split],
             ctx.dt,
-            |q| within(q.j as usize),
+            |j| (lo..hi).contains(&(j as usize)),
             |q, o| {
                 let j = q.j as usize - lo;
                 force[j] -= o.force;
@@ -259,7 +264,8 @@ impl Contact {
         next.clear();
         *diag = ContactDiagnostics::default();
         let mut adder = RowAdder::new(lo, diag, next);
-        self.in_lanes(p, &near[rows..rest], &history[split..], ctx.dt, |_| true, |q, o| adder.add(force, torque, q, o));
+        let add = |q: &Pair, o: &ContactOutcome| adder.add(force, torque, q, o);
+        self.in_lanes(p, &candidates, &near[rows..rest], &history[split..], ctx.dt, |_| true, add);
         adder.finish(force, torque);
     }
 
@@ -371,8 +377,8 @@ impl ForceTerm for Contact {
     fn name(&self) -> &'static str {
         "contact"
     }
-    fn pairs(&self) -> Option<PairRange> {
-        Some(self.near)
+    fn pairs(&self) -> Option<PairNeed> {
+        Some(PairNeed { range: self.near, form: PairForm::Candidates })
     }
     fn apply(&mut self, ctx: &Context, p: &Particles, out: &mut Forces) {
         let mut diag = ContactDiagnostics::default();
@@ -412,8 +418,8 @@ mod tests {
         }
         let (range, skin, dt) = (2.0 * a, 0.4 * a, 1e-8);
         let near = PairRange::Within { range, skin };
-        let (mut neighbours, mut contact) =
-            (Neighbours::new([near]), Contact::new(std::slice::from_ref(&species), ContactLaw::default(), true, near));
+        let mut contact = Contact::new(std::slice::from_ref(&species), ContactLaw::default(), true, near);
+        let mut neighbours = Neighbours::new(contact.pairs());
         let (mut found, mut rebuilds) = (0, 0);
         state.fields.fit(state.particles.len());
         for step in 0..400 {
