@@ -593,7 +593,7 @@ fn paper_sizes(max: usize) -> Vec<usize> {
 }
 
 fn scaling_sizes(max: usize) -> Vec<usize> {
-    [1000, 3000, 10000, 30000, 100000].into_iter().filter(|&n| n <= max).collect()
+    [1000, 3000, 10000, 30000, 100000, 300000].into_iter().filter(|&n| n <= max).collect()
 }
 
 /// What this machine is (CPU model, cores, memory, kernel).
