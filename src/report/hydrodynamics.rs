@@ -747,6 +747,35 @@ fn variations(variants: &[&str], cols: &[Vec<f64>; 10]) -> String {
 mod tests {
     use super::*;
 
+    /// Each variant is set against the run it varies (the wall variants against their free-fluid
+    /// model, the spreads against A_eff), the difference ± the two CI95 in quadrature, and called
+    /// a change only when the difference exceeds that.
+    #[test]
+    fn variations_compare_each_variant_with_the_runs_it_varies() {
+        let variants = ["a-eff", "no-shielding", "a-eff-wall", "cv-10"];
+        let mut cols: [Vec<f64>; 10] = Default::default();
+        // seeds, aggregates, size, ± size, velocity, ±, singles, 5+, ± 5+, slope
+        let rows = [
+            [20.0, 21.0, 2.6, 0.3, 15.0, 2.0, 6.5, 37.0, 8.0, 0.9],
+            [20.0, 23.0, 2.4, 0.2, 8.2, 0.3, 7.9, 8.6, 1.1, 0.05],
+            [10.0, 22.0, 2.5, 0.4, 14.0, 2.0, 6.0, 13.0, 3.0, 0.4],
+            [10.0, 21.0, 3.6, 0.4, 15.0, 2.0, 6.5, 36.0, 6.0, 0.8],
+        ];
+        for row in rows {
+            row.iter().zip(cols.iter_mut()).for_each(|(v, c)| c.push(*v));
+        }
+        let text = variations(&variants, &cols);
+        let wall = text.lines().find(|l| l.contains("substrate's drag (10")).expect("the wall variant's line");
+        assert!(wall.contains("against `a-eff`"), "{wall}");
+        // Size: -0.1 ± 0.5 (no change); velocity of 5+: -24.0 ± 8.5 (a change).
+        assert!(wall.contains("the mean size does not change measurably (-0.10 ± 0.50"), "{wall}");
+        assert!(wall.contains("5+ changes (-24.0 ± 8.5 µm/s)"), "{wall}");
+        let spread = text.lines().find(|l| l.contains("cv 10 %")).expect("the spread variant's line");
+        assert!(spread.contains("the mean size changes (+1.00 ± 0.50"), "{spread}");
+        assert!(!text.contains("cv 5 %") && !text.contains("no shielding with"), "variants without runs are left out");
+        assert!(variations(&variants[..2], &cols).is_empty());
+    }
+
     /// Velocities growing as n^0.7 give the exponent 0.7; a size seen fewer than three times is
     /// left out (here an outlier that would pull the fit).
     #[test]
