@@ -427,15 +427,30 @@ mod tests {
         v
     }
 
+    /// 300 particles at random in a 1 × 0.8 × 0.6 box with the given periodic axes.
+    fn random_box(seed: u64, periodic: [bool; 3]) -> (rand_chacha::ChaCha8Rng, Domain, Vec<Vec3>) {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let domain = Domain { lo: Vec3::zeros(), hi: Vec3::new(1.0, 0.8, 0.6), periodic };
+        let pos = (0..300)
+            .map(|_| Vec3::new(rng.random::<f64>(), 0.8 * rng.random::<f64>(), 0.6 * rng.random::<f64>()))
+            .collect();
+        (rng, domain, pos)
+    }
+
+    /// Moves every particle by up to `step`/2 per axis, kept in the box.
+    fn jiggle(rng: &mut rand_chacha::ChaCha8Rng, pos: &mut [Vec3], domain: &Domain, step: f64) {
+        for x in pos.iter_mut() {
+            *x += Vec3::new(rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5) * step;
+            domain.wrap(x);
+            *x = x.zip_map(&domain.hi, |c, hi| c.clamp(0.0, hi));
+        }
+    }
+
     #[test]
     fn verlet_list_gives_the_same_pairs_in_ij_order_as_particles_move() {
         // Periodic on two axes, and walled on all three (filtered with a plain subtraction).
         for periodic in [[true, false, true], [false; 3]] {
-            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
-            let domain = Domain { lo: Vec3::zeros(), hi: Vec3::new(1.0, 0.8, 0.6), periodic };
-            let mut pos: Vec<Vec3> = (0..300)
-                .map(|_| Vec3::new(rng.random::<f64>(), 0.8 * rng.random::<f64>(), 0.6 * rng.random::<f64>()))
-                .collect();
+            let (mut rng, domain, mut pos) = random_box(11, periodic);
             let mut list = VerletList::default();
             let mut out = vec![];
             for _ in 0..40 {
@@ -449,12 +464,7 @@ mod tests {
                         "periodic {periodic:?}"
                     );
                 }
-                for x in pos.iter_mut() {
-                    *x += Vec3::new(rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5)
-                        * 0.004;
-                    domain.wrap(x);
-                    *x = x.zip_map(&domain.hi, |c, hi| c.clamp(0.0, hi));
-                }
+                jiggle(&mut rng, &mut pos, &domain, 0.004);
             }
             assert!(list.rebuilds > 1 && list.rebuilds < 40, "{} rebuilds", list.rebuilds);
         }
@@ -465,11 +475,7 @@ mod tests {
     #[test]
     fn filtered_candidates_are_the_listed_pairs_bit_for_bit() {
         for periodic in [[true, false, true], [false; 3]] {
-            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-            let domain = Domain { lo: Vec3::zeros(), hi: Vec3::new(1.0, 0.8, 0.6), periodic };
-            let mut pos: Vec<Vec3> = (0..300)
-                .map(|_| Vec3::new(rng.random::<f64>(), 0.8 * rng.random::<f64>(), 0.6 * rng.random::<f64>()))
-                .collect();
+            let (mut rng, domain, mut pos) = random_box(5, periodic);
             let range = PairRange::Within { range: 0.12, skin: 0.03 };
             let need = |form| PairNeed { range, form };
             let mut listed = Neighbours::new([need(PairForm::Listed)]);
@@ -485,12 +491,7 @@ mod tests {
                 for (g, w) in got.iter().zip(want) {
                     assert!((g.i, g.j, g.r, g.dist) == (w.i, w.j, w.r, w.dist), "step {step}: {g:?} vs {w:?}");
                 }
-                for x in pos.iter_mut() {
-                    *x += Vec3::new(rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5)
-                        * 0.01;
-                    domain.wrap(x);
-                    *x = x.zip_map(&domain.hi, |c, hi| c.clamp(0.0, hi));
-                }
+                jiggle(&mut rng, &mut pos, &domain, 0.01);
             }
         }
     }
