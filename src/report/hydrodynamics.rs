@@ -33,12 +33,13 @@ pub struct HydrodynamicsReportOptions {
 
 /// The drag models and size spreads of the case-2 experiments, by variant name, in the report's
 /// order (the opt-in files' variants appear once their runs exist).
-const MODELS: [(&str, &str); 8] = [
+const MODELS: [(&str, &str); 9] = [
     ("a-eff", "Schiller–Naumann with the paper's A_eff"),
     ("no-shielding", "Schiller–Naumann, every sphere its own drag"),
     ("rpy", "Stokes flow with hydrodynamic interactions (RPY)"),
     ("a-eff-wall", "A_eff, substrate drag, M re-derived"),
     ("no-shielding-wall", "no shielding, substrate drag, M re-derived"),
+    ("cv-0", "A_eff, equal diameters, gravity, raised lid"),
     ("cv-5", "A_eff, diameters with cv 5 %"),
     ("cv-10", "A_eff, diameters with cv 10 %"),
     ("cv-20", "A_eff, diameters with cv 20 %"),
@@ -76,13 +77,15 @@ pub fn write_report(options: &HydrodynamicsReportOptions) -> Result<PathBuf, Err
     if !ran("a-eff-wall") {
         md += "- Case 2 with the substrate's drag: the correction is built and tested (`[forces.drag.wall]`, docs/model.md §7) \
                and its experiment is `experiments/hydrodynamics/opt-in/case2-wall.toml` (a 1 % gap, f = 3.38, M re-derived: \
-               material χ = 28.09); its runs are not made yet.\n";
+               material χ = 28.09, dt = 2.5e-8 s: at the scene's 5e-8 s every run became unstable); its runs are not made \
+               yet.\n";
     }
     if !ran("cv-10") {
         md +=
             "- Case 2 with spread diameters: polydisperse species are built and tested (`species.size`, docs/model.md \
-               §2.1) and the sweep of cv 5 / 10 / 20 % is `experiments/hydrodynamics/opt-in/case2-cv.toml` (the \
-               experiment's spread is not given); its runs are not made yet.\n";
+               §2.1) and the sweep of cv 0 / 5 / 10 / 20 % is `experiments/hydrodynamics/opt-in/case2-cv.toml` (the \
+               experiment's spread is not given; the lid raised to the largest diameter, gravity on, dt = 2.5e-8 s); its \
+               runs are not made yet.\n";
     }
     if !runs.iter().any(|r| r.completed() && r.experiment == "hydro-case1") {
         md += &format!(
@@ -405,11 +408,15 @@ fn case2_section(runs: &[Run], reference: &Path, out: &Path, tables: &Path) -> R
         cols[9].push(log_slope(&by_size));
         let classes: Vec<(usize, &Vec<f64>)> =
             by_size.iter().filter(|(_, v)| v.len() >= 3).map(|(&n, v)| (n, v)).collect();
+        // The figure shows the drag models and their substrate variants; the spreads are in the table.
+        if variant.starts_with("cv-") {
+            continue;
+        }
         series.push(
             Series::markers(
                 format!("{label} (mean per size ± CI95 over its aggregates)"),
                 classes.iter().map(|(n, v)| (*n as f64 * (1.0 + 0.03 * (k as f64 - 1.0)), summary(v).mean)).collect(),
-                palette([0, 3, 1, 4, 5, 6, 7, 2][k]),
+                palette([0, 3, 1, 4, 5][k]),
                 5,
             )
             .with_errors(classes.iter().map(|(_, v)| ci95_half_width(v)).collect()),
@@ -710,9 +717,9 @@ fn variations(variants: &[&str], cols: &[Vec<f64>; 10]) -> String {
     let pairs = [
         ("a-eff-wall", "a-eff", "A_eff with the substrate's drag"),
         ("no-shielding-wall", "no-shielding", "no shielding with the substrate's drag"),
-        ("cv-5", "a-eff", "A_eff, cv 5 %"),
-        ("cv-10", "a-eff", "A_eff, cv 10 %"),
-        ("cv-20", "a-eff", "A_eff, cv 20 %"),
+        ("cv-5", "cv-0", "A_eff, cv 5 %"),
+        ("cv-10", "cv-0", "A_eff, cv 10 %"),
+        ("cv-20", "cv-0", "A_eff, cv 20 %"),
     ];
     let lines: Vec<String> = pairs
         .iter()
@@ -737,8 +744,11 @@ fn variations(variants: &[&str], cols: &[Vec<f64>; 10]) -> String {
     format!(
         "The opt-in variants against the runs they vary (differences of independent means, ± the two CI95 in \
          quadrature). The substrate variants re-derive M so that a single sphere still moves at 7.5 µm/s under the \
-         wall-corrected drag (a 1 % gap, f = 3.38); the spread variants keep the scene's M and draw each diameter from a \
-         normal law truncated at ±3σ about 5.5 µm (the experiment's spread is not given).\n\n{}\n",
+         wall-corrected drag (a 1 % gap, f = 3.38) and run at dt = 2.5e-8 s (their stronger contacts need it), against \
+         the free-fluid runs at 5e-8 s. The spread variants keep the scene's M, draw each diameter from a normal law \
+         truncated at ±3σ about 5.5 µm (the experiment's spread is not given), raise the lid to the largest diameter, \
+         add gravity to hold the monolayer on its substrate and run at dt = 2.5e-8 s; they are set against cv 0 % in the \
+         same set-up.\n\n{}\n",
         lines.concat()
     )
 }
@@ -748,17 +758,18 @@ mod tests {
     use super::*;
 
     /// Each variant is set against the run it varies (the wall variants against their free-fluid
-    /// model, the spreads against A_eff), the difference ± the two CI95 in quadrature, and called
+    /// model, the spreads against equal diameters in the same set-up), the difference ± the two CI95 in quadrature, and called
     /// a change only when the difference exceeds that.
     #[test]
     fn variations_compare_each_variant_with_the_runs_it_varies() {
-        let variants = ["a-eff", "no-shielding", "a-eff-wall", "cv-10"];
+        let variants = ["a-eff", "no-shielding", "a-eff-wall", "cv-0", "cv-10"];
         let mut cols: [Vec<f64>; 10] = Default::default();
         // seeds, aggregates, size, ± size, velocity, ±, singles, 5+, ± 5+, slope
         let rows = [
             [20.0, 21.0, 2.6, 0.3, 15.0, 2.0, 6.5, 37.0, 8.0, 0.9],
             [20.0, 23.0, 2.4, 0.2, 8.2, 0.3, 7.9, 8.6, 1.1, 0.05],
             [10.0, 22.0, 2.5, 0.4, 14.0, 2.0, 6.0, 13.0, 3.0, 0.4],
+            [10.0, 21.0, 2.6, 0.3, 15.0, 2.0, 6.5, 37.0, 8.0, 0.9],
             [10.0, 21.0, 3.6, 0.4, 15.0, 2.0, 6.5, 36.0, 6.0, 0.8],
         ];
         for row in rows {
@@ -771,7 +782,7 @@ mod tests {
         assert!(wall.contains("the mean size does not change measurably (-0.10 ± 0.50"), "{wall}");
         assert!(wall.contains("5+ changes (-24.0 ± 8.5 µm/s)"), "{wall}");
         let spread = text.lines().find(|l| l.contains("cv 10 %")).expect("the spread variant's line");
-        assert!(spread.contains("the mean size changes (+1.00 ± 0.50"), "{spread}");
+        assert!(spread.contains("against `cv-0`: the mean size changes (+1.00 ± 0.50"), "{spread}");
         assert!(!text.contains("cv 5 %") && !text.contains("no shielding with"), "variants without runs are left out");
         assert!(variations(&variants[..2], &cols).is_empty());
     }

@@ -805,6 +805,39 @@ fn checked_count(
     Ok(count)
 }
 
+/// The largest sphere the group's species can have fits its region between the walls on every
+/// walled axis (a thin monolayer box and a spread of diameters can disagree).
+fn check_fits_between_walls(
+    spec: &SceneSpec,
+    domain: &Domain,
+    s: &Species,
+    group: &ParticleGroupSpec,
+    (lo, hi): (Vec3, Vec3),
+) -> Result<(), SceneError> {
+    let largest = s.largest_radius();
+    let Some(axis) =
+        (0..3).find(|&k| !domain.periodic[k] && lo[k].max(domain.lo[k] + largest) > hi[k].min(domain.hi[k] - largest))
+    else {
+        return Ok(());
+    };
+    let k = spec.species.iter().position(|x| x.name == group.species).unwrap_or_default();
+    let (key, what) = match s.size {
+        Some(_) => (format!("species[{k}].size"), "its size law draws diameters up to"),
+        None => (format!("species[{k}].diameter"), "its diameter is"),
+    };
+    Err(invalid(
+        key,
+        format!("{:.3e}", 2.0 * largest),
+        format!(
+            "{what} {:.3e} m, more than the {:.3e} m between the walls along {} where its particles are placed: such a sphere \
+             cannot be placed without overlapping a wall (widen the box or truncate the law with max_diameter)",
+            2.0 * largest,
+            hi[axis].min(domain.hi[axis]) - lo[axis].max(domain.lo[axis]),
+            ["x", "y", "z"][axis]
+        ),
+    ))
+}
+
 /// Group `g`'s particles placed at random in its region `lo..hi`, clear of the `existing`
 /// particles of earlier groups, from the scene's seed: their centres and radii (drawn from a
 /// second stream of the seed for a polydisperse species).
@@ -818,6 +851,7 @@ fn random_sites(
     existing: &[(Vec3, f64)],
 ) -> Result<(Vec<Vec3>, Vec<f64>), SceneError> {
     let key = |name: &str| format!("particles[{g}].{name}");
+    check_fits_between_walls(spec, domain, s, group, (lo, hi))?;
     let count = random_count(spec, domain, s, g, group, (lo, hi), existing.len())?;
     let seed = spec.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(g as u64);
     let radii: Vec<f64> = match &s.size {
