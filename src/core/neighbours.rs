@@ -212,7 +212,22 @@ fn filter(
 ) {
     let range2 = range * range;
     parallel::collect_ordered_ranges(candidates.len(), out, pieces, |ks, out| {
-        for &(i, j) in &candidates[ks] {
+        // Four candidates at a time, their square roots taken together (one vector sqrt: the
+        // same correctly rounded bits as four scalar ones, for a quarter of the latency).
+        let block = &candidates[ks];
+        let mut quads = block.chunks_exact(4);
+        for quad in &mut quads {
+            let r: [Vec3; 4] =
+                std::array::from_fn(|k| displacement(&positions[quad[k].0 as usize], &positions[quad[k].1 as usize]));
+            let d2: [f64; 4] = std::array::from_fn(|k| r[k].norm_squared());
+            let dist = d2.map(f64::sqrt);
+            for k in 0..4 {
+                if d2[k] < range2 {
+                    out.push(Pair { i: quad[k].0, j: quad[k].1, r: r[k], dist: dist[k] });
+                }
+            }
+        }
+        for &(i, j) in quads.remainder() {
             let r = displacement(&positions[i as usize], &positions[j as usize]);
             let d2 = r.norm_squared();
             if d2 < range2 {
