@@ -815,9 +815,8 @@ fn check_fits_between_walls(
     (lo, hi): (Vec3, Vec3),
 ) -> Result<(), SceneError> {
     let largest = s.largest_radius();
-    let Some(axis) =
-        (0..3).find(|&k| !domain.periodic[k] && lo[k].max(domain.lo[k] + largest) > hi[k].min(domain.hi[k] - largest))
-    else {
+    let (lo_c, hi_c) = placement::centre_range(largest, lo, hi, domain);
+    let Some(axis) = (0..3).find(|&k| lo_c[k] > hi_c[k]) else {
         return Ok(());
     };
     let k = spec.species.iter().position(|x| x.name == group.species).unwrap_or_default();

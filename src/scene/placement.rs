@@ -12,6 +12,19 @@ type Grid = HashMap<(i64, i64, i64), Vec<(Vec3, f64)>>;
 /// Attempts per particle before placement gives up.
 pub const MAX_ATTEMPTS: usize = 100_000;
 
+/// Where the centre of a sphere of `radius` may lie in the region `[lo, hi]`: kept its radius
+/// from the walls on walled axes. An axis whose lower end exceeds its upper one cannot hold it.
+pub fn centre_range(radius: f64, lo: Vec3, hi: Vec3, domain: &Domain) -> (Vec3, Vec3) {
+    let (mut lo_c, mut hi_c) = (lo, hi);
+    for k in 0..3 {
+        if !domain.periodic[k] {
+            lo_c[k] = lo[k].max(domain.lo[k] + radius);
+            hi_c[k] = hi[k].min(domain.hi[k] - radius);
+        }
+    }
+    (lo_c, hi_c)
+}
+
 /// Places spheres of `radii` uniformly in `[lo, hi]` (centres kept their radius from wall faces),
 /// in order, avoiding `existing` spheres (centre, radius). Returns the index of the first particle
 /// that could not be placed on failure.
@@ -24,16 +37,7 @@ pub fn place_random(
     seed: u64,
 ) -> Result<Vec<Vec3>, usize> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let clamp = |radius: f64| {
-        let (mut lo_c, mut hi_c) = (lo, hi);
-        for k in 0..3 {
-            if !domain.periodic[k] {
-                lo_c[k] = lo[k].max(domain.lo[k] + radius);
-                hi_c[k] = hi[k].min(domain.hi[k] - radius);
-            }
-        }
-        (lo_c, hi_c)
-    };
+    let clamp = |radius: f64| centre_range(radius, lo, hi, domain);
     let mut placed: Vec<Vec3> = Vec::with_capacity(radii.len());
     let mut grid = SphereGrid::new(radii.iter().copied().fold(0.0, f64::max), existing);
     for (k, &radius) in radii.iter().enumerate() {

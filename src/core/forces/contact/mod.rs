@@ -78,8 +78,9 @@ type ShareOut = (Vec<((u32, u32), Vec3)>, ContactDiagnostics);
 ///
 /// Pairs: one pass per particle share over the near candidates in (i, j) order finds the touching
 /// pairs (no pair list is written) and their springs (a merge with the sorted history), computes
-/// them [`LANES`] at a time and adds them in order (see [`Contact::share_pass`]). Walls: found and merged the same way,
-/// computed in parallel batches when many, added in order. The same bits for any thread count.
+/// them [`LANES`] at a time and adds them in order (see [`Contact::share_pass`]). Walls: found
+/// and merged the same way, computed in parallel batches when many, added in order. The same bits
+/// for any thread count.
 pub struct Contact {
     /// Pair constants indexed `[species_i * n_species + species_j]`.
     materials: Vec<PairMaterial>,
@@ -210,7 +211,10 @@ impl Contact {
             }
         };
         let touching = |&(i, j): &(u32, u32)| {
-            let pair = keep(j).then(|| candidates.pair(&p.position, (i, j))).flatten()?;
+            if !keep(j) {
+                return None;
+            }
+            let pair = candidates.pair(&p.position, (i, j))?;
             (pair.dist < p.radius[i as usize] + p.radius[j as usize]).then_some(pair)
         };
         for pair in in_range.iter().filter_map(touching) {
