@@ -141,18 +141,28 @@ fn cost(point: &Point) -> f64 {
     factor * point.scene.total_steps() as f64 * point.scene.initial.len() as f64
 }
 
-/// Runs every point of `experiments` on `jobs` workers, the most expensive first, and writes each
+/// The order points are started in, as (experiment, point) indices: the most expensive first, and
+/// equal costs seed by seed, so that an experiment cut short has its variants at equal seeds.
+pub fn run_order(experiments: &[Experiment]) -> Vec<(usize, usize)> {
+    let point = |(e, p): (usize, usize)| &experiments[e].points[p];
+    let mut queue: Vec<(usize, usize)> =
+        experiments.iter().enumerate().flat_map(|(e, x)| (0..x.points.len()).map(move |p| (e, p))).collect();
+    queue.sort_by(|&a, &b| {
+        cost(point(b)).total_cmp(&cost(point(a))).then(point(a).scene.spec.seed.cmp(&point(b).scene.spec.seed))
+    });
+    queue
+}
+
+/// Runs every point of `experiments` on `jobs` workers in [`run_order`], and writes each
 /// experiment's `manifest.csv`. Results come back per experiment, in point order.
 pub fn run_experiments(
     experiments: &[Experiment],
     options: &ExperimentOptions,
 ) -> Result<Vec<Vec<PointResult>>, Box<dyn std::error::Error>> {
-    let mut queue: Vec<(usize, usize)> = vec![];
-    for (e, experiment) in experiments.iter().enumerate() {
+    for experiment in experiments {
         std::fs::create_dir_all(&experiment.output)?;
-        queue.extend((0..experiment.points.len()).map(|p| (e, p)));
     }
-    queue.sort_by(|a, b| cost(&experiments[b.0].points[b.1]).total_cmp(&cost(&experiments[a.0].points[a.1])));
+    let queue = run_order(experiments);
     // A progress bar on stderr when it is a terminal; one line per finished run on stdout when
     // stdout is not a terminal (a log file, a pipe, CI) or the bar cannot be shown.
     let bar_shown = options.progress && stderr().is_terminal();

@@ -4,7 +4,7 @@
 
 mod common;
 
-use magdem::experiment::{run_experiment, ExperimentOptions, Outcome};
+use magdem::experiment::{run_experiment, run_order, ExperimentOptions, Outcome};
 use magdem::scene::experiment::Experiment;
 use std::path::PathBuf;
 use std::process::Command;
@@ -232,4 +232,15 @@ fn a_killed_ensemble_loses_no_finished_run_and_resumes_the_rest() {
     }
     assert!(results.iter().any(|r| r.outcome == Outcome::Resumed), "the point running at the kill is resumed");
     assert!(exp.points.iter().all(|p| status(p).as_deref() == Some("completed")));
+}
+
+#[test]
+fn equal_cost_points_start_seed_by_seed_after_the_expensive_ones() {
+    let (_work, file, _out) = setup("order", "seed = [1, 2, 3]\n\"particles.0.count\" = [10, 20]\n");
+    let exp = Experiment::from_file(&file).unwrap();
+    let started: Vec<(usize, u64)> = run_order(std::slice::from_ref(&exp))
+        .into_iter()
+        .map(|(_, p)| (exp.points[p].scene.initial.len(), exp.points[p].scene.spec.seed))
+        .collect();
+    assert_eq!(started, [(20, 1), (20, 2), (20, 3), (10, 1), (10, 2), (10, 3)]);
 }
