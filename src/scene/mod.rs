@@ -326,7 +326,7 @@ impl Scene {
             drag.wall = d.wall.as_ref().map(|w| {
                 let (axis, high) = w.face.axis_and_side();
                 let position = if high { self.domain.hi[axis] } else { self.domain.lo[axis] };
-                WallCorrection { axis, position, min_gap: w.min_gap }
+                WallCorrection::new(axis, position, w.min_gap)
             });
             terms.push(Box::new(drag));
         }

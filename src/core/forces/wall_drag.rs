@@ -14,10 +14,14 @@
 //! set by its roughness, and f_∥ diverges (logarithmically) at contact. docs/model.md §7.
 
 use crate::core::state::Vec3;
+use std::sync::LazyLock;
 
 /// (h/a, f_∥) of O'Neill (1964) / Goldman, Cox & Brenner (1967), for the interpolated range.
 const EXACT: [(f64, f64); 6] =
     [(1.0050, 3.7863), (1.0453, 2.6475), (1.1276, 2.1514), (1.5431, 1.5675), (2.3524, 1.3079), (3.7622, 1.1738)];
+
+/// [`EXACT`] on the interpolation's axes, (ln(h/a − 1), ln f_∥), computed once.
+static KNOTS: LazyLock<[(f64, f64); 6]> = LazyLock::new(|| EXACT.map(|(h, f)| ((h - 1.0).ln(), f.ln())));
 
 /// Faxén's series for f_∥ at `h_over_a` = h/a.
 pub fn faxen(h_over_a: f64) -> f64 {
@@ -40,9 +44,9 @@ pub fn parallel_factor(h_over_a: f64) -> f64 {
         return lubrication(h_over_a - 1.0);
     }
     let k = EXACT.windows(2).position(|w| h_over_a < w[1].0).unwrap_or(EXACT.len() - 2);
-    let ((h0, f0), (h1, f1)) = (EXACT[k], EXACT[k + 1]);
-    let t = ((h_over_a - 1.0).ln() - (h0 - 1.0).ln()) / ((h1 - 1.0).ln() - (h0 - 1.0).ln());
-    (f0.ln() + t * (f1.ln() - f0.ln())).exp()
+    let ((x0, y0), (x1, y1)) = (KNOTS[k], KNOTS[k + 1]);
+    let t = ((h_over_a - 1.0).ln() - x0) / (x1 - x0);
+    (y0 + t * (y1 - y0)).exp()
 }
 
 /// One plane wall of the box for the drag correction.
@@ -53,14 +57,24 @@ pub struct WallCorrection {
     /// The wall's coordinate along `axis` (m).
     pub position: f64,
     /// Smallest gap used, as a fraction of the radius.
-    pub min_gap: f64,
+    min_gap: f64,
+    /// f_∥ at the smallest gap, where a sphere resting on the wall sits.
+    at_min_gap: f64,
 }
 
 impl WallCorrection {
+    pub fn new(axis: usize, position: f64, min_gap: f64) -> Self {
+        Self { axis, position, min_gap, at_min_gap: parallel_factor(1.0 + min_gap) }
+    }
+
     /// f_∥ of a sphere of radius `a` centred at `x`.
     pub fn factor(&self, x: &Vec3, a: f64) -> f64 {
-        let h = (x[self.axis] - self.position).abs();
-        parallel_factor((h / a).max(1.0 + self.min_gap))
+        let h_over_a = (x[self.axis] - self.position).abs() / a;
+        if h_over_a <= 1.0 + self.min_gap {
+            self.at_min_gap
+        } else {
+            parallel_factor(h_over_a)
+        }
     }
 
     /// `u` with its components parallel to the wall multiplied by `f`.
