@@ -8,6 +8,7 @@ use magdem::core::neighbours::{PairRange, Skins};
 use magdem::core::simulation::ForceField;
 use magdem::core::state::{Particles, Species, State, Vec3};
 use magdem::scene::Scene;
+use nalgebra::Matrix3;
 use std::f64::consts::PI;
 
 const WATER: &str = "[fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n";
@@ -575,16 +576,129 @@ fn rpy_mobility_is_positive_definite_with_overlaps_and_unequal_radii() {
         // Spheres of 1–3 µm packed into a 10 µm cube: many overlap, some lie inside others.
         let x: Vec<Vec3> = (0..n).map(|i| Vec3::from_fn(|c, _| 1e-5 * value(100 * trial + 3 * i + c))).collect();
         let radii: Vec<f64> = (0..n).map(|i| 1e-6 * (1.0 + 2.0 * value(7919 * trial + i))).collect();
-        let m = mobility(&x, &radii, 1e-3);
+        let m = mobility(&x, &radii, 1e-3, None);
         let asym = (0..3 * n)
             .flat_map(|r| (0..3 * n).map(move |c| (r, c)))
             .map(|(r, c)| (m[(r, c)] - m[(c, r)]).abs())
             .fold(0.0, f64::max);
         assert!(asym == 0.0, "trial {trial}: not symmetric ({asym:e})");
-        let resistance = Resistance::new(&x, &radii, 1e-3).unwrap_or_else(|e| panic!("trial {trial}: {e}"));
+        let resistance = Resistance::new(&x, &radii, 1e-3, None).unwrap_or_else(|e| panic!("trial {trial}: {e}"));
         let u: Vec<Vec3> = (0..n).map(|i| Vec3::from_fn(|c, _| value(31 * trial + 3 * i + c) - 0.5)).collect();
         let power: f64 = resistance.drag(&u, Vec3::zeros()).iter().zip(&u).map(|(f, v)| f.dot(v)).sum();
         assert!(power < 0.0, "trial {trial}: the drag does work {power:e}");
+    }
+}
+
+/// RPY above a wall (Rotne–Prager–Blake, Swan & Brady 2007): a lone sphere's mobility along the
+/// wall approaches the exact values (O'Neill 1964, tabulated by Goldman, Cox & Brenner 1967) as it
+/// moves away from the wall — the far-field tensor misses lubrication near it — and two spheres
+/// far apart along the wall couple as Blake's (1971) point force near a wall, written out here
+/// (the image stokeslet, doublet and dipole, the dipole's derivative by finite differences): r⁻³
+/// screening instead of the unbounded fluid's r⁻¹.
+#[test]
+fn rpy_above_a_wall_meets_the_exact_lone_sphere_drag_and_blakes_far_field() {
+    use magdem::core::forces::blake::PlaneWall;
+    use magdem::core::forces::hydrodynamics::mobility;
+    let (a, mu) = (1.0e-6_f64, 1.0e-3);
+    let unit = 1.0 / (6.0 * PI * mu * a);
+    let wall = PlaneWall { axis: 2, position: 0.0, side: 1.0, min_gap: 0.01 };
+    // (h/a, exact f_∥, largest relative error allowed): the error shrinks like (a/h)⁴.
+    for (h, exact, tolerance) in [(1.5431, 1.5675, 0.05), (2.3524, 1.3079, 0.01), (3.7622, 1.1738, 0.002)] {
+        let m = mobility(&[Vec3::new(0.0, 0.0, h * a)], &[a], mu, Some(&wall));
+        let f = unit / m[(0, 0)];
+        assert!((f / exact - 1.0).abs() < tolerance, "h/a = {h}: f = {f} vs {exact}");
+        assert!(m[(1, 1)] == m[(0, 0)] && m[(2, 2)] < m[(0, 0)], "h/a = {h}: normal motion is the more hindered");
+    }
+    // The same wall as the box's upper face (fluid below it) gives the mirrored mobility.
+    let top = PlaneWall { axis: 2, position: 0.0, side: -1.0, min_gap: 0.01 };
+    let (xi, xj) = (Vec3::new(0.0, 0.0, 3.0 * a), Vec3::new(4.0 * a, 1.0 * a, 2.0 * a));
+    let low = mobility(&[xi, xj], &[a, a], mu, Some(&wall));
+    let mirror = |v: Vec3| Vec3::new(v.x, v.y, -v.z);
+    let high = mobility(&[mirror(xi), mirror(xj)], &[a, a], mu, Some(&top));
+    for (r, c) in (0..6).flat_map(|r| (0..6).map(move |c| (r, c))) {
+        let sign = if (r % 3 == 2) != (c % 3 == 2) { -1.0 } else { 1.0 };
+        assert!((high[(r, c)] - sign * low[(r, c)]).abs() < 1e-12 * unit, "mirrored entry ({r}, {c})");
+    }
+
+    let stokeslet = |r: Vec3| -> Matrix3<f64> {
+        let d = r.norm();
+        (Matrix3::identity() / d + r * r.transpose() / d.powi(3)) / (8.0 * PI * mu)
+    };
+    // Blake: G_ij = S_ij(r) − S_ij(R) + 2h M_jk ∂_k [h R_i/R³ − (δ_i3/R + R_i R_3/R³)] / (8π μ),
+    // r = x − y, R = x − ȳ (ȳ the image of the force point y at height h), M = diag(1, 1, −1).
+    let blake = |x: Vec3, y: Vec3| -> Matrix3<f64> {
+        let h = y.z;
+        let image = Vec3::new(y.x, y.y, -h);
+        let phi = |q: Vec3| -> Vec3 {
+            let d = q.norm();
+            Vec3::from_fn(|i, _| h * q[i] / d.powi(3) - (if i == 2 { 1.0 / d } else { 0.0 } + q[i] * q.z / d.powi(3)))
+        };
+        let big = x - image;
+        let step = 1e-5 * big.norm();
+        let mut grad = Matrix3::zeros(); // grad[(i, k)] = ∂φ_i/∂R_k
+        for k in 0..3 {
+            let mut e = Vec3::zeros();
+            e[k] = step;
+            let column = (phi(big + e) - phi(big - e)) / (2.0 * step);
+            grad.set_column(k, &column);
+        }
+        let mirror = Matrix3::from_diagonal(&Vec3::new(1.0, 1.0, -1.0));
+        stokeslet(x - y) - stokeslet(big) + grad * mirror * (2.0 * h / (8.0 * PI * mu))
+    };
+    for (xi, xj) in [
+        (Vec3::new(0.0, 0.0, 20.0), Vec3::new(200.0, 0.0, 20.0)),
+        (Vec3::new(0.0, 0.0, 15.0), Vec3::new(150.0, 80.0, 25.0)),
+    ] {
+        let (xi, xj) = (xi * a, xj * a);
+        let m = mobility(&[xi, xj], &[a, a], mu, Some(&wall));
+        let block = Matrix3::from_fn(|r, c| m[(r, 3 + c)]);
+        let expected = blake(xi, xj);
+        let error = (block - expected).norm() / expected.norm();
+        assert!(error < 0.01, "{xi:?} {xj:?}: {block:?} vs Blake {expected:?} ({error:e})");
+    }
+    // Screening: twice as far apart along the wall, the coupling falls 8-fold (r⁻³), not 2-fold.
+    let coupling = |rho: f64| {
+        let m = mobility(&[Vec3::new(0.0, 0.0, 20.0 * a), Vec3::new(rho * a, 0.0, 20.0 * a)], &[a, a], mu, Some(&wall));
+        m[(0, 3)]
+    };
+    let fall = coupling(200.0) / coupling(400.0);
+    assert!((fall / 8.0 - 1.0).abs() < 0.1, "the coupling falls {fall}-fold from 200 a to 400 a");
+}
+
+/// The mobility above a wall is positive definite for spheres resting on it: straight chains of
+/// n = 2 … 20 touching (and slightly overlapping, as Hertz contacts leave them) along the wall at
+/// the smallest gap, and random configurations of spheres that overlap neither each other nor the
+/// wall.
+#[test]
+fn rpy_above_a_wall_is_positive_definite_for_chains_on_it_and_random_spheres() {
+    use magdem::core::forces::blake::PlaneWall;
+    use magdem::core::forces::hydrodynamics::Resistance;
+    let (a, mu) = (2.75e-6_f64, 1.0e-3);
+    let wall = PlaneWall { axis: 2, position: 0.0, side: 1.0, min_gap: 0.01 };
+    for n in 2..=20 {
+        for spacing in [2.0 * a, 2.0 * a * (1.0 - 1e-3)] {
+            let x: Vec<Vec3> = (0..n).map(|i| Vec3::new(i as f64 * spacing, 0.0, a)).collect();
+            Resistance::new(&x, &vec![a; n], mu, Some(&wall)).unwrap_or_else(|e| panic!("chain n = {n}: {e}"));
+        }
+    }
+    // SplitMix64, to [0, 1).
+    let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+    let mut value = move || {
+        seed = seed.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = seed;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for trial in 0..10 {
+        let mut x: Vec<Vec3> = vec![];
+        while x.len() < 25 {
+            let c = Vec3::new(40.0 * value(), 40.0 * value(), 1.01 + 10.0 * value()) * a;
+            if x.iter().all(|y| (y - c).norm() > 2.0 * a) {
+                x.push(c);
+            }
+        }
+        Resistance::new(&x, &vec![a; x.len()], mu, Some(&wall)).unwrap_or_else(|e| panic!("trial {trial}: {e}"));
     }
 }
 
@@ -598,7 +712,7 @@ fn rpy_pair_drag_matches_its_closed_form_at_several_separations() {
     for r_over_a in [2.0, 2.5, 4.0, 10.0] {
         let r = r_over_a * a;
         let x = [Vec3::zeros(), Vec3::new(r, 0.0, 0.0)];
-        let resistance = Resistance::new(&x, &[a, a], mu).unwrap();
+        let resistance = Resistance::new(&x, &[a, a], mu, None).unwrap();
         for (axis, closed) in [
             (0, 1.0 / (1.0 + 1.5 / r_over_a - r_over_a.powi(-3))),
             (1, 1.0 / (1.0 + 0.75 / r_over_a + 0.5 * r_over_a.powi(-3))),

@@ -220,10 +220,10 @@ fn cost_section(tables: &Path) -> Result<(String, f64), Error> {
         let velocity: Vec<Vec3> = (0..n).map(|k| Vec3::new(1e-5, 1e-6 * (k % 3) as f64, 0.0)).collect();
         let repeats = if n > 500 { 3 } else { 7 };
         let factor = timed(repeats, || {
-            std::hint::black_box(Resistance::new(&x, &radii, mu).expect("RPY is positive definite"));
+            std::hint::black_box(Resistance::new(&x, &radii, mu, None).expect("RPY is positive definite"));
         })
         .1;
-        let r = Resistance::new(&x, &radii, mu)?;
+        let r = Resistance::new(&x, &radii, mu, None)?;
         let solve = timed(15, || {
             std::hint::black_box(r.drag(&velocity, Vec3::zeros()));
         })

@@ -7,6 +7,7 @@ pub mod spec;
 mod start;
 
 use crate::core::domain::Domain;
+use crate::core::forces::blake::PlaneWall;
 use crate::core::forces::contact::law::{ContactLaw, Normal, Tangential};
 use crate::core::forces::contact::Contact;
 use crate::core::forces::dipole::DipoleForce;
@@ -310,7 +311,13 @@ impl Scene {
         let near = PairRange::Within { range, skin: skins.near * range };
         let medium = Fluid { density: fluid.density, viscosity: fluid.viscosity, velocity: Vec3::from(fluid.velocity) };
         if let Some(d) = f.drag.as_ref().filter(|d| d.law == DragLawSpec::Rpy) {
-            terms.push(Box::new(RpyDrag::new(medium, d.rotational, d.refactor_every)));
+            let mut rpy = RpyDrag::new(medium, d.rotational, d.refactor_every);
+            rpy.wall = d.wall.as_ref().map(|w| {
+                let (axis, high) = w.face.axis_and_side();
+                let position = if high { self.domain.hi[axis] } else { self.domain.lo[axis] };
+                PlaneWall { axis, position, side: if high { -1.0 } else { 1.0 }, min_gap: w.min_gap }
+            });
+            terms.push(Box::new(rpy));
         } else if let Some(d) = &f.drag {
             let law = match d.law {
                 DragLawSpec::Stokes => DragLaw::Stokes,
@@ -555,16 +562,12 @@ fn check_forces(
         }
         if let Some(w) = &d.wall {
             positive("forces.drag.wall.min_gap", w.min_gap)?;
+            if d.law == DragLawSpec::Rpy {
+                check_equal_spheres(spec)?;
+            }
             let (axis, _) = w.face.axis_and_side();
             if spec.domain.boundary.axis(axis) == Boundary::Periodic {
                 return Err(invalid("forces.drag.wall.face", w.face, "that face is periodic, not a wall"));
-            }
-            if d.law == DragLawSpec::Rpy {
-                return Err(invalid(
-                    "forces.drag.wall",
-                    w.face,
-                    "the RPY mobility is that of an unbounded fluid; a wall needs its image system (Blake), not included",
-                ));
             }
             if spec.integration.scheme.integrates_linear_drag() {
                 return Err(invalid(
@@ -803,6 +806,24 @@ fn checked_count(
         )));
     }
     Ok(count)
+}
+
+/// The RPY mobility above a wall (Swan & Brady's) is that of equal spheres: one diameter, no size law.
+fn check_equal_spheres(spec: &SceneSpec) -> Result<(), SceneError> {
+    let why = "the RPY mobility above a wall (forces.drag.wall with law = \"rpy\") is written for equal spheres";
+    for (k, s) in spec.species.iter().enumerate() {
+        if s.size.is_some() {
+            return Err(invalid(format!("species[{k}].size"), s.name.as_str(), format!("{why}: give one diameter")));
+        }
+        if s.diameter != spec.species[0].diameter {
+            return Err(invalid(
+                format!("species[{k}].diameter"),
+                s.diameter,
+                format!("{why}: species[0] has {:e} m", spec.species[0].diameter),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The largest sphere the group's species can have fits its region between the walls on every

@@ -11,6 +11,7 @@
 //! The 3N × 3N mobility is symmetric positive definite for any configuration; the drag is
 //! F_h = −R (U − u_f) with R = M⁻¹, formed from a Cholesky factor of M (faer). docs/model.md §7.
 
+use super::blake::PlaneWall;
 use super::drag::Fluid;
 use super::{Context, ForceTerm, Forces, InductionError};
 use crate::core::state::{Particles, State, Vec3};
@@ -37,8 +38,9 @@ pub fn pair_mobility(a_i: f64, a_j: f64, r: &Vec3, viscosity: f64) -> Matrix3<f6
     }
 }
 
-/// The dense 3N × 3N mobility of spheres at `positions` with `radii` (unbounded fluid).
-pub fn mobility(positions: &[Vec3], radii: &[f64], viscosity: f64) -> faer::Mat<f64> {
+/// The dense 3N × 3N mobility of spheres at `positions` with `radii`: an unbounded fluid, or above
+/// `wall` (equal radii, [`super::blake`]).
+pub fn mobility(positions: &[Vec3], radii: &[f64], viscosity: f64, wall: Option<&PlaneWall>) -> faer::Mat<f64> {
     let n = positions.len();
     let mut m = faer::Mat::<f64>::zeros(3 * n, 3 * n);
     for i in 0..n {
@@ -53,6 +55,16 @@ pub fn mobility(positions: &[Vec3], radii: &[f64], viscosity: f64) -> faer::Mat<
             }
         }
     }
+    if let (Some(wall), Some(&a)) = (wall, radii.first()) {
+        for (i, j, block) in wall.corrections(positions, a, viscosity) {
+            for (r, c) in (0..3).flat_map(|r| (0..3).map(move |c| (r, c))) {
+                m[(3 * i + r, 3 * j + c)] += block[(r, c)];
+                if i != j {
+                    m[(3 * j + r, 3 * i + c)] += block[(c, r)];
+                }
+            }
+        }
+    }
     m
 }
 
@@ -63,17 +75,22 @@ pub struct Resistance {
     inverse: faer::Mat<f64>,
 }
 
-/// The mobility is not positive definite (it always is for RPY: a failure means non-finite
-/// positions or radii).
+/// The mobility is not positive definite: in an unbounded fluid it always is (a failure means
+/// non-finite positions or radii); above a wall, spheres that overlap may also cause it.
 #[derive(Debug, Clone, thiserror::Error)]
-#[error("the RPY mobility of {particles} spheres has no Cholesky factor (non-finite positions or radii)")]
+#[error("the RPY mobility of {particles} spheres has no Cholesky factor (non-finite positions or radii, or overlaps near the wall)")]
 pub struct NotPositiveDefinite {
     pub particles: usize,
 }
 
 impl Resistance {
-    pub fn new(positions: &[Vec3], radii: &[f64], viscosity: f64) -> Result<Self, NotPositiveDefinite> {
-        let m = mobility(positions, radii, viscosity);
+    pub fn new(
+        positions: &[Vec3],
+        radii: &[f64],
+        viscosity: f64,
+        wall: Option<&PlaneWall>,
+    ) -> Result<Self, NotPositiveDefinite> {
+        let m = mobility(positions, radii, viscosity, wall);
         let factor = m.llt(faer::Side::Lower).map_err(|_| NotPositiveDefinite { particles: positions.len() })?;
         Ok(Self { inverse: factor.inverse() })
     }
@@ -107,6 +124,8 @@ pub struct RpyDrag {
     pub fluid: Fluid,
     pub rotational: bool,
     pub refactor_every: u64,
+    /// A no-slip wall the spheres move above (its image system in the mobility), or none.
+    pub wall: Option<PlaneWall>,
     resistance: Option<Result<Resistance, NotPositiveDefinite>>,
     /// The step call began on a multiple of `refactor_every`: renew at the next evaluation.
     due: bool,
@@ -114,7 +133,7 @@ pub struct RpyDrag {
 
 impl RpyDrag {
     pub fn new(fluid: Fluid, rotational: bool, refactor_every: u64) -> Self {
-        Self { fluid, rotational, refactor_every: refactor_every.max(1), resistance: None, due: false }
+        Self { fluid, rotational, refactor_every: refactor_every.max(1), wall: None, resistance: None, due: false }
     }
 }
 
@@ -128,7 +147,7 @@ impl ForceTerm for RpyDrag {
     fn prepare(&mut self, _ctx: &Context, state: &State) -> Result<(), InductionError> {
         if self.refactor_every == 1 || self.due || self.resistance.is_none() {
             let p = &state.particles;
-            self.resistance = Some(Resistance::new(&p.position, &p.radius, self.fluid.viscosity));
+            self.resistance = Some(Resistance::new(&p.position, &p.radius, self.fluid.viscosity, self.wall.as_ref()));
             self.due = false;
         }
         Ok(())

@@ -2,6 +2,7 @@
 //! lists, so an absent term costs nothing. A term reads the particles (never writes them),
 //! declares the pairs it needs, and adds its contribution into [`Forces`].
 
+pub mod blake;
 pub mod contact;
 pub mod dipole;
 pub mod drag;
