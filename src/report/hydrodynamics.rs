@@ -704,6 +704,15 @@ fn case1_verdict(names: &[String], cols: &[Vec<f64>; 10]) -> String {
 /// What each model's velocities say against the experiment, in words: the exponent, where its
 /// aggregates of five or more fall against the experiment's band (their CI95 overlapping it or
 /// not), and how fast RPY's single particles move against the lone-sphere value.
+/// α to two decimals, or why there is none (fewer than two sizes with three aggregates).
+fn slope(alpha: f64) -> String {
+    if alpha.is_finite() {
+        format!("{alpha:.2}")
+    } else {
+        "not yet fitted (too few sizes with three aggregates)".to_string()
+    }
+}
+
 fn verdict(names: &[String], cols: &[Vec<f64>; 10], exp: f64, exp_std: f64) -> String {
     let (singles, large, large_ci, slopes) = (&cols[6], &cols[7], &cols[8], &cols[9]);
     let mut text = String::from("Which drag model gives the measured size independence: ");
@@ -712,10 +721,16 @@ fn verdict(names: &[String], cols: &[Vec<f64>; 10], exp: f64, exp_std: f64) -> S
             let (v, ci) = (large[k], large_ci[k]);
             let overlaps = v - ci <= exp + exp_std && v + ci >= exp - exp_std;
             format!(
-                "{}: α = {:.2}, aggregates of 5+ at {v:.1} ± {ci:.1} µm/s ({} the experiment's {:.1}–{:.1} µm/s)",
+                "{}: α = {}, aggregates of 5+ at {v:.1} ± {ci:.1} µm/s ({} the experiment's {:.1}–{:.1} µm/s)",
                 names[k],
-                slopes[k],
-                if overlaps { "overlapping" } else { "clear of" },
+                slope(slopes[k]),
+                if !ci.is_finite() {
+                    "not yet comparable with"
+                } else if overlaps {
+                    "overlapping"
+                } else {
+                    "clear of"
+                },
                 exp - exp_std,
                 exp + exp_std
             )
@@ -767,14 +782,19 @@ fn variations(variants: &[&str], cols: &[Vec<f64>; 10]) -> String {
         .map(|(k, b, base, label)| {
             let change = |m: usize, c: usize| (cols[m][k] - cols[m][b], cols[c][k].hypot(cols[c][b]));
             let ((ds, ds_ci), (dv, dv_ci)) = (change(2, 3), change(7, 8));
-            let word = |d: f64, ci: f64| if d.abs() > ci { "changes" } else { "does not change measurably" };
+            let word = |d: f64, ci: f64| match () {
+                _ if !ci.is_finite() => "is not yet measured (fewer than two seeds with a value)",
+                _ if d.abs() > ci => "changes",
+                _ => "does not change measurably",
+            };
             format!(
-                "- {label} ({} seeds) against `{base}`: the mean size {} ({ds:+.2} ± {ds_ci:.2} particles), the velocity                  of aggregates of 5+ {} ({dv:+.1} ± {dv_ci:.1} µm/s), slope α {:.2} against {:.2}.\n",
+                "- {label} ({} seeds) against `{base}`: the mean size {} ({ds:+.2} ± {ds_ci:.2} particles), the velocity \
+                 of aggregates of 5+ {} ({dv:+.1} ± {dv_ci:.1} µm/s), slope α {} against {}.\n",
                 cols[0][k],
                 word(ds, ds_ci),
                 word(dv, dv_ci),
-                cols[9][k],
-                cols[9][b]
+                slope(cols[9][k]),
+                slope(cols[9][b])
             )
         })
         .collect();
