@@ -597,8 +597,8 @@ fn rpy_mobility_is_positive_definite_with_overlaps_and_unequal_radii() {
 /// screening instead of the unbounded fluid's r⁻¹.
 #[test]
 fn rpy_above_a_wall_meets_the_exact_lone_sphere_drag_and_blakes_far_field() {
-    use magdem::core::forces::blake::PlaneWall;
     use magdem::core::forces::hydrodynamics::mobility;
+    use magdem::core::forces::wall_drag::PlaneWall;
     let (a, mu) = (1.0e-6_f64, 1.0e-3);
     let unit = 1.0 / (6.0 * PI * mu * a);
     let wall = PlaneWall { axis: 2, position: 0.0, side: 1.0, min_gap: 0.01 };
@@ -671,8 +671,8 @@ fn rpy_above_a_wall_meets_the_exact_lone_sphere_drag_and_blakes_far_field() {
 /// wall.
 #[test]
 fn rpy_above_a_wall_is_positive_definite_for_chains_on_it_and_random_spheres() {
-    use magdem::core::forces::blake::PlaneWall;
     use magdem::core::forces::hydrodynamics::Resistance;
+    use magdem::core::forces::wall_drag::PlaneWall;
     let (a, mu) = (2.75e-6_f64, 1.0e-3);
     let wall = PlaneWall { axis: 2, position: 0.0, side: 1.0, min_gap: 0.01 };
     for n in 2..=20 {

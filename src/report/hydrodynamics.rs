@@ -6,8 +6,8 @@
 use super::runs::{experiment_files, load_runs_digested, Run};
 use super::tables::{col, floats, frame, markdown, read_csv, scol, write};
 use crate::analysis::stats::{ci95_half_width, summary};
-use crate::core::forces::blake::PlaneWall;
 use crate::core::forces::hydrodynamics::Resistance;
+use crate::core::forces::wall_drag::PlaneWall;
 use crate::core::state::Vec3;
 use crate::plot::{chart, palette, Legend, RGBColor, Scale, Series, SeriesLabelPosition};
 use crate::scene::Scene;

@@ -7,7 +7,6 @@ pub mod spec;
 mod start;
 
 use crate::core::domain::Domain;
-use crate::core::forces::blake::PlaneWall;
 use crate::core::forces::contact::law::{ContactLaw, Normal, Tangential};
 use crate::core::forces::contact::Contact;
 use crate::core::forces::dipole::DipoleForce;
@@ -15,7 +14,7 @@ use crate::core::forces::drag::{Drag, DragLaw, Fluid, Shielding};
 use crate::core::forces::gradient::GradientForce;
 use crate::core::forces::gravity::GravityBuoyancy;
 use crate::core::forces::hydrodynamics::RpyDrag;
-use crate::core::forces::wall_drag::WallCorrection;
+use crate::core::forces::wall_drag::{PlaneWall, WallCorrection};
 use crate::core::forces::ForceTerm;
 use crate::core::integrators;
 use crate::core::magnetisation::{Induction, Magnetisation, MU0};
@@ -310,13 +309,14 @@ impl Scene {
         let mut terms = self.magnetic_terms(skins);
         let near = PairRange::Within { range, skin: skins.near * range };
         let medium = Fluid { density: fluid.density, viscosity: fluid.viscosity, velocity: Vec3::from(fluid.velocity) };
+        let drag_wall = f.drag.as_ref().and_then(|d| d.wall.as_ref()).map(|w| {
+            let (axis, high) = w.face.axis_and_side();
+            let position = if high { self.domain.hi[axis] } else { self.domain.lo[axis] };
+            PlaneWall { axis, position, side: if high { -1.0 } else { 1.0 }, min_gap: w.min_gap }
+        });
         if let Some(d) = f.drag.as_ref().filter(|d| d.law == DragLawSpec::Rpy) {
             let mut rpy = RpyDrag::new(medium, d.rotational, d.refactor_every);
-            rpy.wall = d.wall.as_ref().map(|w| {
-                let (axis, high) = w.face.axis_and_side();
-                let position = if high { self.domain.hi[axis] } else { self.domain.lo[axis] };
-                PlaneWall { axis, position, side: if high { -1.0 } else { 1.0 }, min_gap: w.min_gap }
-            });
+            rpy.wall = drag_wall;
             terms.push(Box::new(rpy));
         } else if let Some(d) = &f.drag {
             let law = match d.law {
@@ -330,11 +330,7 @@ impl Scene {
             };
             let mut drag = Drag::new(law, shielding, d.rotational, medium);
             drag.exclude_linear = spec.integration.scheme.integrates_linear_drag();
-            drag.wall = d.wall.as_ref().map(|w| {
-                let (axis, high) = w.face.axis_and_side();
-                let position = if high { self.domain.hi[axis] } else { self.domain.lo[axis] };
-                WallCorrection::new(axis, position, w.min_gap)
-            });
+            drag.wall = drag_wall.map(WallCorrection::new);
             terms.push(Box::new(drag));
         }
         if let Some(g) = &f.gravity {

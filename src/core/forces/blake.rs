@@ -13,26 +13,16 @@
 //! factor ([`super::wall_drag`]). Positive definite for spheres that do not overlap each other or
 //! the wall (Swan & Brady); the Cholesky factor reports the configurations where it is not.
 
+use super::wall_drag::PlaneWall;
 use crate::core::state::Vec3;
 use nalgebra::Matrix3;
-
-/// A no-slip plane wall normal to `axis` at coordinate `position`, the fluid on one side of it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PlaneWall {
-    pub axis: usize,
-    pub position: f64,
-    /// +1 when the fluid lies on the wall's positive side (a low face of the box), −1 otherwise.
-    pub side: f64,
-    /// Smallest sphere–wall gap used, as a fraction of the radius.
-    pub min_gap: f64,
-}
 
 impl PlaneWall {
     /// `x` in the wall's frame: the wall-normal component last, measured from the wall into the
     /// fluid (a reflection where the fluid lies below it: Stokes flow is reflection invariant).
     fn local(&self, x: &Vec3) -> Vec3 {
         let (t1, t2) = ((self.axis + 1) % 3, (self.axis + 2) % 3);
-        Vec3::new(x[t1], x[t2], self.side * (x[self.axis] - self.position))
+        Vec3::new(x[t1], x[t2], self.height(x))
     }
 
     /// A block from the wall's frame back to the box's (the inverse of [`Self::local`]).

@@ -8,11 +8,12 @@
 //! - one inside the other, r ≤ |a_i − a_j|:   M_ij = I/(6π μ max(a_i, a_j))
 //! - self: M_ii = I/(6π μ a_i)
 //!
-//! The 3N × 3N mobility is symmetric positive definite for any configuration; the drag is
+//! In an unbounded fluid the 3N × 3N mobility is symmetric positive definite for any configuration
+//! (above a wall, [`super::blake`], for spheres that do not overlap); the drag is
 //! F_h = −R (U − u_f) with R = M⁻¹, formed from a Cholesky factor of M (faer). docs/model.md §7.
 
-use super::blake::PlaneWall;
 use super::drag::Fluid;
+use super::wall_drag::PlaneWall;
 use super::{Context, ForceTerm, Forces, InductionError};
 use crate::core::state::{Particles, State, Vec3};
 use faer::linalg::solvers::DenseSolveCore;

@@ -49,28 +49,44 @@ pub fn parallel_factor(h_over_a: f64) -> f64 {
     (y0 + t * (y1 - y0)).exp()
 }
 
-/// One plane wall of the box for the drag correction.
+/// A plane wall of the box as the drag sees it (this factor, and the RPY mobility above a wall of
+/// [`super::blake`]): normal to `axis` at coordinate `position`, the fluid on one side of it.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct WallCorrection {
+pub struct PlaneWall {
     /// Axis normal to the wall (0, 1, 2).
     pub axis: usize,
     /// The wall's coordinate along `axis` (m).
     pub position: f64,
-    /// Smallest gap used, as a fraction of the radius.
-    min_gap: f64,
+    /// +1 when the fluid lies on the wall's positive side (a low face of the box), −1 otherwise.
+    pub side: f64,
+    /// Smallest sphere–wall gap used, as a fraction of the radius.
+    pub min_gap: f64,
+}
+
+impl PlaneWall {
+    /// The distance from the wall into the fluid of a point at `x` (m).
+    pub fn height(&self, x: &Vec3) -> f64 {
+        self.side * (x[self.axis] - self.position)
+    }
+}
+
+/// The parallel-wall factor of one wall of the box.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WallCorrection {
+    pub wall: PlaneWall,
     /// f_∥ at the smallest gap, where a sphere resting on the wall sits.
     at_min_gap: f64,
 }
 
 impl WallCorrection {
-    pub fn new(axis: usize, position: f64, min_gap: f64) -> Self {
-        Self { axis, position, min_gap, at_min_gap: parallel_factor(1.0 + min_gap) }
+    pub fn new(wall: PlaneWall) -> Self {
+        Self { wall, at_min_gap: parallel_factor(1.0 + wall.min_gap) }
     }
 
     /// f_∥ of a sphere of radius `a` centred at `x`.
     pub fn factor(&self, x: &Vec3, a: f64) -> f64 {
-        let h_over_a = (x[self.axis] - self.position).abs() / a;
-        if h_over_a <= 1.0 + self.min_gap {
+        let h_over_a = self.wall.height(x) / a;
+        if h_over_a <= 1.0 + self.wall.min_gap {
             self.at_min_gap
         } else {
             parallel_factor(h_over_a)
@@ -80,7 +96,7 @@ impl WallCorrection {
     /// `u` with its components parallel to the wall multiplied by `f`.
     pub fn scale_parallel(&self, u: Vec3, f: f64) -> Vec3 {
         let mut v = u * f;
-        v[self.axis] = u[self.axis];
+        v[self.wall.axis] = u[self.wall.axis];
         v
     }
 }
