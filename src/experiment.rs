@@ -2,9 +2,12 @@
 //! first, one HDF5 file per run, a manifest beside each experiment's runs), skipping runs already
 //! complete, resuming interrupted ones, and refusing to overwrite a finished run whose scene
 //! changed unless told to. A run that goes unstable is a result, recorded as such, not retried.
+//! A run that a report's digest records as finished with the same scene is not run again: the
+//! digests are how an ensemble grows across machines that do not keep each other's trajectories.
 
 use crate::io::trajectory::{status, Trajectory};
 use crate::reference::{self, Engine};
+use crate::report::digest::{self, Recorded};
 use crate::run::{run, RunFailure, RunOptions, INTERRUPTED};
 use crate::scene::experiment::{Experiment, Point};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -22,6 +25,9 @@ pub struct ExperimentOptions {
     /// Replace finished runs whose scene changed (otherwise they are kept and reported).
     pub overwrite_changed: bool,
     pub progress: bool,
+    /// Reports' digest directories (`reports/*/digests`): a run one records as finished with the
+    /// same scene is taken as done.
+    pub digests: Vec<PathBuf>,
 }
 
 /// What happened to one point.
@@ -31,6 +37,8 @@ pub enum Outcome {
     Resumed,
     /// Already complete with the same scene.
     Skipped,
+    /// A report's digest records it as complete with the same scene (its trajectory is elsewhere).
+    Digested,
     /// Finished earlier with a different scene; kept.
     KeptChanged {
         old_hash: String,
@@ -50,6 +58,7 @@ impl Outcome {
             Outcome::Completed => "completed".into(),
             Outcome::Resumed => "resumed".into(),
             Outcome::Skipped => "skipped (complete)".into(),
+            Outcome::Digested => "skipped (complete in a report's digest)".into(),
             Outcome::KeptChanged { old_hash } => {
                 format!("kept: finished with another scene ({})", &old_hash[..12.min(old_hash.len())])
             }
@@ -78,11 +87,17 @@ fn existing(file: &Path) -> Option<(String, String, String)> {
     ))
 }
 
-fn run_point(point: &Point, file: &Path, options: &ExperimentOptions) -> Outcome {
+fn run_point(point: &Point, file: &Path, digested: Option<&Recorded>, options: &ExperimentOptions) -> Outcome {
     if INTERRUPTED.load(Ordering::Relaxed) {
         return Outcome::Interrupted;
     }
     let hash = &point.scene.hash;
+    if let Some(d) = digested.filter(|d| &d.scene_hash == hash) {
+        return match d.status.as_str() {
+            status::UNSTABLE => Outcome::Unstable(d.message.clone()),
+            _ => Outcome::Digested,
+        };
+    }
     let mut resume = false;
     if let Some((state, old_hash, message)) = existing(file) {
         if state == status::UNSTABLE && &old_hash == hash {
@@ -163,6 +178,8 @@ pub fn run_experiments(
         std::fs::create_dir_all(&experiment.output)?;
     }
     let queue = run_order(experiments);
+    let recorded =
+        experiments.iter().map(|e| digest::recorded(&options.digests, &e.spec.name)).collect::<Result<Vec<_>, _>>()?;
     // A progress bar on stderr when it is a terminal; one line per finished run on stdout when
     // stdout is not a terminal (a log file, a pipe, CI) or the bar cannot be shown.
     let bar_shown = options.progress && stderr().is_terminal();
@@ -187,7 +204,7 @@ pub fn run_experiments(
                         let point = &experiments[e].points[p];
                         let file = experiments[e].output.join(format!("{}.h5", point.id));
                         let start = Instant::now();
-                        let outcome = run_point(point, &file, options);
+                        let outcome = run_point(point, &file, recorded[e].get(&point.id), options);
                         bar.inc(1);
                         bar.set_message(format!("{}: {}", point.id, outcome.label()));
                         let wall_time = start.elapsed().as_secs_f64();

@@ -205,6 +205,13 @@ enum Command {
         dry_run: bool,
         #[arg(short, long)]
         quiet: bool,
+        /// A report's digest directory: a run it records as finished with the same scene is not
+        /// run again (repeatable; default: every reports/*/digests under the current directory).
+        #[arg(long, value_name = "DIR")]
+        digests: Vec<PathBuf>,
+        /// Run every point whose trajectory is not here, whatever the digests record.
+        #[arg(long, conflicts_with = "digests")]
+        no_digests: bool,
     },
     /// Write a report from experiment runs.
     #[command(subcommand)]
@@ -286,8 +293,13 @@ fn main() -> ExitCode {
         }
         Command::Validate { scene } => cli::scene::validate(&scene),
         Command::Analyse { file, frame, gap, csv, header } => cli::trajectory::analyse(&file, frame, gap, csv, header),
-        Command::Experiment { files, jobs, overwrite_changed, dry_run, quiet } => {
-            let options = magdem::experiment::ExperimentOptions { jobs, overwrite_changed, progress: !quiet };
+        Command::Experiment { files, jobs, overwrite_changed, dry_run, quiet, digests, no_digests } => {
+            let digests = match (no_digests, digests.is_empty()) {
+                (true, _) => vec![],
+                (false, true) => cli::experiment::report_digests(),
+                (false, false) => digests,
+            };
+            let options = magdem::experiment::ExperimentOptions { jobs, overwrite_changed, progress: !quiet, digests };
             cli::experiment::experiment(&files, &options, dry_run)
         }
         Command::Report(Report::Paper { experiments, reference, out, gap, wall_time }) => {

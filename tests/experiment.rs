@@ -244,3 +244,32 @@ fn equal_cost_points_start_seed_by_seed_after_the_expensive_ones() {
         .collect();
     assert_eq!(started, [(20, 1), (20, 2), (20, 3), (10, 1), (10, 2), (10, 3)]);
 }
+
+#[test]
+fn runs_a_digest_records_are_not_run_again_on_another_machine() {
+    let (work, file, out) = setup("digested", "seed = [1, 2]\n");
+    let exp = Experiment::from_file(&file).unwrap();
+    let options = ExperimentOptions { jobs: Some(2), ..Default::default() };
+    assert!(run_experiment(&exp, &options).unwrap().iter().all(|r| r.outcome == Outcome::Completed));
+    // A report digests the runs; the trajectories then exist only where they were made.
+    let digests = work.path().join("digests");
+    magdem::report::runs::load_runs_digested(std::slice::from_ref(&file), 1e-3, &digests).unwrap();
+    std::fs::remove_dir_all(&out).unwrap();
+    let with = ExperimentOptions { digests: vec![digests.clone()], ..options.clone() };
+    let again = run_experiment(&exp, &with).unwrap();
+    assert!(
+        again.iter().all(|r| r.outcome == Outcome::Digested),
+        "{:?}",
+        again.iter().map(|r| r.outcome.label()).collect::<Vec<_>>()
+    );
+    assert!(again.iter().all(|r| !r.file.exists()), "nothing is run");
+    // A changed base scene under the same run ids, and a seed the digest lacks, run.
+    let base = work.path().join("base.toml");
+    std::fs::write(&base, std::fs::read_to_string(&base).unwrap().replace("count = 20", "count = 18")).unwrap();
+    std::fs::write(&file, std::fs::read_to_string(&file).unwrap().replace("seed = [1, 2]", "seed = [1, 2, 3]"))
+        .unwrap();
+    let changed = Experiment::from_file(&file).unwrap();
+    let third = run_experiment(&changed, &with).unwrap();
+    let labels: Vec<String> = third.iter().map(|r| r.outcome.label()).collect();
+    assert!(third.iter().all(|r| r.outcome == Outcome::Completed), "{labels:?}");
+}

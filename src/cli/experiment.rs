@@ -2,6 +2,7 @@
 
 use super::{fail, stop_on_ctrl_c};
 use magdem::experiment::{run_experiments, ExperimentOptions, Outcome, PointResult};
+use magdem::report::digest;
 use magdem::scene::experiment::Experiment;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -18,8 +19,10 @@ pub fn experiment(files: &[PathBuf], options: &ExperimentOptions, dry_run: bool)
         }
     }
     if dry_run {
-        list_points(&experiments);
-        return ExitCode::SUCCESS;
+        return match list_points(&experiments, &options.digests) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => fail(e, 1),
+        };
     }
     stop_on_ctrl_c();
     match run_experiments(&experiments, options) {
@@ -44,12 +47,31 @@ pub fn experiment(files: &[PathBuf], options: &ExperimentOptions, dry_run: bool)
     }
 }
 
-/// `--dry-run`: each point's output, particles, steps and engine, with its scene's warnings.
-fn list_points(experiments: &[Experiment]) {
+/// Every `reports/*/digests` directory under the current directory, in name order.
+pub fn report_digests() -> Vec<PathBuf> {
+    let mut dirs: Vec<PathBuf> = std::fs::read_dir("reports")
+        .into_iter()
+        .flatten()
+        .flatten()
+        .map(|e| e.path().join("digests"))
+        .filter(|d| d.is_dir())
+        .collect();
+    dirs.sort();
+    dirs
+}
+
+/// `--dry-run`: each point's output, particles, steps and engine, with its scene's warnings, and
+/// whether a digest records it as finished.
+fn list_points(experiments: &[Experiment], digests: &[PathBuf]) -> Result<(), Box<dyn std::error::Error>> {
     for e in experiments {
+        let recorded = digest::recorded(digests, &e.spec.name)?;
         for p in &e.points {
+            let done = match recorded.get(&p.id) {
+                Some(r) if r.scene_hash == p.scene.hash => format!("  ({} in a digest)", r.status),
+                _ => String::new(),
+            };
             println!(
-                "{}/{}.h5  {} particles  {} steps  {}",
+                "{}/{}.h5  {} particles  {} steps  {}{done}",
                 e.output.display(),
                 p.id,
                 p.scene.initial.len(),
@@ -61,6 +83,7 @@ fn list_points(experiments: &[Experiment]) {
             }
         }
     }
+    Ok(())
 }
 
 /// Prints the runs that did not end well; whether one of them fails the command (an unstable run

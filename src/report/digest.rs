@@ -224,6 +224,31 @@ pub fn sync(runs: &mut [Run], dir: &Path, gap: f64) -> Result<Vec<String>, Error
     Ok(changed)
 }
 
+/// A finished run as a digest records it: the scene it ran and how it ended.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Recorded {
+    pub scene_hash: String,
+    /// `completed` or `unstable`.
+    pub status: String,
+    pub message: String,
+}
+
+/// The finished runs of experiment `experiment` that the digests under `roots` (each a report's
+/// `digests/`) record, by run id. A run recorded in two roots takes the first's record.
+pub fn recorded(roots: &[impl AsRef<Path>], experiment: &str) -> Result<BTreeMap<String, Recorded>, Error> {
+    let mut all = BTreeMap::new();
+    for root in roots.iter().rev() {
+        let here = root.as_ref().join(experiment);
+        let entries = read(&here).map_err(|e| format!("digest {}: {e}", here.display()))?;
+        for (id, e) in entries {
+            if e.status == status::COMPLETED || e.status == status::UNSTABLE {
+                all.insert(id, Recorded { scene_hash: e.scene_hash, status: e.status, message: e.message });
+            }
+        }
+    }
+    Ok(all)
+}
+
 /// Writes `entries` as the digest in `here` unless it holds them already; whether it wrote.
 fn write(here: &Path, entries: &BTreeMap<String, Entry>) -> Result<bool, Error> {
     let bytes = encode(entries)?;
