@@ -102,6 +102,34 @@ enum Report {
         #[arg(long, default_value_t = 1e-3)]
         gap: f64,
     },
+    /// Bring the finished runs on this machine into a report's digests (reports/REPORT/digests/)
+    /// without rewriting the report: an ensemble run in parts on several machines is written up
+    /// once all of it is digested.
+    Digests {
+        #[arg(value_enum)]
+        report: DigestedReport,
+        /// Aggregate gap tolerance, as a fraction of the smaller radius (the report's).
+        #[arg(long, default_value_t = 1e-3)]
+        gap: f64,
+    },
+}
+
+/// The reports that keep digests, with their experiment and report directories.
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum DigestedReport {
+    /// experiments/paper → reports/paper/digests
+    Paper,
+    /// experiments/hydrodynamics → reports/hydrodynamics/digests
+    Hydrodynamics,
+}
+
+impl DigestedReport {
+    fn name(self) -> &'static str {
+        match self {
+            DigestedReport::Paper => "paper",
+            DigestedReport::Hydrodynamics => "hydrodynamics",
+        }
+    }
 }
 
 #[derive(Subcommand)]
@@ -301,6 +329,11 @@ fn main() -> ExitCode {
             };
             let options = magdem::experiment::ExperimentOptions { jobs, overwrite_changed, progress: !quiet, digests };
             cli::experiment::experiment(&files, &options, dry_run)
+        }
+        Command::Report(Report::Digests { report, gap }) => {
+            let name = report.name();
+            let (experiments, dir) = (PathBuf::from("experiments").join(name), PathBuf::from("reports").join(name));
+            cli::report::digests(&experiments, &dir.join("digests"), gap)
         }
         Command::Report(Report::Paper { experiments, reference, out, gap, wall_time }) => {
             cli::report::paper(&magdem::report::paper::PaperReportOptions {

@@ -247,13 +247,22 @@ fn equal_cost_points_start_seed_by_seed_after_the_expensive_ones() {
 
 #[test]
 fn runs_a_digest_records_are_not_run_again_on_another_machine() {
-    let (work, file, out) = setup("digested", "seed = [1, 2]\n");
+    let (work, setup_file, out) = setup("digested", "seed = [1, 2]\n");
+    // The experiment file in a directory of its own, as a report reads them.
+    let experiments = work.path().join("experiments");
+    std::fs::create_dir(&experiments).unwrap();
+    let file = experiments.join("experiment.toml");
+    std::fs::write(&file, std::fs::read_to_string(&setup_file).unwrap().replace("\"base.toml\"", "\"../base.toml\""))
+        .unwrap();
     let exp = Experiment::from_file(&file).unwrap();
     let options = ExperimentOptions { jobs: Some(2), ..Default::default() };
     assert!(run_experiment(&exp, &options).unwrap().iter().all(|r| r.outcome == Outcome::Completed));
-    // A report digests the runs; the trajectories then exist only where they were made.
+    // The runs are digested (`magdem report digests`); the trajectories then exist only where
+    // they were made.
     let digests = work.path().join("digests");
-    magdem::report::runs::load_runs_digested(std::slice::from_ref(&file), 1e-3, &digests).unwrap();
+    let changed = magdem::report::digest::update(&experiments, &digests, 1e-3).unwrap();
+    assert_eq!(changed, vec!["digested".to_string()]);
+    assert!(magdem::report::digest::update(&experiments, &digests, 1e-3).unwrap().is_empty(), "nothing new");
     std::fs::remove_dir_all(&out).unwrap();
     let with = ExperimentOptions { digests: vec![digests.clone()], ..options.clone() };
     let again = run_experiment(&exp, &with).unwrap();

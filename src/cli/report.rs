@@ -1,4 +1,5 @@
-//! `magdem report paper`, `magdem report hydrodynamics` and `magdem bench`: commands that write a report and name it.
+//! `magdem report paper`, `magdem report hydrodynamics` and `magdem bench`: commands that write a report and name it;
+//! `magdem report digests`: a report's digests alone.
 
 use super::report_written;
 use magdem::report::paper::PaperReportOptions;
@@ -18,4 +19,19 @@ pub fn hydrodynamics(options: &magdem::report::hydrodynamics::HydrodynamicsRepor
 pub fn bench(options: magdem::bench::Options) -> ExitCode {
     let options = magdem::bench::Options { repeats: options.repeats.max(1), ..options };
     report_written(magdem::bench::report::write(&options))
+}
+
+/// `magdem report digests`: names the experiments whose digest changed.
+pub fn digests(experiments: &std::path::Path, dir: &std::path::Path, gap: f64) -> ExitCode {
+    match magdem::report::digest::update(experiments, dir, gap) {
+        Ok(changed) if changed.is_empty() => {
+            println!("{}: no digest changed", dir.display());
+            ExitCode::SUCCESS
+        }
+        Ok(changed) => {
+            changed.iter().for_each(|e| println!("wrote {}", dir.join(e).display()));
+            ExitCode::SUCCESS
+        }
+        Err(e) => super::fail(e, 1),
+    }
 }

@@ -249,6 +249,15 @@ pub fn recorded(roots: &[impl AsRef<Path>], experiment: &str) -> Result<BTreeMap
     Ok(all)
 }
 
+/// Brings the finished runs of the experiment files in `experiments` (and its `opt-in/`) into the
+/// digests under `dir`, leaving the report itself as it is: how a machine adds its share of an
+/// ensemble before the whole has been run. Returns the experiments whose digest changed.
+pub fn update(experiments: &Path, dir: &Path, gap: f64) -> Result<Vec<String>, Error> {
+    let files = super::runs::experiment_files(experiments, true)?;
+    let mut runs = super::runs::load_runs(&files, gap)?;
+    sync(&mut runs, dir, gap)
+}
+
 /// Writes `entries` as the digest in `here` unless it holds them already; whether it wrote.
 fn write(here: &Path, entries: &BTreeMap<String, Entry>) -> Result<bool, Error> {
     let bytes = encode(entries)?;
