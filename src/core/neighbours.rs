@@ -137,6 +137,12 @@ fn neighbour_cells(idx: [usize; 3], dims: [usize; 3], domain: &Domain) -> ([u32;
 /// filters them by the current distance. Because the candidates are sorted, the pairs come out
 /// in (i, j) order whenever the list was built, so results do not depend on the rebuild history
 /// (a resumed run stays bitwise equal).
+///
+/// A skin wider than [`ADAPTIVE_SKIN_FLOOR`] of the range (the dilute scenes' whole range) is the
+/// widest the list uses: at each rebuild the skin in use narrows (down to that floor) while
+/// rebuilds are rare and widens again while they are frequent ([`VerletList::adapt`]), so a
+/// suspension whose particles snap together at m/s rebuilds seldom and its chains, once formed
+/// and slow, filter few candidates. Which pairs come out never depends on the skin.
 #[derive(Debug, Default, Clone)]
 pub struct VerletList {
     cells: CellList,
@@ -144,15 +150,46 @@ pub struct VerletList {
     candidates: Vec<(u32, u32)>,
     reference: Vec<Vec3>,
     built_for: Option<(f64, f64)>,
+    /// The skin of the last build (at most the declared one).
+    in_use: f64,
+    /// Updates since the last build.
+    since_build: u64,
     /// Rebuilds so far (diagnostic).
     pub rebuilds: u64,
 }
 
+/// The narrowest skin, as a fraction of the range, to which [`VerletList`] narrows a wider one.
+pub const ADAPTIVE_SKIN_FLOOR: f64 = 0.2;
+
 impl VerletList {
-    /// Brings the candidates up to date for `range` and `skin` (rebuilt when some particle has
-    /// moved more than half the skin since the last build); returns whether it rebuilt them.
-    pub fn update(&mut self, positions: &[Vec3], domain: &Domain, range: f64, skin: f64) -> bool {
-        let moved = |(x, x0): (&Vec3, &Vec3)| domain.displacement(x, x0).norm_squared() > 0.25 * skin * skin;
+    /// The skin for the next build, given the updates between the last two: narrower by 3/4 after
+    /// more than 50 (rebuilding costs a cell search, filtering costs per candidate and step:
+    /// rare rebuilds mean the skin holds more candidates than it needs), wider by 3/2 after fewer
+    /// than 10, within [`ADAPTIVE_SKIN_FLOOR`] × range … `skin`.
+    fn adapt(&self, range: f64, skin: f64) -> f64 {
+        let floor = skin.min(ADAPTIVE_SKIN_FLOOR * range);
+        if self.built_for != Some((range, skin)) {
+            return skin;
+        }
+        let next = match self.since_build {
+            0..10 => self.in_use * 1.5,
+            10..=50 => self.in_use,
+            _ => self.in_use * 0.75,
+        };
+        next.clamp(floor, skin)
+    }
+
+    /// The skin the candidates were last built with.
+    pub fn skin_in_use(&self) -> f64 {
+        self.in_use
+    }
+
+    /// Brings the candidates up to date for `range` and at most `skin` (rebuilt when some
+    /// particle has moved more than half the skin in use since the last build); returns the skin
+    /// in use if it rebuilt them.
+    pub fn update(&mut self, positions: &[Vec3], domain: &Domain, range: f64, skin: f64) -> Option<f64> {
+        let in_use = self.in_use;
+        let moved = |(x, x0): (&Vec3, &Vec3)| domain.displacement(x, x0).norm_squared() > 0.25 * in_use * in_use;
         let stale = self.reference.len() != positions.len() || self.built_for != Some((range, skin));
         // Branch-free over a chunk; in parallel, one such loop per chunk: rayon's element-wise
         // map and reduce took three times as long on two threads (sparse 30 000 particles: 88–99
@@ -160,16 +197,20 @@ impl VerletList {
         let any_moved = |xs: &[Vec3], x0s: &[Vec3]| xs.iter().zip(x0s).fold(false, |any, pair| any | moved(pair));
         let moved_too_far =
             stale || parallel::any_share((positions, &self.reference[..]), |(xs, x0s)| any_moved(xs, x0s));
-        if moved_too_far {
-            self.cells.pairs_within(positions, domain, Some(range + skin), &mut self.scratch);
-            self.candidates.clear();
-            self.candidates.extend(self.scratch.iter().map(|p| (p.i, p.j)));
-            self.reference.clear();
-            self.reference.extend_from_slice(positions);
-            self.built_for = Some((range, skin));
-            self.rebuilds += 1;
+        if !moved_too_far {
+            self.since_build += 1;
+            return None;
         }
-        moved_too_far
+        self.in_use = self.adapt(range, skin);
+        self.cells.pairs_within(positions, domain, Some(range + self.in_use), &mut self.scratch);
+        self.candidates.clear();
+        self.candidates.extend(self.scratch.iter().map(|p| (p.i, p.j)));
+        self.reference.clear();
+        self.reference.extend_from_slice(positions);
+        self.built_for = Some((range, skin));
+        self.since_build = 0;
+        self.rebuilds += 1;
+        Some(self.in_use)
     }
 
     /// Candidate pairs (i < j) within range + skin of the last build, sorted by (i, j).
@@ -177,9 +218,9 @@ impl VerletList {
         &self.candidates
     }
 
-    /// Fills `out` with the pairs closer than `range` in (i, j) order; `skin` is the extra
-    /// candidate distance (a larger skin rebuilds less often but filters more candidates).
-    /// Returns whether the candidates were rebuilt.
+    /// Fills `out` with the pairs closer than `range` in (i, j) order; `skin` is the largest
+    /// extra candidate distance (a larger skin rebuilds less often but filters more candidates).
+    /// Returns the skin in use if the candidates were rebuilt.
     pub fn pairs_within(
         &mut self,
         positions: &[Vec3],
@@ -187,7 +228,7 @@ impl VerletList {
         range: f64,
         skin: f64,
         out: &mut Vec<Pair>,
-    ) -> bool {
+    ) -> Option<f64> {
         let rebuilt = self.update(positions, domain, range, skin);
         // The filter gathers in the cell list's buffers (used only when it rebuilds).
         let (candidates, pieces) = (&self.candidates, &mut self.cells.pieces);
@@ -250,11 +291,13 @@ pub enum PairRange {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum PairForm {
     /// A list of [`Pair`]s written once per evaluation: for terms that sweep the pairs many
-    /// times (the induction's iterations, then the dipole forces).
+    /// times (the induction's iterations, then the dipole forces), or whose pairs another term
+    /// of the range reads too (the shielding's touching pairs, which the contact then reads).
     Listed,
     /// The Verlet candidates, each filtered by the term in its own pass ([`Candidates`]): for a
-    /// term that reads each pair once, which so never writes the list (contact, shielding).
-    /// Only for [`PairRange::Within`].
+    /// term that reads each pair once, which so never writes the list (contact alone); it reads
+    /// the listed pairs instead where another term lists the range
+    /// ([`Neighbours::listed_pairs`]). Only for [`PairRange::Within`].
     Candidates,
 }
 
@@ -371,11 +414,9 @@ impl Neighbours {
         for list in self.lists.iter_mut().filter(|l| wanted(l.range)) {
             list.rebuilt = match (list.range, list.listed) {
                 (PairRange::Within { range, skin }, true) => {
-                    list.verlet.pairs_within(positions, domain, range, skin, &mut list.pairs).then_some(skin)
+                    list.verlet.pairs_within(positions, domain, range, skin, &mut list.pairs)
                 }
-                (PairRange::Within { range, skin }, false) => {
-                    list.verlet.update(positions, domain, range, skin).then_some(skin)
-                }
+                (PairRange::Within { range, skin }, false) => list.verlet.update(positions, domain, range, skin),
                 (PairRange::All, _) => {
                     list.cells.pairs_within(positions, domain, None, &mut list.pairs);
                     None
@@ -395,6 +436,13 @@ impl Neighbours {
             assert!(l.listed, "{range:?} is declared as candidates only: read it with Neighbours::candidates");
             &l.pairs
         })
+    }
+
+    /// The pairs of `range` if some term lists it (`None` for a range declared only as
+    /// candidates): a term that reads candidates may read these instead, the same pairs, bit for
+    /// bit, already filtered.
+    pub fn listed_pairs(&self, range: PairRange) -> Option<&[Pair]> {
+        self.list(range).filter(|l| l.listed).map(|l| l.pairs.as_slice())
     }
 
     /// The candidates of `range` (a [`PairRange::Within`]; none for a range no term declared) in
@@ -418,8 +466,8 @@ impl Neighbours {
         self.lists.iter().find(|l| l.listed && same(&l.range)).map(|l| l.pairs.as_slice())
     }
 
-    /// `Some(skin)` when the candidates of `range` were rebuilt in the last update: until the next
-    /// rebuild no particle moves more than skin/2 from where it is now.
+    /// `Some(skin)` when the candidates of `range` were rebuilt in the last update, with the skin
+    /// in use: until the next rebuild no particle moves more than skin/2 from where it is now.
     pub fn rebuilt(&self, range: PairRange) -> Option<f64> {
         self.list(range).and_then(|l| l.rebuilt)
     }
@@ -483,6 +531,42 @@ mod tests {
             }
             assert!(list.rebuilds > 1 && list.rebuilds < 40, "{} rebuilds", list.rebuilds);
         }
+    }
+
+    /// A skin of a whole range narrows to its floor while the particles drift slowly (rebuilds
+    /// rare) and widens again while they drift fast (rebuilds frequent); the pairs are the
+    /// brute-force ones throughout.
+    #[test]
+    fn a_wide_skin_narrows_when_rebuilds_are_rare_and_widens_when_they_are_frequent() {
+        let (mut rng, domain, mut pos) = random_box(3, [true; 3]);
+        let (range, skin) = (0.1, 0.1);
+        let mut list = VerletList::default();
+        let mut out = vec![];
+        let mut drift = |list: &mut VerletList, pos: &mut Vec<Vec3>, speed: f64, updates: usize| {
+            for _ in 0..updates {
+                list.pairs_within(pos, &domain, range, skin, &mut out);
+                let got: Vec<(u32, u32)> = out.iter().map(|p| (p.i, p.j)).collect();
+                assert_eq!(got, brute(pos, &domain, range));
+                for x in pos.iter_mut() {
+                    x.x += speed;
+                }
+                jiggle(&mut rng, pos, &domain, 0.1 * speed);
+            }
+        };
+        // Half the floor's skin (0.01) in 100 updates: rebuilds 50+ updates apart narrow the skin.
+        drift(&mut list, &mut pos, 1e-4, 2500);
+        assert_eq!(list.skin_in_use(), ADAPTIVE_SKIN_FLOOR * range, "slow particles: the floor");
+        // Half the declared skin in 12.5 updates: rebuilds under 10 apart widen it.
+        drift(&mut list, &mut pos, 4e-3, 60);
+        assert_eq!(list.skin_in_use(), skin, "fast particles: the declared skin");
+        // A declared skin at or below the floor is kept.
+        let mut narrow = VerletList::default();
+        for _ in 0..300 {
+            narrow.pairs_within(&pos, &domain, range, 0.01, &mut out);
+            pos.iter_mut().for_each(|x| x.x += 1e-4);
+        }
+        assert!(narrow.rebuilds > 1);
+        assert_eq!(narrow.skin_in_use(), 0.01);
     }
 
     /// A term filtering the candidates as it goes gets the listed pairs, bit for bit, in order:

@@ -382,7 +382,7 @@ impl ForceTerm for DipoleForce {
         match (listed, self.cutoff) {
             (Some(pairs), _) => add_listed_pairs(pairs, out.moment, out.force, &mut self.buffer),
             (None, Some(c)) => {
-                if self.verlet.update(&p.position, ctx.domain, c, c * self.skin) {
+                if self.verlet.update(&p.position, ctx.domain, c, c * self.skin).is_some() {
                     self.rows.build(n, self.verlet.candidates());
                 }
                 fill_particle_blocks(&mut self.particle_blocks, &p.position, out.moment);

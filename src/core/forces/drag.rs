@@ -24,8 +24,8 @@ pub enum DragLaw {
 pub enum Shielding {
     None,
     /// The paper's A_eff from the touching upstream neighbour: pairs count as touching when their
-    /// gap is below `touch_tolerance` times the smaller radius, found through the `near` search
-    /// (contact range times 1 + touch tolerance).
+    /// gap is below `touch_tolerance` times the smaller radius, found among the `near` pairs
+    /// (contact range times 1 + touch tolerance, the contact term's range).
     Paper {
         touch_tolerance: f64,
         near: PairRange,
@@ -78,36 +78,49 @@ impl Drag {
     }
 
     /// Largest shadow each particle receives from a touching upstream neighbour, with each
-    /// particle's flow direction computed once (not once per touching pair).
+    /// particle's flow direction computed once (not once per touching pair). In shares of
+    /// particles: a share reads the near pairs with i below its end and keeps the shadows cast
+    /// on its own particles (a maximum: the same bits in any order and on any split).
     fn compute_shadows(&mut self, ctx: &Context, p: &Particles, touch_tolerance: f64, near: PairRange) {
-        self.flow_direction.clear();
-        self.flow_direction.extend(p.velocity.iter().map(|v| {
-            let u = v - self.fluid.velocity;
-            let speed = u.norm();
-            if speed > 0.0 {
-                u / speed
-            } else {
-                Vec3::zeros()
+        let fluid = self.fluid.velocity;
+        self.flow_direction.resize(p.len(), Vec3::zeros());
+        parallel::for_each_share((&mut self.flow_direction[..], &p.velocity[..]), |_, (dirs, vs)| {
+            for (dir, v) in dirs.iter_mut().zip(vs) {
+                let u = v - fluid;
+                let speed = u.norm();
+                *dir = if speed > 0.0 { u / speed } else { Vec3::zeros() };
             }
-        }));
+        });
         self.shadow.clear();
         self.shadow.resize(p.len(), 0.0);
-        let candidates = ctx.neighbours.candidates(near, ctx.domain);
-        for pair in candidates.list.iter().filter_map(|&ij| candidates.pair(&p.position, ij)) {
-            let (i, j) = (pair.i as usize, pair.j as usize);
-            let (a_i, a_j) = (p.radius[i], p.radius[j]);
-            if pair.dist - a_i - a_j > touch_tolerance * a_i.min(a_j) {
-                continue;
-            }
-            // pair.r = x_i − x_j: offset of j seen from i is −r, of i seen from j is +r. A zero
-            // flow direction (particle at rest in the fluid) casts no shadow: `along` is 0.
-            for (me, other, offset) in [(i, j, -pair.r), (j, i, pair.r)] {
-                let area = shadow_area(p.radius[me], p.radius[other], &offset, &self.flow_direction[me]);
-                if area > self.shadow[me] {
-                    self.shadow[me] = area;
+        let pairs = ctx.neighbours.pairs(near);
+        let flow = &self.flow_direction;
+        parallel::for_each_share(&mut self.shadow[..], |lo, shadow| {
+            let hi = lo + shadow.len();
+            let rows = pairs.partition_point(|q| (q.i as usize) < hi);
+            let mut cast = |me: usize, other: usize, offset: &Vec3| {
+                if (lo..hi).contains(&me) {
+                    let area = shadow_area(p.radius[me], p.radius[other], offset, &flow[me]);
+                    if area > shadow[me - lo] {
+                        shadow[me - lo] = area;
+                    }
                 }
+            };
+            for pair in &pairs[..rows] {
+                let (i, j) = (pair.i as usize, pair.j as usize);
+                if i < lo && !(lo..hi).contains(&j) {
+                    continue;
+                }
+                let (a_i, a_j) = (p.radius[i], p.radius[j]);
+                if pair.dist - a_i - a_j > touch_tolerance * a_i.min(a_j) {
+                    continue;
+                }
+                // pair.r = x_i − x_j: offset of j seen from i is −r, of i seen from j is +r. A
+                // zero flow direction (particle at rest in the fluid) casts no shadow.
+                cast(i, j, &-pair.r);
+                cast(j, i, &pair.r);
             }
-        }
+        });
     }
 }
 
@@ -125,7 +138,8 @@ impl ForceTerm for Drag {
     fn pairs(&self) -> Option<PairNeed> {
         match self.shielding {
             Shielding::None => None,
-            Shielding::Paper { near, .. } => Some(PairNeed { range: near, form: PairForm::Candidates }),
+            // Listed: the contact term reads the same list instead of filtering the candidates again.
+            Shielding::Paper { near, .. } => Some(PairNeed { range: near, form: PairForm::Listed }),
         }
     }
     fn apply(&mut self, ctx: &Context, p: &Particles, out: &mut Forces) {

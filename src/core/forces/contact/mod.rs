@@ -77,8 +77,8 @@ type ShareOut = (Vec<((u32, u32), Vec3)>, ContactDiagnostics);
 /// Particle–particle and particle–wall contacts.
 ///
 /// Pairs: one pass per particle share over the near candidates in (i, j) order finds the touching
-/// pairs (no pair list is written) and their springs (a merge with the sorted history), computes
-/// them [`LANES`] at a time and adds them in order (see [`Contact::share_pass`]). Walls: found
+/// pairs (no pair list is written; where another term lists the range, the pass reads that list)
+/// and their springs (a merge with the sorted history), computes them [`LANES`] at a time and adds them in order (see [`Contact::share_pass`]). Walls: found
 /// and merged the same way, computed in parallel batches when many, added in order. The same bits
 /// for any thread count.
 pub struct Contact {
@@ -188,15 +188,15 @@ impl Contact {
         });
     }
 
-    /// The touching pairs among the `candidates` `in_range` that `keep(j)` selects, in order, their
-    /// springs merged from `history` (sorted, covering them), computed [`LANES`] at a time;
+    /// The touching pairs among the near `items` that `keep(j)` selects, in order, their springs
+    /// merged from `history` (sorted, covering them), computed [`LANES`] at a time;
     /// `emit(pair, outcome)` receives each in order.
     #[allow(clippy::too_many_arguments)]
-    fn in_lanes(
+    fn in_lanes<S: NearSource>(
         &self,
         p: &Particles,
-        candidates: &Candidates,
-        in_range: &[(u32, u32)],
+        source: &S,
+        items: &[S::Item],
         history: &[((u32, u32), Vec3)],
         dt: f64,
         keep: impl Fn(u32) -> bool,
@@ -210,14 +210,15 @@ impl Contact {
                 emit(pair, &ContactOutcome::of(lanes, l, *diameter));
             }
         };
-        let touching = |&(i, j): &(u32, u32)| {
+        let touching = |item: &S::Item| {
+            let (i, j) = S::ij(item);
             if !keep(j) {
                 return None;
             }
-            let pair = candidates.pair(&p.position, (i, j))?;
+            let pair = source.pair(&p.position, item)?;
             (pair.dist < p.radius[i as usize] + p.radius[j as usize]).then_some(pair)
         };
-        for pair in in_range.iter().filter_map(touching) {
+        for pair in items.iter().filter_map(touching) {
             let (i, j) = (pair.i as usize, pair.j as usize);
             let s = spring(history, &mut cursor, (pair.i, pair.j));
             let reduced = cache.get((p.radius[i], p.radius[j], p.mass[i], p.mass[j]));
@@ -237,27 +238,27 @@ impl Contact {
     /// then the share's own rows, whose j beyond the share are left to the shares after. Each
     /// particle's force and torque are so summed in the serial order, on any split.
     #[allow(clippy::too_many_arguments)]
-    fn share_pass(
+    fn share_pass<S: NearSource>(
         &self,
-        ctx: &Context,
+        source: &S,
         p: &Particles,
+        dt: f64,
         history: &[((u32, u32), Vec3)],
         lo: usize,
         (force, torque): (&mut [Vec3], &mut [Vec3]),
         (next, diag): &mut ShareOut,
     ) {
-        let candidates = ctx.neighbours.candidates(self.near, ctx.domain);
-        let near = candidates.list;
+        let near = source.items();
         let hi = lo + force.len();
-        let (rows, rest) =
-            (near.partition_point(|q| (q.0 as usize) < lo), near.partition_point(|q| (q.0 as usize) < hi));
+        let row_below = |bound: usize| near.partition_point(|q| (S::ij(q).0 as usize) < bound);
+        let (rows, rest) = (row_below(lo), row_below(hi));
         let split = history.partition_point(|h| (h.0 .0 as usize) < lo);
         self.in_lanes(
             p,
-            &candidates,
+            source,
             &near[..rows],
             &history[..split],
-            ctx.dt,
+            dt,
             |j| (lo..hi).contains(&(j as usize)),
             |q, o| {
                 let j = q.j as usize - lo;
@@ -269,7 +270,7 @@ impl Contact {
         *diag = ContactDiagnostics::default();
         let mut adder = RowAdder::new(lo, diag, next);
         let add = |q: &Pair, o: &ContactOutcome| adder.add(force, torque, q, o);
-        self.in_lanes(p, &candidates, &near[rows..rest], &history[split..], ctx.dt, |_| true, add);
+        self.in_lanes(p, source, &near[rows..rest], &history[split..], dt, |_| true, add);
         adder.finish(force, torque);
     }
 
@@ -281,9 +282,16 @@ impl Contact {
         // The first share writes the next history in place; the others are appended to it.
         *slots[0].get_mut().expect("no share running") =
             (std::mem::take(&mut self.spare_pairs), ContactDiagnostics::default());
+        // The near pairs as another term lists them, or the candidates filtered as they are read:
+        // the same pairs, bit for bit.
+        let listed = ctx.neighbours.listed_pairs(self.near);
+        let candidates = ctx.neighbours.candidates(self.near, ctx.domain);
         parallel::for_each_share((&mut *out.force, &mut *out.torque), |lo, parts| {
             let mut slot = slots[lo / size].lock().expect("one share per slot");
-            self.share_pass(ctx, p, &history, lo, parts, &mut slot);
+            match listed {
+                Some(pairs) => self.share_pass(&pairs, p, ctx.dt, &history, lo, parts, &mut slot),
+                None => self.share_pass(&candidates, p, ctx.dt, &history, lo, parts, &mut slot),
+            }
         });
         // The shares' histories in order; the first largest overlap, as the serial pass finds it.
         let (mut next, first_diag) = std::mem::take(slots[0].get_mut().expect("the shares are done"));
@@ -324,6 +332,46 @@ impl Contact {
         }
         out.contacts.walls = next;
         self.outcomes = batches;
+    }
+}
+
+/// Near pairs in (i, j) order as the pair pass reads them: the candidates, each filtered as it
+/// is read, or the pairs another term lists.
+trait NearSource: Sync {
+    type Item: Sync;
+    fn items(&self) -> &[Self::Item];
+    fn ij(item: &Self::Item) -> (u32, u32);
+    /// The item as a pair if it is within the range now.
+    fn pair(&self, positions: &[Vec3], item: &Self::Item) -> Option<Pair>;
+}
+
+impl NearSource for Candidates<'_> {
+    type Item = (u32, u32);
+    fn items(&self) -> &[(u32, u32)] {
+        self.list
+    }
+    #[inline(always)]
+    fn ij(item: &(u32, u32)) -> (u32, u32) {
+        *item
+    }
+    #[inline(always)]
+    fn pair(&self, positions: &[Vec3], item: &(u32, u32)) -> Option<Pair> {
+        Candidates::pair(self, positions, *item)
+    }
+}
+
+impl NearSource for &[Pair] {
+    type Item = Pair;
+    fn items(&self) -> &[Pair] {
+        self
+    }
+    #[inline(always)]
+    fn ij(item: &Pair) -> (u32, u32) {
+        (item.i, item.j)
+    }
+    #[inline(always)]
+    fn pair(&self, _: &[Vec3], item: &Pair) -> Option<Pair> {
+        Some(*item)
     }
 }
 
@@ -401,6 +449,58 @@ mod tests {
     use crate::core::forces::ForceGroup;
     use crate::core::neighbours::Neighbours;
     use crate::core::state::State;
+
+    /// Where another term lists the near range, the pair pass reads that list instead of
+    /// filtering the candidates: the same forces, torques and springs, bit for bit, step by
+    /// step, in a crowded box periodic on two axes (overlapping pairs, springs carried along).
+    #[test]
+    fn reading_the_listed_near_pairs_gives_the_bits_of_filtering_the_candidates() {
+        let a = 5e-6;
+        let species = crate::core::state::test_sphere(a);
+        let edge = 60e-6;
+        let domain = Domain { lo: Vec3::zeros(), hi: Vec3::repeat(edge), periodic: [true, true, false] };
+        let value = |k: usize| (k as f64 * 0.618_033_988_75).fract();
+        let mut state = State::default();
+        for i in 0..250 {
+            let x = Vec3::from_fn(|c, _| a + (edge - 2.0 * a) * value(3 * i + c));
+            let v = Vec3::from_fn(|c, _| value(1000 + 3 * i + c) - 0.5) * 0.05;
+            state.particles.push(0, &species, x, v);
+        }
+        state.fields.fit(state.particles.len());
+        let near = PairRange::Within { range: 2.0 * a, skin: 0.4 * a };
+        let candidates_only = PairNeed { range: near, form: PairForm::Candidates };
+        let also_listed = PairNeed { range: near, form: PairForm::Listed };
+        let mut filtering = (Neighbours::new([candidates_only]), state.clone());
+        let mut reading = (Neighbours::new([candidates_only, also_listed]), state);
+        let mut contacts =
+            [0, 1].map(|_| Contact::new(std::slice::from_ref(&species), ContactLaw::default(), true, near));
+        let dt = 1e-8;
+        let mut touching = 0;
+        for step in 0..200 {
+            for ((neighbours, state), contact) in [&mut filtering, &mut reading].into_iter().zip(&mut contacts) {
+                let p = &mut state.particles;
+                for (x, v) in p.position.iter_mut().zip(&p.velocity) {
+                    *x += *v * dt;
+                    domain.wrap(x);
+                }
+                neighbours.update(&p.position, &domain, |_| true);
+                let ctx = Context { domain: &domain, neighbours, dt };
+                state.fields.force.iter_mut().for_each(|f| *f = Vec3::zeros());
+                let (p, mut out) = Forces::of(state, ForceGroup::All);
+                contact.apply(&ctx, p, &mut out);
+                let (p, f) = (&mut state.particles, &state.fields.force);
+                for ((v, f), m) in p.velocity.iter_mut().zip(f).zip(&p.mass) {
+                    *v += f * (dt / m);
+                }
+            }
+            assert!(reading.0.listed_pairs(near).is_some() && filtering.0.listed_pairs(near).is_none());
+            let (x, y) = (&filtering.1, &reading.1);
+            assert!(x.fields.force == y.fields.force && x.fields.torque == y.fields.torque, "step {step}");
+            assert!(x.contacts.pairs == y.contacts.pairs && x.particles.position == y.particles.position);
+            touching += x.contacts.pairs.len();
+        }
+        assert!(touching > 1000, "{touching} pair contacts over the run");
+    }
 
     /// Particles drifting in a walled box, in and out of the walls' reach: the wall contacts
     /// found among the candidates kept between rebuilds of the near list are, spring for spring,
