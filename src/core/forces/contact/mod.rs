@@ -288,10 +288,15 @@ impl Contact {
         let candidates = ctx.neighbours.candidates(self.near, ctx.domain);
         parallel::for_each_share((&mut *out.force, &mut *out.torque), |lo, parts| {
             let mut slot = slots[lo / size].lock().expect("one share per slot");
+            // Filled on this thread's stack, not in the slot: the slots sit side by side, and
+            // writing a history's length at every contact into a cache line the other share also
+            // writes is false sharing.
+            let mut share = std::mem::take(&mut *slot);
             match listed {
-                Some(pairs) => self.share_pass(&pairs, p, ctx.dt, &history, lo, parts, &mut slot),
-                None => self.share_pass(&candidates, p, ctx.dt, &history, lo, parts, &mut slot),
+                Some(pairs) => self.share_pass(&pairs, p, ctx.dt, &history, lo, parts, &mut share),
+                None => self.share_pass(&candidates, p, ctx.dt, &history, lo, parts, &mut share),
             }
+            *slot = share;
         });
         // The shares' histories in order; the first largest overlap, as the serial pass finds it.
         let (mut next, first_diag) = std::mem::take(slots[0].get_mut().expect("the shares are done"));
