@@ -299,7 +299,7 @@ pub enum PairForm {
     /// The Verlet candidates, each filtered by the term in its own pass ([`Candidates`]): for a
     /// term that reads each pair once, which so never writes the list (contact alone); it reads
     /// the listed pairs instead where another term lists the range
-    /// ([`Neighbours::listed_pairs`]). Only for [`PairRange::Within`].
+    /// ([`Neighbours::listed`]). Only for [`PairRange::Within`].
     Candidates,
 }
 
@@ -438,13 +438,6 @@ impl Neighbours {
             assert!(l.listed, "{range:?} is declared as candidates only: read it with Neighbours::candidates");
             &l.pairs
         })
-    }
-
-    /// The pairs of `range` if some term lists it (`None` for a range declared only as
-    /// candidates): a term that reads candidates may read these instead, the same pairs, bit for
-    /// bit, already filtered.
-    pub fn listed_pairs(&self, range: PairRange) -> Option<&[Pair]> {
-        self.list(range).filter(|l| l.listed).map(|l| l.pairs.as_slice())
     }
 
     /// The candidates of `range` (a [`PairRange::Within`]; none for a range no term declared) in

@@ -78,9 +78,9 @@ type ShareOut = (Vec<((u32, u32), Vec3)>, ContactDiagnostics);
 ///
 /// Pairs: one pass per particle share over the near candidates in (i, j) order finds the touching
 /// pairs (no pair list is written; where another term lists the range, the pass reads that list)
-/// and their springs (a merge with the sorted history), computes them [`LANES`] at a time and adds them in order (see [`Contact::share_pass`]). Walls: found
-/// and merged the same way, computed in parallel batches when many, added in order. The same bits
-/// for any thread count.
+/// and their springs (a merge with the sorted history), computes them [`LANES`] at a time and
+/// adds them in order (see [`Contact::share_pass`]). Walls: found and merged the same way,
+/// computed in parallel batches when many, added in order. The same bits for any thread count.
 pub struct Contact {
     /// Pair constants indexed `[species_i * n_species + species_j]`.
     materials: Vec<PairMaterial>,
@@ -284,7 +284,10 @@ impl Contact {
             (std::mem::take(&mut self.spare_pairs), ContactDiagnostics::default());
         // The near pairs as another term lists them, or the candidates filtered as they are read:
         // the same pairs, bit for bit.
-        let listed = ctx.neighbours.listed_pairs(self.near);
+        let listed = match self.near {
+            PairRange::Within { range, .. } => ctx.neighbours.listed(Some(range)),
+            PairRange::All => None,
+        };
         let candidates = ctx.neighbours.candidates(self.near, ctx.domain);
         parallel::for_each_share((&mut *out.force, &mut *out.torque), |lo, parts| {
             let mut slot = slots[lo / size].lock().expect("one share per slot");
@@ -498,7 +501,8 @@ mod tests {
                     *v += f * (dt / m);
                 }
             }
-            assert!(reading.0.listed_pairs(near).is_some() && filtering.0.listed_pairs(near).is_none());
+            let listed = |n: &Neighbours| n.listed(Some(2.0 * a)).is_some();
+            assert!(listed(&reading.0) && !listed(&filtering.0));
             let (x, y) = (&filtering.1, &reading.1);
             assert!(x.fields.force == y.fields.force && x.fields.torque == y.fields.torque, "step {step}");
             assert!(x.contacts.pairs == y.contacts.pairs && x.particles.position == y.particles.position);
