@@ -6,7 +6,7 @@
 use super::runs::Run;
 use super::tables::{col, markdown, same, scol, write};
 use crate::analysis::image::Imaging;
-use crate::analysis::stats::{ci95_half_width, summary};
+use crate::analysis::stats::{ci95_half_width, slope_ci95, summary};
 use crate::core::magnetisation::MU0;
 use crate::plot::{chart, palette, Legend, RGBColor, Scale, Series, SeriesLabelPosition};
 use polars::prelude::DataFrame;
@@ -272,6 +272,7 @@ pub fn finite_size_section(
         }
         let mut pts = vec![];
         let mut errs = vec![];
+        let mut edge = vec![];
         for (&f, group) in &by_factor {
             let e = Estimate::of(&lengths(group));
             let particles = Estimate::of(&group.iter().map(|r| r.particles as f64).collect::<Vec<_>>()).mean;
@@ -286,12 +287,15 @@ pub fn finite_size_section(
             wall_col.push(Estimate::of(&group.iter().map(|r| r.wall_time).collect::<Vec<_>>()).mean);
             pts.push((particles, e.mean));
             errs.push(e.ci95);
+            edge.push((particles, 1e6 * Estimate::of(&group.iter().map(|r| r.box_extent).collect::<Vec<_>>()).mean));
             (x_lo, x_hi) = (x_lo.min(particles), x_hi.max(particles));
         }
         series
             .push(Series::markers(format!("{c} mg/ml (mean ± CI95 over seeds)"), pts, palette(k), 6).with_errors(errs));
+        series.push(Series::line(format!("box edge along the field, {c} mg/ml"), edge, palette(k)));
         series.push(level(format!("experiment, {c} mg/ml"), exp, (x_lo.min(300.0), x_hi.max(3.0e4)), palette(k)));
         findings.extend(box_findings(runs, c, &by_factor, effects));
+        findings.extend(size_trend(c, &by_factor));
     }
     let mut df = DataFrame::new(vec![
         col("concentration_mg_per_ml", c_col),
@@ -308,7 +312,8 @@ pub fn finite_size_section(
     md += "The paper's box scaled by f^(1/3) per side at equal concentration (f times the particles), side faces x and y \
            periodic (the field lies along x), walls at top and bottom, r-RESPA, t = 5 ms. `box-limited` is the share of \
            aggregates whose extent along the field reaches 90 % of the box's or that wrap through a periodic face onto \
-           themselves (percolating: no finite length, left out of the mean, which is then a lower bound).\n\n";
+           themselves (percolating: no finite length, left out of the mean, which is then a lower bound). Wall time per run \
+           as run: one core per run, two runs at a time, except the 100× runs, which had both cores to themselves.\n\n";
     md += &markdown(
         &df,
         &[
@@ -336,9 +341,46 @@ pub fn finite_size_section(
         legend,
         (Scale::Log, Scale::Log),
     )?;
-    md += "\n![Finite size](finite-size.png)\n\nMarks: magdem, mean ± CI95 over seeds; dotted lines: the experiment's mean \
-           (about 10⁶ particles; its own spread is not a CI and is not drawn).\n\n";
+    md += "\n![Finite size](finite-size.png)\n\nMarks: magdem, mean ± CI95 over seeds; solid lines: the box edge along the field \
+           (a chain cannot be longer without percolating); dotted lines: the experiment's mean (about 10⁶ particles; its own \
+           spread is not a CI and is not drawn).\n\n";
     Ok(md)
+}
+
+/// The mean length's trend against the particle count at concentration `c`, L ∝ N^β fitted
+/// over every run (a chain capped by the box grows with its edge, β = 1/3; a converged length has
+/// β = 0), and what the next size of the 1-2-4-10-30-100 series would cost at the largest size's
+/// measured wall time, taken as linear in the particles.
+fn size_trend(c: f64, by_factor: &BTreeMap<u64, Vec<&Run>>) -> Option<String> {
+    let points: Vec<(f64, f64)> = by_factor
+        .values()
+        .flatten()
+        .map(|r| (r.particles as f64, r.mean_length_um()))
+        .filter(|&(n, l)| n > 0.0 && l > 0.0 && l.is_finite())
+        .map(|(n, l)| (n.ln(), l.ln()))
+        .collect();
+    let (beta, ci) = slope_ci95(&points);
+    let (f_max, largest) = by_factor.iter().next_back()?;
+    let particles = Estimate::of(&largest.iter().map(|r| r.particles as f64).collect::<Vec<_>>()).mean;
+    let wall = Estimate::of(&largest.iter().map(|r| r.wall_time).collect::<Vec<_>>()).mean;
+    let factor = [1, 2, 4, 10, 30, 100, 300, 1000, 3000].into_iter().find(|&f| f > *f_max).unwrap_or(3 * f_max);
+    let next = factor as f64 / *f_max as f64;
+    let trend = if beta.is_finite() {
+        format!(
+            "{c} mg/ml: L ∝ N^β with β = {beta:.2} ± {ci:.2} (CI95, {} runs from {}× to {f_max}×; the box edge grows as N^0.33)",
+            points.len(),
+            by_factor.keys().next()?
+        )
+    } else {
+        format!("{c} mg/ml: too few runs for a trend")
+    };
+    Some(format!(
+        "{trend}; the next size, {:.0} particles ({factor}× the paper's), would take about {:.1} h of wall time per run at \
+         the {f_max}× runs' measured {:.0} s for {particles:.0} particles",
+        next * particles,
+        next * wall / 3600.0,
+        wall
+    ))
 }
 
 /// The two largest boxes' agreement at concentration `c`, and the walls-to-periodic change at
@@ -391,14 +433,7 @@ fn growth_exponent(r: &Run, from: f64, to: f64) -> f64 {
         .filter(|(&t, &l)| t >= from - 1e-12 && t <= to + 1e-12 && l > 0.0)
         .map(|(t, l)| (t.ln(), l.ln()))
         .collect();
-    if pts.len() < 3 {
-        return f64::NAN;
-    }
-    let n = pts.len() as f64;
-    let (mx, my) = (pts.iter().map(|p| p.0).sum::<f64>() / n, pts.iter().map(|p| p.1).sum::<f64>() / n);
-    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    sxy / sxx
+    slope_ci95(&pts).0
 }
 
 /// Mean length of a run at time `t` (µm), from the first frame at or after it.
