@@ -383,6 +383,15 @@ fn size_trend(c: f64, by_factor: &BTreeMap<u64, Vec<&Run>>) -> Option<String> {
     ))
 }
 
+/// "+m ± h" with `digits` decimals, or "+m" alone when there is no interval (one run).
+fn signed_cell(e: &Estimate, digits: usize) -> String {
+    if e.ci95.is_finite() {
+        format!("{:+.digits$} ± {:.digits$}", e.mean, e.ci95)
+    } else {
+        format!("{:+.digits$}", e.mean)
+    }
+}
+
 /// The two largest boxes' agreement at concentration `c`, and the walls-to-periodic change at
 /// the paper's box (recorded in `effects` for the ranking).
 fn box_findings(runs: &[Run], c: f64, by_factor: &BTreeMap<u64, Vec<&Run>>, effects: &mut Vec<Effect>) -> Vec<String> {
@@ -393,7 +402,9 @@ fn box_findings(runs: &[Run], c: f64, by_factor: &BTreeMap<u64, Vec<&Run>>, effe
         let (fb, b) = sizes[sizes.len() - 1];
         let d = unpaired(&lengths(a), &lengths(b));
         // Agreement within 5 % needs the whole CI95 inside ±5 %, not only the mean.
-        let verdict = if d.mean.abs() + d.ci95 <= 5.0 {
+        let verdict = if !d.ci95.is_finite() {
+            "cannot be compared to 5 % until each has two seeds"
+        } else if d.mean.abs() + d.ci95 <= 5.0 {
             "agree within 5 %"
         } else if d.mean.abs() - d.ci95 > 5.0 {
             "differ by more than 5 %"
@@ -401,9 +412,8 @@ fn box_findings(runs: &[Run], c: f64, by_factor: &BTreeMap<u64, Vec<&Run>>, effe
             "are not resolved to 5 % at these seeds"
         };
         findings.push(format!(
-            "{c} mg/ml: {fb}× against {fa}× the particles {:+.1} ± {:.1} % — the two largest boxes {verdict} ({} and {} seeds)",
-            d.mean,
-            d.ci95,
+            "{c} mg/ml: {fb}× against {fa}× the particles {} % — the two largest boxes {verdict} ({} and {} seeds)",
+            signed_cell(&d, 1),
             b.len(),
             a.len()
         ));
