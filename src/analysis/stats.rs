@@ -41,10 +41,13 @@ pub fn ci95_half_width(values: &[f64]) -> f64 {
 /// points or without spread in x).
 pub fn slope_ci95(points: &[(f64, f64)]) -> (f64, f64) {
     let n = points.len();
+    if n < 3 {
+        return (f64::NAN, f64::NAN);
+    }
     let (mx, my) =
         (points.iter().map(|p| p.0).sum::<f64>() / n as f64, points.iter().map(|p| p.1).sum::<f64>() / n as f64);
     let sxx: f64 = points.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    if n < 3 || sxx <= 0.0 {
+    if sxx <= 0.0 {
         return (f64::NAN, f64::NAN);
     }
     let b = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum::<f64>() / sxx;

@@ -50,6 +50,15 @@ impl Estimate {
             (true, true) => format!("{:.digits$} ± {:.digits$}", self.mean, self.ci95),
         }
     }
+
+    /// A change as "+mean ± CI95" with `digits` decimals ("+mean" without a CI: one run or seed).
+    pub fn signed_cell(&self, digits: usize) -> String {
+        match (self.mean.is_finite(), self.ci95.is_finite()) {
+            (false, _) => "–".into(),
+            (true, false) => format!("{:+.digits$}", self.mean),
+            (true, true) => format!("{:+.digits$} ± {:.digits$}", self.mean, self.ci95),
+        }
+    }
 }
 
 /// One explanation's effect on the mean length at one concentration (%).
@@ -108,8 +117,13 @@ fn lengths(runs: &[&Run]) -> Vec<f64> {
     runs.iter().map(|r| r.mean_length_um()).collect()
 }
 
+/// Mean of `value` over `runs` (its finite values).
+fn mean_over(runs: &[&Run], value: impl Fn(&Run) -> f64) -> f64 {
+    Estimate::of(&runs.iter().map(|r| value(r)).collect::<Vec<_>>()).mean
+}
+
 fn box_limited(runs: &[&Run]) -> f64 {
-    Estimate::of(&runs.iter().map(|r| r.box_limited_fraction()).collect::<Vec<_>>()).mean
+    mean_over(runs, Run::box_limited_fraction)
 }
 
 /// Mean over runs of the mean length (µm) at each frame, with the frame times (s).
@@ -275,7 +289,7 @@ pub fn finite_size_section(
         let mut edge = vec![];
         for (&f, group) in &by_factor {
             let e = Estimate::of(&lengths(group));
-            let particles = Estimate::of(&group.iter().map(|r| r.particles as f64).collect::<Vec<_>>()).mean;
+            let particles = mean_over(group, |r| r.particles as f64);
             c_col.push(c);
             f_col.push(f as f64);
             p_col.push(particles);
@@ -284,10 +298,10 @@ pub fn finite_size_section(
             ci_col.push(e.ci95);
             cap_col.push(box_limited(group));
             perc_col.push(group.iter().map(|r| r.percolating() as f64).sum::<f64>());
-            wall_col.push(Estimate::of(&group.iter().map(|r| r.wall_time).collect::<Vec<_>>()).mean);
+            wall_col.push(mean_over(group, |r| r.wall_time));
             pts.push((particles, e.mean));
             errs.push(e.ci95);
-            edge.push((particles, 1e6 * Estimate::of(&group.iter().map(|r| r.box_extent).collect::<Vec<_>>()).mean));
+            edge.push((particles, 1e6 * mean_over(group, |r| r.box_extent)));
             (x_lo, x_hi) = (x_lo.min(particles), x_hi.max(particles));
         }
         series
@@ -361,8 +375,8 @@ fn size_trend(c: f64, by_factor: &BTreeMap<u64, Vec<&Run>>) -> Option<String> {
         .collect();
     let (beta, ci) = slope_ci95(&points);
     let (f_max, largest) = by_factor.iter().next_back()?;
-    let particles = Estimate::of(&largest.iter().map(|r| r.particles as f64).collect::<Vec<_>>()).mean;
-    let wall = Estimate::of(&largest.iter().map(|r| r.wall_time).collect::<Vec<_>>()).mean;
+    let particles = mean_over(largest, |r| r.particles as f64);
+    let wall = mean_over(largest, |r| r.wall_time);
     let factor = [1, 2, 4, 10, 30, 100, 300, 1000, 3000].into_iter().find(|&f| f > *f_max).unwrap_or(3 * f_max);
     let next = factor as f64 / *f_max as f64;
     let trend = if beta.is_finite() {
@@ -381,15 +395,6 @@ fn size_trend(c: f64, by_factor: &BTreeMap<u64, Vec<&Run>>) -> Option<String> {
         next * wall / 3600.0,
         wall
     ))
-}
-
-/// "+m ± h" with `digits` decimals, or "+m" alone when there is no interval (one run).
-fn signed_cell(e: &Estimate, digits: usize) -> String {
-    if e.ci95.is_finite() {
-        format!("{:+.digits$} ± {:.digits$}", e.mean, e.ci95)
-    } else {
-        format!("{:+.digits$}", e.mean)
-    }
 }
 
 /// The two largest boxes' agreement at concentration `c`, and the walls-to-periodic change at
@@ -413,7 +418,7 @@ fn box_findings(runs: &[Run], c: f64, by_factor: &BTreeMap<u64, Vec<&Run>>, effe
         };
         findings.push(format!(
             "{c} mg/ml: {fb}× against {fa}× the particles {} % — the two largest boxes {verdict} ({} and {} seeds)",
-            signed_cell(&d, 1),
+            d.signed_cell(1),
             b.len(),
             a.len()
         ));
@@ -426,8 +431,9 @@ fn box_findings(runs: &[Run], c: f64, by_factor: &BTreeMap<u64, Vec<&Run>>, effe
             });
             let walls = paired(&respa_runs(runs, c), x1, |r| r.mean_length_um());
             findings.push(format!(
-                "{c} mg/ml, the paper's box: periodic side faces against walls {:+.1} ± {:.1} % (paired over {} seeds)",
-                walls.mean, walls.ci95, walls.n
+                "{c} mg/ml, the paper's box: periodic side faces against walls {} % (paired over {} seeds)",
+                walls.signed_cell(1),
+                walls.n
             ));
         }
     }
