@@ -37,10 +37,15 @@ pub enum Induction {
 /// H = [3(m·r̂)r̂ − m]/(4π r³) (A/m; even in r̂, so both share r̂ and 1/(4π r³)).
 #[inline]
 pub fn pair_dipole_fields(m_i: &Vec3, m_j: &Vec3, pair: &Pair) -> (Vec3, Vec3) {
+    (pair_dipole_field(m_j, pair), pair_dipole_field(m_i, pair))
+}
+
+/// The field of dipole `m` at the pair's other end (either: the field is even in r̂).
+#[inline]
+pub fn pair_dipole_field(m: &Vec3, pair: &Pair) -> Vec3 {
     let rhat = pair.r / pair.dist;
     let scale = 1.0 / (4.0 * PI * pair.dist.powi(3));
-    let field = |m: &Vec3| (3.0 * m.dot(&rhat) * rhat - m) * scale;
-    (field(m_j), field(m_i))
+    (3.0 * m.dot(&rhat) * rhat - m) * scale
 }
 
 pub struct Magnetisation {
@@ -53,7 +58,6 @@ pub struct Magnetisation {
     /// The pairs the local fields sum over (`None` for induction `none`).
     range: Option<PairRange>,
     field: Vec<Vec3>,
-    pair_fields: Vec<(Vec3, Vec3)>,
     moments: Vec<Vec3>,
     /// Sweeps used by the last `Exact` update (diagnostic).
     pub last_iterations: usize,
@@ -74,7 +78,6 @@ impl Magnetisation {
             saturation: species.iter().map(|s| s.saturation).collect(),
             range,
             field: vec![],
-            pair_fields: vec![],
             moments: vec![],
             last_iterations: 0,
         }
@@ -112,12 +115,13 @@ impl Magnetisation {
         let mut field = std::mem::take(&mut self.field);
         field.clear();
         field.extend(p.position.iter().map(|x| self.external_field(x)));
-        let pair_fields =
-            |k: usize| pair_dipole_fields(&moment[pairs[k].i as usize], &moment[pairs[k].j as usize], &pairs[k]);
-        parallel::add_in_order(pairs.len(), &mut self.pair_fields, pair_fields, |k, (on_i, on_j)| {
-            field[pairs[k].i as usize] += on_i;
-            field[pairs[k].j as usize] += on_j;
-        });
+        parallel::add_pairs_in_order(
+            &mut field,
+            pairs,
+            |q| (q.i as usize, q.j as usize),
+            |q| pair_dipole_fields(&moment[q.i as usize], &moment[q.j as usize], q),
+            |q| pair_dipole_field(&moment[q.i as usize], q),
+        );
         self.field = field;
     }
 

@@ -208,20 +208,38 @@ pub fn any_share<S: Split>(parts: S, test: impl Fn(S) -> bool + Sync + Send) -> 
     shares(parts).into_par_iter().map(|(_, piece)| test(piece)).reduce(|| false, |a, b| a | b)
 }
 
-/// `add(k, value(k))` for k in 0..n in k order, the values computed in parallel chunks (into
-/// `buffer`) when worth it: a pair sum whose accumulation order, and bits, stay serial.
-pub fn add_in_order<T: Send>(
-    n: usize,
-    buffer: &mut Vec<T>,
-    value: impl Fn(usize) -> T + Sync + Send,
-    mut add: impl FnMut(usize, T),
+/// Σ over the pairs k (sorted by i, with i < j) of `both(k).0` into `out[i]` and `both(k).1`
+/// into `out[j]`, each particle's terms added in pair order, as the loop
+/// `for k { out[i] += a; out[j] += b }` adds them, bit for bit. In shares of particles when worth
+/// it: a share first adds, in order, the pairs of earlier rows that reach it (`second(k)`, the
+/// part for j alone: those pairs come first in its particles' serial sums), then walks its own
+/// rows, leaving the j beyond it to the shares after. Nothing is buffered and no thread waits.
+pub fn add_pairs_in_order<P: Sync, T: Copy + Send + std::ops::AddAssign>(
+    out: &mut [T],
+    pairs: &[P],
+    ij: impl Fn(&P) -> (usize, usize) + Sync + Send,
+    both: impl Fn(&P) -> (T, T) + Sync + Send,
+    second: impl Fn(&P) -> T + Sync + Send,
 ) {
-    if worth_it(n) {
-        map_ordered(n, buffer, value);
-        buffer.drain(..).enumerate().for_each(|(k, v)| add(k, v));
-    } else {
-        (0..n).for_each(|k| add(k, value(k)));
-    }
+    for_each_share(out, |lo, share| {
+        let hi = lo + share.len();
+        let row_below = |bound: usize| pairs.partition_point(|q| ij(q).0 < bound);
+        let (start, end) = (row_below(lo), row_below(hi));
+        for q in &pairs[..start] {
+            let j = ij(q).1;
+            if (lo..hi).contains(&j) {
+                share[j - lo] += second(q);
+            }
+        }
+        for q in &pairs[start..end] {
+            let (i, j) = ij(q);
+            let (a, b) = both(q);
+            share[i - lo] += a;
+            if j < hi {
+                share[j - lo] += b;
+            }
+        }
+    });
 }
 
 /// Runs `f` (one step of a system of `len` particles) while the pool's other threads spin and
@@ -281,5 +299,38 @@ mod tests {
             }
         }
         assert!(pieces.0.len() >= 20, "the buffers of the longest call are kept");
+    }
+
+    /// Pairs of random particles (sorted by i, i < j, rows of every length, particles in no
+    /// pair): the shares of one, two and three threads add each particle's terms in the serial
+    /// loop's order, so the sums are its bits. The terms are chosen so that the order matters.
+    #[test]
+    fn ordered_pair_sums_equal_the_serial_loop_on_any_thread_count() {
+        let n = 3 * MIN_PARALLEL_LEN;
+        // Particle numbers from a 64-bit mix (SplitMix64's finaliser), so that rows and their
+        // partners fall in every share.
+        let particle = |k: u64| {
+            let mut z = k.wrapping_mul(0x9e37_79b9_7f4a_7c15);
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            ((z ^ (z >> 31)) % n as u64) as usize
+        };
+        let mut pairs: Vec<(usize, usize)> =
+            (0..40 * n as u64).map(|k| (particle(2 * k), particle(2 * k + 1))).filter(|(i, j)| i < j).collect();
+        pairs.sort_unstable();
+        let both = |&(i, j): &(usize, usize)| (1.0 / (1.0 + (i * 7 + j) as f64), -3.0e5 / (1.0 + (j * 3 + i) as f64));
+        let second = |q: &(usize, usize)| both(q).1;
+        let mut serial = vec![0.1; n];
+        for q in &pairs {
+            let (a, b) = both(q);
+            serial[q.0] += a;
+            serial[q.1] += b;
+        }
+        for threads in [1, 2, 3] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let mut out = vec![0.1; n];
+            pool.install(|| with_warm_pool(n, || add_pairs_in_order(&mut out, &pairs, |q| *q, both, second)));
+            assert!(out == serial, "{threads} threads");
+        }
     }
 }

@@ -323,15 +323,20 @@ fn add_row_sums_in<const PERIODIC: bool>(
     }
 }
 
-/// Adds F_ij to i and −F_ij to j for each listed pair, in list order.
-fn add_listed_pairs(pairs: &[Pair], moment: &[Vec3], force: &mut [Vec3], buffer: &mut Vec<Vec3>) {
-    let pair_force = |k: usize| {
-        dipole_pair_force(&moment[pairs[k].i as usize], &moment[pairs[k].j as usize], &pairs[k].r, pairs[k].dist)
-    };
-    parallel::add_in_order(pairs.len(), buffer, pair_force, |k, f| {
-        force[pairs[k].i as usize] += f;
-        force[pairs[k].j as usize] -= f;
-    });
+/// Adds F_ij to i and −F_ij to j for each listed pair, each particle's in list order.
+fn add_listed_pairs(pairs: &[Pair], moment: &[Vec3], force: &mut [Vec3]) {
+    let pair_force = |q: &Pair| dipole_pair_force(&moment[q.i as usize], &moment[q.j as usize], &q.r, q.dist);
+    // −F_ij added is F_ij subtracted, bit for bit.
+    parallel::add_pairs_in_order(
+        force,
+        pairs,
+        |q| (q.i as usize, q.j as usize),
+        |q| {
+            let f = pair_force(q);
+            (f, -f)
+        },
+        |q| -pair_force(q),
+    );
 }
 
 pub struct DipoleForce {
@@ -344,7 +349,6 @@ pub struct DipoleForce {
     pub gradient: Matrix3<f64>,
     verlet: VerletList,
     pairs: Vec<Pair>,
-    buffer: Vec<Vec3>,
     particle_blocks: Vec<ParticleBlock>,
     rows: Rows,
     bands: Vec<Band>,
@@ -359,7 +363,6 @@ impl DipoleForce {
             gradient,
             verlet: VerletList::default(),
             pairs: vec![],
-            buffer: vec![],
             particle_blocks: vec![],
             rows: Rows::default(),
             bands: vec![],
@@ -380,7 +383,7 @@ impl ForceTerm for DipoleForce {
         let n = p.len();
         let listed = ctx.neighbours.listed(self.cutoff);
         match (listed, self.cutoff) {
-            (Some(pairs), _) => add_listed_pairs(pairs, out.moment, out.force, &mut self.buffer),
+            (Some(pairs), _) => add_listed_pairs(pairs, out.moment, out.force),
             (None, Some(c)) => {
                 if self.verlet.update(&p.position, ctx.domain, c, c * self.skin).is_some() {
                     self.rows.build(n, self.verlet.candidates());
