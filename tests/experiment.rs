@@ -282,3 +282,26 @@ fn runs_a_digest_records_are_not_run_again_on_another_machine() {
     let labels: Vec<String> = third.iter().map(|r| r.outcome.label()).collect();
     assert!(third.iter().all(|r| r.outcome == Outcome::Completed), "{labels:?}");
 }
+
+/// `--dry-run` lists every point and runs nothing; a warning that every point's scene carries
+/// (here a gradient that is not divergence-free) is printed once, with the number of points.
+#[test]
+fn a_dry_run_lists_the_points_and_each_warning_once() {
+    let (work, file, out) = setup("dry", "seed = [1, 2, 3]\n");
+    let base = work.path().join("base.toml");
+    let text = std::fs::read_to_string(&base).unwrap();
+    let gradient = "b0 = [0.4, 0.0, 0.0]\ngradient = [[1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]";
+    std::fs::write(&base, text.replacen("b0 = [0.4, 0.0, 0.0]", gradient, 1)).unwrap();
+    let output = Command::new(env!("CARGO_BIN_EXE_magdem"))
+        .args(["experiment", "--dry-run", "--no-digests"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&output.stderr));
+    assert_eq!(stdout.lines().filter(|l| l.contains(".h5  20 particles")).count(), 3, "{stdout}");
+    let warnings: Vec<&str> = stdout.lines().filter(|l| l.contains("warning")).collect();
+    assert_eq!(warnings.len(), 1, "{stdout}");
+    assert!(warnings[0].contains("(3 points)") && warnings[0].contains("divergence"), "{stdout}");
+    assert!(!out.exists(), "a dry run writes nothing");
+}

@@ -60,9 +60,15 @@ pub fn report_digests() -> Vec<PathBuf> {
     dirs
 }
 
-/// `--dry-run`: each point's output, particles, steps and engine, with its scene's warnings, and
-/// whether a digest records it as finished.
+/// `--dry-run`: each point's output, particles, steps and engine, with its scene's warnings (each
+/// printed once, at the first point that has it, with how many points share it), and whether a
+/// digest records it as finished.
 fn list_points(experiments: &[Experiment], digests: &[PathBuf]) -> Result<(), Box<dyn std::error::Error>> {
+    let mut points_with = std::collections::HashMap::<&str, usize>::new();
+    for w in experiments.iter().flat_map(|e| &e.points).flat_map(|p| &p.scene.warnings) {
+        *points_with.entry(w.as_str()).or_default() += 1;
+    }
+    let mut printed = std::collections::HashSet::new();
     for e in experiments {
         let recorded = digest::recorded(digests, &e.spec.name)?;
         for p in &e.points {
@@ -78,8 +84,11 @@ fn list_points(experiments: &[Experiment], digests: &[PathBuf]) -> Result<(), Bo
                 p.scene.total_steps(),
                 p.engine
             );
-            for w in &p.scene.warnings {
-                println!("  warning: {w}");
+            for w in p.scene.warnings.iter().filter(|w| printed.insert(w.as_str())) {
+                match points_with[w.as_str()] {
+                    1 => println!("  warning: {w}"),
+                    n => println!("  warning ({n} points): {w}"),
+                }
             }
         }
     }
