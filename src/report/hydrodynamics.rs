@@ -536,6 +536,7 @@ fn case2_section(runs: &[Run], reference: &Path, out: &Path, tables: &Path) -> R
     md += "\n![Velocity by size](case2-velocity-by-size.png)\n\n";
     md += &verdict(&names, &cols, exp_velocity, exp_velocity_std);
     md += &variations(&variants, &cols);
+    md += &spread_against_the_gap(&variants, &cols, exp_size);
     Ok(md)
 }
 
@@ -823,6 +824,34 @@ fn variations(variants: &[&str], cols: &[Vec<f64>; 10]) -> String {
     )
 }
 
+/// The paper's explanation of its case-2 gap (constant diameters, where the experiment's were
+/// spread), tested: the gap between the experiment's mean size and that of equal diameters, and
+/// the largest change of the mean size that the spread variants allow (the upper end of the CI95
+/// of their difference to cv 0 %).
+fn spread_against_the_gap(variants: &[&str], cols: &[Vec<f64>; 10], experiment_size: f64) -> String {
+    let at = |v: &str| variants.iter().position(|&x| x == v);
+    let Some(base) = at("cv-0") else { return String::new() };
+    let allowed: Vec<(f64, &str)> = ["cv-5", "cv-10", "cv-20"]
+        .iter()
+        .filter_map(|&v| at(v).map(|k| (v, k)))
+        .map(|(v, k)| ((cols[2][k] - cols[2][base]).abs() + cols[3][k].hypot(cols[3][base]), v))
+        .filter(|(bound, _)| bound.is_finite())
+        .collect();
+    let Some(&(bound, variant)) = allowed.iter().max_by(|a, b| a.0.total_cmp(&b.0)) else { return String::new() };
+    let gap = experiment_size - cols[2][base];
+    format!(
+        "The paper's explanation of its case-2 gap, constant diameters where the experiment's were spread, tested: \
+         the experiment's mean size is {experiment_size:.0} particles, equal diameters give {:.2} ± {:.2}, a gap of \
+         {gap:.1} particles. The largest change of the mean size the spread variants allow (the far end of the CI95 of \
+         their difference to cv 0 %) is {bound:.2} particles (`{variant}`), {:.0} % of the gap: a spread of diameters \
+         up to 20 % {} the gap.\n\n",
+        cols[2][base],
+        cols[3][base],
+        100.0 * bound / gap,
+        if bound < gap { "does not close" } else { "could close" },
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -860,6 +889,11 @@ mod tests {
         assert!(unmeasured.contains("5+ is not yet measured"), "{unmeasured}");
         assert!(!text.contains("NaN"), "{text}");
         assert!(variations(&variants[..2], &cols).is_empty());
+        // Gap 7 − 2.6 = 4.4; cv 10 %: |3.6 − 2.6| + 0.5 = 1.5, cv 20 %: 0.1 + 0.5 = 0.6.
+        let gap = spread_against_the_gap(&variants, &cols, 7.0);
+        assert!(gap.contains("a gap of 4.4 particles") && gap.contains("is 1.50 particles (`cv-10`), 34 %"), "{gap}");
+        assert!(gap.contains("does not close the gap"), "{gap}");
+        assert!(spread_against_the_gap(&variants[..3], &cols, 7.0).is_empty(), "no cv 0 %, no comparison");
     }
 
     /// Velocities growing as n^0.7 give the exponent 0.7; a size seen fewer than three times is
