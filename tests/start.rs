@@ -146,3 +146,59 @@ fn the_deck_writes_the_started_positions_and_says_the_springs_start_at_zero() {
         assert!(found, "position {x:?} missing from {}", files.data.display());
     }
 }
+
+/// `[start] order = "spatial"` numbers the stored particles along a Morton curve and renames their
+/// springs with them: the same state (each particle found under its new number, each spring
+/// under its renamed pair, negated where the pair's order flips), and a run from it follows the
+/// run from the stored numbering to round-off, where dropping the springs would not.
+#[test]
+fn a_start_numbered_in_space_is_the_same_state_renamed() {
+    let dir = tempfile::tempdir().unwrap();
+    run(
+        &Scene::parse(&bed(&lattice(), 3.0e-7), "first").unwrap(),
+        &dir.path().join("first.h5"),
+        &RunOptions::default(),
+    )
+    .unwrap();
+    let start = |order: &str| {
+        let text = bed(&format!("[start]\ntrajectory = \"first.h5\"\n{order}"), 3.0e-7);
+        Scene::parse_in(&text, "started", dir.path()).unwrap()
+    };
+    let (kept, spatial) = (start(""), start("order = \"spatial\"\n"));
+    assert_ne!(kept.hash, spatial.hash, "another numbering is another scene");
+    let (p, q) = (&kept.initial, &spatial.initial);
+    // new[i]: particle i's number in the spatial start, found by its position (all distinct).
+    let new: Vec<usize> =
+        p.position.iter().map(|x| q.position.iter().position(|y| y == x).expect("every particle kept")).collect();
+    assert!(new.iter().enumerate().any(|(i, &k)| i != k), "an FCC block numbered row by row is renumbered");
+    for (i, &k) in new.iter().enumerate() {
+        assert_eq!(
+            (p.velocity[i], p.angular_velocity[i], p.radius[i]),
+            (q.velocity[k], q.angular_velocity[k], q.radius[k])
+        );
+    }
+    let (a, b) = (&kept.initial_contacts, &spatial.initial_contacts);
+    assert_eq!((a.pairs.len(), a.walls.len()), (b.pairs.len(), b.walls.len()));
+    let mut flipped = 0;
+    for ((i, j), spring) in &a.pairs {
+        let (x, y) = (new[*i as usize] as u32, new[*j as usize] as u32);
+        let key = (x.min(y), x.max(y));
+        let (_, renamed) = b.pairs.iter().find(|(k, _)| *k == key).expect("every spring kept");
+        assert_eq!(*renamed, if x < y { *spring } else { -*spring });
+        flipped += (x > y) as usize;
+    }
+    assert!(flipped > 0 && b.pairs.windows(2).all(|w| w[0].0 < w[1].0), "flipped pairs, sorted again");
+
+    // The same run, numbered two ways: apart by round-off, far less than without the springs.
+    let (x, y) = (run_in_memory(&kept), run_in_memory(&spatial));
+    let apart =
+        (0..p.len()).map(|i| (x.particles.position[i] - y.particles.position[new[i]]).norm()).fold(0.0, f64::max);
+    let mut forgetful = spatial.clone();
+    forgetful.initial_contacts = Default::default();
+    let z = run_in_memory(&forgetful);
+    let without =
+        (0..p.len()).map(|i| (x.particles.position[i] - z.particles.position[new[i]]).norm()).fold(0.0, f64::max);
+    let moved = (0..p.len()).map(|i| (x.particles.position[i] - p.position[i]).norm()).fold(0.0, f64::max);
+    assert!(apart < 1e-9 * moved, "{apart:e} m apart after moving up to {moved:e} m");
+    assert!(without > 1e3 * apart.max(1e-25), "without springs {without:e} m against {apart:e} m");
+}

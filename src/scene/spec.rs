@@ -50,6 +50,11 @@ pub struct SceneSpec {
 pub struct StartSpec {
     /// The trajectory (HDF5), relative to this scene file.
     pub trajectory: std::path::PathBuf,
+    /// How the started particles are numbered: as the trajectory numbers them (`placement`, the
+    /// default) or along a Morton curve through cells of the smallest diameter (`spatial`), the
+    /// contact history renamed with them.
+    #[serde(default)]
+    pub order: ParticleOrder,
 }
 
 fn default_seed() -> u64 {
@@ -208,8 +213,8 @@ pub struct ParticleGroupSpec {
     pub order: ParticleOrder,
 }
 
-/// The numbering of randomly placed particles. The physics does not depend on it; the speed of
-/// large scenes does, since particles near in space are then near in memory.
+/// The numbering of randomly placed or started particles. The physics does not depend on it; the
+/// speed of large scenes does, since particles near in space are then near in memory.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ParticleOrder {

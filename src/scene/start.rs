@@ -1,5 +1,7 @@
 //! `[start]`: a scene's particles and contact history from the state a trajectory ends with.
 
+use super::placement::morton_order;
+use super::spec::ParticleOrder;
 use super::{fmt3, invalid, SceneError, SceneSpec, StartSpec};
 use crate::core::domain::Domain;
 use crate::core::state::{ContactHistory, Particles, Species, Vec3};
@@ -50,8 +52,22 @@ pub(super) fn load(
         })
         .collect::<Result<Vec<_>, _>>()?;
 
+    // The stored particles in the order they are numbered here; `renamed[i]`: stored i's number.
+    let wrapped: Vec<Vec3> = old.position.iter().map(|x| wrapped(x, domain)).collect();
+    let visit: Vec<usize> = match start.order {
+        ParticleOrder::Placement => (0..old.len()).collect(),
+        ParticleOrder::Spatial => {
+            let smallest = old.radius.iter().copied().fold(f64::INFINITY, f64::min);
+            morton_order(&wrapped, 2.0 * smallest, domain)
+        }
+    };
+    let mut renamed = vec![0u32; old.len()];
+    for (k, &i) in visit.iter().enumerate() {
+        renamed[i] = k as u32;
+    }
+
     let mut particles = Particles::default();
-    for i in 0..old.len() {
+    for &i in &visit {
         let si = map[old.species[i] as usize];
         let s = &species[si];
         let radius = old.radius[i];
@@ -62,8 +78,7 @@ pub(super) fn load(
                 s.name, s.radius
             )));
         }
-        let mut x = old.position[i];
-        domain.wrap(&mut x);
+        let x = wrapped[i];
         // A settled bed presses on its floor: wall overlaps up to what the run monitor accepts.
         let allowed = spec.stability.max_overlap * 2.0 * radius;
         super::inside(x, radius, allowed, domain)
@@ -71,13 +86,16 @@ pub(super) fn load(
         particles.push_sized(si as u16, s, radius, x, old.velocity[i]);
         *particles.angular_velocity.last_mut().expect("just pushed") = old.angular_velocity[i];
         // A permanent moment keeps the orientation it turned to, with this species' magnitude.
-        let (turned, own) = (old.permanent_moment[i], particles.permanent_moment[i]);
+        let (turned, own) = (old.permanent_moment[i], *particles.permanent_moment.last().expect("just pushed"));
         if turned != Vec3::zeros() && own != Vec3::zeros() {
-            particles.permanent_moment[i] = turned * (own.norm() / turned.norm());
+            *particles.permanent_moment.last_mut().expect("just pushed") = turned * (own.norm() / turned.norm());
         }
     }
 
     let mut contacts = state.contacts;
+    if start.order != ParticleOrder::Placement {
+        rename(&mut contacts, &renamed);
+    }
     let same_box = stored.domain.lo == spec.domain.lo
         && stored.domain.hi == spec.domain.hi
         && (0..3).all(|k| stored.domain.boundary.axis(k) == spec.domain.boundary.axis(k));
@@ -112,4 +130,27 @@ pub(super) fn load(
         s.iter().for_each(|c| h.update(c.to_le_bytes()));
     }
     Ok(Started { particles, contacts, digest: h.finalize().to_vec() })
+}
+
+fn wrapped(x: &Vec3, domain: &Domain) -> Vec3 {
+    let mut x = *x;
+    domain.wrap(&mut x);
+    x
+}
+
+/// The contact history with particle i renamed `renamed[i]`, sorted again. A pair whose order
+/// flips stores the spring of j against i: the relative tangential displacement, negated.
+fn rename(contacts: &mut ContactHistory, renamed: &[u32]) {
+    for ((i, j), spring) in &mut contacts.pairs {
+        let (a, b) = (renamed[*i as usize], renamed[*j as usize]);
+        (*i, *j) = (a.min(b), a.max(b));
+        if a > b {
+            *spring = -*spring;
+        }
+    }
+    contacts.pairs.sort_unstable_by_key(|(key, _)| *key);
+    for ((i, _), _) in &mut contacts.walls {
+        *i = renamed[*i as usize];
+    }
+    contacts.walls.sort_unstable_by_key(|(key, _)| *key);
 }
