@@ -232,8 +232,14 @@ pub fn run_experiments(
         .into_iter()
         .map(|r| r.into_iter().map(|x| x.expect("every point ran")).collect())
         .collect();
-    for (experiment, results) in experiments.iter().zip(&results) {
-        write_manifest(experiment, results)?;
+    // One manifest per output directory: files that continue one experiment (same name, other
+    // seeds) share it, and each lists its points there.
+    let mut outputs: Vec<&Path> = experiments.iter().map(|e| e.output.as_path()).collect();
+    outputs.sort();
+    outputs.dedup();
+    for output in outputs {
+        let sharing = experiments.iter().zip(&results).filter(|(e, _)| e.output == output);
+        write_manifest(output, sharing)?;
     }
     Ok(results)
 }
@@ -250,9 +256,12 @@ fn csv_field(text: &str) -> String {
     format!("\"{}\"", text.replace('"', "\"\""))
 }
 
-fn write_manifest(experiment: &Experiment, results: &[PointResult]) -> std::io::Result<()> {
+fn write_manifest<'a>(
+    output: &Path,
+    experiments: impl Iterator<Item = (&'a Experiment, &'a Vec<PointResult>)>,
+) -> std::io::Result<()> {
     let mut csv = String::from("id,base,variant,overrides,engine,scene_sha256,outcome,wall_time_s,file\n");
-    for (point, r) in experiment.points.iter().zip(results) {
+    for (point, r) in experiments.flat_map(|(e, results)| e.points.iter().zip(results)) {
         let overrides = point.overrides.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join("; ");
         let _ = writeln!(
             csv,
@@ -268,5 +277,5 @@ fn write_manifest(experiment: &Experiment, results: &[PointResult]) -> std::io::
             csv_field(&r.file.display().to_string())
         );
     }
-    std::fs::write(experiment.output.join("manifest.csv"), csv)
+    std::fs::write(output.join("manifest.csv"), csv)
 }

@@ -305,3 +305,21 @@ fn a_dry_run_lists_the_points_and_each_warning_once() {
     assert!(warnings[0].contains("(3 points)") && warnings[0].contains("divergence"), "{stdout}");
     assert!(!out.exists(), "a dry run writes nothing");
 }
+
+/// Two files of one experiment (the same name: the second continues the first's seeds) run
+/// together write their runs into one directory, and its manifest lists both files' points.
+#[test]
+fn files_continuing_one_experiment_share_its_manifest() {
+    let (work, file, out) = setup("continued", "seed = [1]\n");
+    let more = work.path().join("more.toml");
+    std::fs::write(&more, std::fs::read_to_string(&file).unwrap().replace("seed = [1]", "seed = [2, 3]")).unwrap();
+    let experiments = [Experiment::from_file(&file).unwrap(), Experiment::from_file(&more).unwrap()];
+    let options = ExperimentOptions { jobs: Some(2), ..Default::default() };
+    let results = magdem::experiment::run_experiments(&experiments, &options).unwrap();
+    assert!(results.iter().flatten().all(|r| r.outcome == Outcome::Completed));
+    let manifest = std::fs::read_to_string(out.join("manifest.csv")).unwrap();
+    for seed in 1..=3 {
+        assert!(manifest.contains(&format!("seed-{seed}\"")), "seed {seed} missing from\n{manifest}");
+    }
+    assert_eq!(manifest.lines().count(), 4, "a header and three runs:\n{manifest}");
+}
