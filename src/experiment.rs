@@ -233,7 +233,7 @@ pub fn run_experiments(
         .map(|r| r.into_iter().map(|x| x.expect("every point ran")).collect())
         .collect();
     // One manifest per output directory: files that continue one experiment (same name, other
-    // seeds) share it, and each lists its points there.
+    // seeds) share it, and each lists its points there; runs of earlier calls stay listed.
     let mut outputs: Vec<&Path> = experiments.iter().map(|e| e.output.as_path()).collect();
     outputs.sort();
     outputs.dedup();
@@ -260,8 +260,19 @@ fn write_manifest<'a>(
     output: &Path,
     experiments: impl Iterator<Item = (&'a Experiment, &'a Vec<PointResult>)>,
 ) -> std::io::Result<()> {
-    let mut csv = String::from("id,base,variant,overrides,engine,scene_sha256,outcome,wall_time_s,file\n");
-    for (point, r) in experiments.flat_map(|(e, results)| e.points.iter().zip(results)) {
+    const HEADER: &str = "id,base,variant,overrides,engine,scene_sha256,outcome,wall_time_s,file";
+    let path = output.join("manifest.csv");
+    let rows: Vec<_> = experiments.flat_map(|(e, results)| e.points.iter().zip(results)).collect();
+    // Rows of earlier calls for points this call did not run (other seeds, other files) are kept.
+    let written: std::collections::HashSet<String> = rows.iter().map(|(point, _)| csv_field(&point.id)).collect();
+    let earlier = std::fs::read_to_string(&path).unwrap_or_default();
+    let mut csv = format!("{HEADER}\n");
+    let kept = earlier.lines().skip(1).filter(|line| line.split_once(',').is_some_and(|(id, _)| !written.contains(id)));
+    kept.for_each(|line| {
+        csv.push_str(line);
+        csv.push('\n');
+    });
+    for (point, r) in rows {
         let overrides = point.overrides.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join("; ");
         let _ = writeln!(
             csv,
@@ -277,5 +288,5 @@ fn write_manifest<'a>(
             csv_field(&r.file.display().to_string())
         );
     }
-    std::fs::write(output.join("manifest.csv"), csv)
+    std::fs::write(path, csv)
 }

@@ -307,7 +307,8 @@ fn a_dry_run_lists_the_points_and_each_warning_once() {
 }
 
 /// Two files of one experiment (the same name: the second continues the first's seeds) run
-/// together write their runs into one directory, and its manifest lists both files' points.
+/// together write their runs into one directory, and its manifest lists both files' points; a
+/// later call of one file keeps the other's rows.
 #[test]
 fn files_continuing_one_experiment_share_its_manifest() {
     let (work, file, out) = setup("continued", "seed = [1]\n");
@@ -322,4 +323,8 @@ fn files_continuing_one_experiment_share_its_manifest() {
         assert!(manifest.contains(&format!("seed-{seed}\"")), "seed {seed} missing from\n{manifest}");
     }
     assert_eq!(manifest.lines().count(), 4, "a header and three runs:\n{manifest}");
+    // Running one of the files again keeps the other's rows, and lists its own once.
+    magdem::experiment::run_experiment(&experiments[1], &options).unwrap();
+    let again = std::fs::read_to_string(out.join("manifest.csv")).unwrap();
+    assert!(again.contains("seed-1\"") && again.lines().count() == 4, "{again}");
 }
