@@ -168,12 +168,26 @@ pub fn run_order(experiments: &[Experiment]) -> Vec<(usize, usize)> {
     queue
 }
 
-/// Runs every point of `experiments` on `jobs` workers in [`run_order`], and writes each
-/// experiment's `manifest.csv`. Results come back per experiment, in point order.
+/// Runs every point of `experiments` on `jobs` workers in [`run_order`], and writes the
+/// `manifest.csv` of each output directory (experiment files that continue one experiment share
+/// one). Results come back per experiment, in point order. Two points with one output file (the
+/// same id in one output directory) are refused before anything runs.
 pub fn run_experiments(
     experiments: &[Experiment],
     options: &ExperimentOptions,
 ) -> Result<Vec<Vec<PointResult>>, Box<dyn std::error::Error>> {
+    let mut files = std::collections::HashSet::new();
+    for e in experiments {
+        if let Some(p) = e.points.iter().find(|p| !files.insert(e.output.join(&p.id))) {
+            return Err(format!(
+                "experiment `{}`: run `{}` in {} is listed by two experiment files (or twice); each run belongs to one",
+                e.spec.name,
+                p.id,
+                e.output.display()
+            )
+            .into());
+        }
+    }
     for experiment in experiments {
         std::fs::create_dir_all(&experiment.output)?;
     }
@@ -265,9 +279,18 @@ fn write_manifest<'a>(
     let rows: Vec<_> = experiments.flat_map(|(e, results)| e.points.iter().zip(results)).collect();
     // Rows of earlier calls for points this call did not run (other seeds, other files) are kept.
     let written: std::collections::HashSet<String> = rows.iter().map(|(point, _)| csv_field(&point.id)).collect();
-    let earlier = std::fs::read_to_string(&path).unwrap_or_default();
+    let earlier = match std::fs::read_to_string(&path) {
+        Ok(text) => text,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => String::new(),
+        Err(e) => return Err(e),
+    };
     let mut csv = format!("{HEADER}\n");
-    let kept = earlier.lines().skip(1).filter(|line| line.split_once(',').is_some_and(|(id, _)| !written.contains(id)));
+    // Only rows of the same layout are kept.
+    let same_layout = earlier.lines().next() == Some(HEADER);
+    let kept = earlier
+        .lines()
+        .skip(1)
+        .filter(|line| same_layout && quoted_field(line).is_some_and(|id| !written.contains(id)));
     kept.for_each(|line| {
         csv.push_str(line);
         csv.push('\n');
@@ -288,5 +311,37 @@ fn write_manifest<'a>(
             csv_field(&r.file.display().to_string())
         );
     }
-    std::fs::write(path, csv)
+    // Written beside and renamed into place: an interrupted write leaves the previous manifest.
+    let partial = output.join("manifest.csv.partial");
+    std::fs::write(&partial, csv)?;
+    std::fs::rename(partial, path)
+}
+
+/// The quoted first field of a CSV row as [`csv_field`] writes it (quotes included, an inner
+/// quote doubled), or `None` if the row does not start with one.
+fn quoted_field(line: &str) -> Option<&str> {
+    let rest = line.strip_prefix('"')?;
+    let mut chars = rest.char_indices().peekable();
+    while let Some((k, c)) = chars.next() {
+        if c == '"' && chars.next_if(|&(_, c)| c == '"').is_none() {
+            return Some(&line[..k + 2]);
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The id a manifest row starts with, as `csv_field` wrote it, whatever it holds.
+    #[test]
+    fn a_row_id_is_read_back_as_written() {
+        for id in ["case1__seed-1", "a,b__seed-2", "say \"x\"", ""] {
+            let row = format!("{},base,,\"\",magdem", csv_field(id));
+            assert_eq!(quoted_field(&row), Some(csv_field(id).as_str()), "{row}");
+        }
+        assert_eq!(quoted_field("id,base"), None);
+        assert_eq!(quoted_field("\"unterminated"), None);
+    }
 }

@@ -327,4 +327,13 @@ fn files_continuing_one_experiment_share_its_manifest() {
     magdem::experiment::run_experiment(&experiments[1], &options).unwrap();
     let again = std::fs::read_to_string(out.join("manifest.csv")).unwrap();
     assert!(again.contains("seed-1\"") && again.lines().count() == 4, "{again}");
+    // A run listed by both files would be written by two workers at once: refused, nothing run.
+    std::fs::write(&more, std::fs::read_to_string(&more).unwrap().replace("seed = [2, 3]", "seed = [3, 4]")).unwrap();
+    std::fs::write(&file, std::fs::read_to_string(&file).unwrap().replace("seed = [1]", "seed = [1, 3]")).unwrap();
+    let overlapping = [Experiment::from_file(&file).unwrap(), Experiment::from_file(&more).unwrap()];
+    let Err(err) = magdem::experiment::run_experiments(&overlapping, &options) else { panic!("overlapping files ran") };
+    let err = err.to_string();
+    assert!(err.contains("seed-3") && err.contains("two experiment files"), "{err}");
+    let seed_4 = overlapping[1].points.iter().find(|p| p.id.ends_with("seed-4")).expect("seed 4");
+    assert!(!out.join(format!("{}.h5", seed_4.id)).exists(), "nothing is run");
 }

@@ -65,8 +65,9 @@ pub fn report_digests() -> Vec<PathBuf> {
 /// digest records it as finished.
 fn list_points(experiments: &[Experiment], digests: &[PathBuf]) -> Result<(), Box<dyn std::error::Error>> {
     let mut points_with = std::collections::HashMap::<&str, usize>::new();
-    for w in experiments.iter().flat_map(|e| &e.points).flat_map(|p| &p.scene.warnings) {
-        *points_with.entry(w.as_str()).or_default() += 1;
+    for p in experiments.iter().flat_map(|e| &e.points) {
+        let distinct: std::collections::HashSet<&str> = p.scene.warnings.iter().map(String::as_str).collect();
+        distinct.into_iter().for_each(|w| *points_with.entry(w).or_default() += 1);
     }
     let mut printed = std::collections::HashSet::new();
     for e in experiments {

@@ -2,8 +2,9 @@
 //! inside a step of a system large enough to pay for it ([`with_warm_pool`], which keeps the
 //! pool's other threads awake for the step) and only when the loop itself is long enough; every
 //! parallel loop gives the same bits as the serial one: per-particle work is elementwise, pair
-//! results are gathered in pair order and summed serially, and reductions are exact (max, first
-//! match). A run's result therefore does not depend on the thread count.
+//! sums add each particle's terms in the serial loop's order ([`add_pairs_in_order`]), and
+//! reductions are exact (max, first match). A run's result therefore does not depend on the
+//! thread count.
 
 /// Shortest loop worth splitting across threads (about 20 µs of per-particle work).
 pub const MIN_PARALLEL_LEN: usize = 4096;
@@ -221,6 +222,10 @@ pub fn add_pairs_in_order<P: Sync, T: Copy + Send + std::ops::AddAssign>(
     both: impl Fn(&P) -> (T, T) + Sync + Send,
     second: impl Fn(&P) -> T + Sync + Send,
 ) {
+    debug_assert!(
+        pairs.windows(2).all(|w| ij(&w[0]).0 <= ij(&w[1]).0) && pairs.iter().all(|q| ij(q).0 < ij(q).1),
+        "pairs sorted by i, with i < j"
+    );
     for_each_share(out, |lo, share| {
         let hi = lo + share.len();
         let row_below = |bound: usize| pairs.partition_point(|q| ij(q).0 < bound);
@@ -306,7 +311,8 @@ mod tests {
     /// loop's order, so the sums are its bits. The terms are chosen so that the order matters.
     #[test]
     fn ordered_pair_sums_equal_the_serial_loop_on_any_thread_count() {
-        let n = 3 * MIN_PARALLEL_LEN;
+        // Not a multiple of 2 or 3: the last share is shorter than the others.
+        let n = 3 * MIN_PARALLEL_LEN + 17;
         // Particle numbers from a 64-bit mix (SplitMix64's finaliser), so that rows and their
         // partners fall in every share.
         let particle = |k: u64| {

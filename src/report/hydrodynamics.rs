@@ -825,28 +825,33 @@ fn variations(variants: &[&str], cols: &[Vec<f64>; 10]) -> String {
 }
 
 /// The paper's explanation of its case-2 gap (constant diameters, where the experiment's were
-/// spread), tested: the gap between the experiment's mean size and that of equal diameters, and
-/// the largest change of the mean size that the spread variants allow (the upper end of the CI95
-/// of their difference to cv 0 %).
+/// spread) against the gap itself: the experiment's mean size less that of equal diameters, and
+/// the largest change of the mean size the spread variants allow, in either direction (the far
+/// end of the CI95 of their difference to cv 0 %).
 fn spread_against_the_gap(variants: &[&str], cols: &[Vec<f64>; 10], experiment_size: f64) -> String {
     let at = |v: &str| variants.iter().position(|&x| x == v);
     let Some(base) = at("cv-0") else { return String::new() };
-    let allowed: Vec<(f64, &str)> = ["cv-5", "cv-10", "cv-20"]
+    let allowed: Vec<(f64, u32)> = [5, 10, 20]
         .iter()
-        .filter_map(|&v| at(v).map(|k| (v, k)))
-        .map(|(v, k)| ((cols[2][k] - cols[2][base]).abs() + cols[3][k].hypot(cols[3][base]), v))
+        .filter_map(|&cv| at(&format!("cv-{cv}")).map(|k| (cv, k)))
+        .map(|(cv, k)| ((cols[2][k] - cols[2][base]).abs() + cols[3][k].hypot(cols[3][base]), cv))
         .filter(|(bound, _)| bound.is_finite())
         .collect();
-    let Some(&(bound, variant)) = allowed.iter().max_by(|a, b| a.0.total_cmp(&b.0)) else { return String::new() };
+    let Some(&(bound, cv)) = allowed.iter().max_by(|a, b| a.0.total_cmp(&b.0)) else { return String::new() };
+    let widest = allowed.iter().map(|&(_, cv)| cv).max().unwrap_or(cv);
     let gap = experiment_size - cols[2][base];
+    let measured = format!(
+        "The paper explains its case-2 gap by its constant diameters, where the experiment's were spread. The \
+         experiment's mean size is {experiment_size} particles; equal diameters give {:.2} ± {:.2}",
+        cols[2][base], cols[3][base],
+    );
+    if gap <= 0.0 {
+        return format!("{measured}: they already reach it, and there is no gap for a spread to close.\n\n");
+    }
     format!(
-        "The paper's explanation of its case-2 gap, constant diameters where the experiment's were spread, tested: \
-         the experiment's mean size is {experiment_size:.0} particles, equal diameters give {:.2} ± {:.2}, a gap of \
-         {gap:.1} particles. The largest change of the mean size the spread variants allow (the far end of the CI95 of \
-         their difference to cv 0 %) is {bound:.2} particles (`{variant}`), {:.0} % of the gap: a spread of diameters \
-         up to 20 % {} the gap.\n\n",
-        cols[2][base],
-        cols[3][base],
+        "{measured}, a gap of {gap:.1} particles. The largest change of the mean size the spread variants allow, in \
+         either direction (the far end of the CI95 of their difference to cv 0 %), is {bound:.2} particles (cv {cv} %), \
+         {:.0} % of the gap: a spread of diameters up to {widest} % {} the gap.\n\n",
         100.0 * bound / gap,
         if bound < gap { "does not close" } else { "could close" },
     )
@@ -891,8 +896,11 @@ mod tests {
         assert!(variations(&variants[..2], &cols).is_empty());
         // Gap 7 − 2.6 = 4.4; cv 10 %: |3.6 − 2.6| + 0.5 = 1.5, cv 20 %: 0.1 + 0.5 = 0.6.
         let gap = spread_against_the_gap(&variants, &cols, 7.0);
-        assert!(gap.contains("a gap of 4.4 particles") && gap.contains("is 1.50 particles (`cv-10`), 34 %"), "{gap}");
-        assert!(gap.contains("does not close the gap"), "{gap}");
+        assert!(gap.contains("mean size is 7 particles") && gap.contains("a gap of 4.4 particles"), "{gap}");
+        assert!(gap.contains("is 1.50 particles (cv 10 %), 34 %"), "{gap}");
+        assert!(gap.contains("up to 20 % does not close the gap"), "{gap}");
+        assert!(spread_against_the_gap(&variants[..5], &cols, 7.0).contains("up to 10 %"), "the widest spread run");
+        assert!(spread_against_the_gap(&variants, &cols, 2.5).contains("no gap"), "{gap}");
         assert!(spread_against_the_gap(&variants[..3], &cols, 7.0).is_empty(), "no cv 0 %, no comparison");
     }
 
