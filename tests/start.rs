@@ -37,6 +37,12 @@ fn run_in_memory(scene: &Scene) -> State {
     sim.state
 }
 
+/// Runs the bed to `end_time` into `dir`/first.h5, the trajectory the started scenes read.
+fn first_run(dir: &std::path::Path, end_time: f64) -> State {
+    let first = Scene::parse(&bed(&lattice(), end_time), "first").unwrap();
+    run(&first, &dir.join("first.h5"), &RunOptions::default()).unwrap().simulation.state
+}
+
 /// Largest |Δx| over particles (m).
 fn max_difference(a: &State, b: &State) -> f64 {
     a.particles.position.iter().zip(&b.particles.position).map(|(x, y)| (x - y).norm()).fold(0.0, f64::max)
@@ -46,8 +52,7 @@ fn max_difference(a: &State, b: &State) -> f64 {
 fn a_started_run_takes_the_stored_state_and_its_springs() {
     let dir = tempfile::tempdir().unwrap();
     let (half, steps) = (3.0e-7, 30);
-    let first = Scene::parse(&bed(&lattice(), half), "first half").unwrap();
-    let stored = run(&first, &dir.path().join("first.h5"), &RunOptions::default()).unwrap().simulation.state;
+    let stored = first_run(dir.path(), half);
     let whole = run_in_memory(&Scene::parse(&bed(&lattice(), 2.0 * half), "whole").unwrap());
 
     let started =
@@ -125,12 +130,7 @@ fn a_start_is_part_of_the_scene_hash_and_its_species_must_exist_here() {
 #[test]
 fn the_deck_writes_the_started_positions_and_says_the_springs_start_at_zero() {
     let dir = tempfile::tempdir().unwrap();
-    run(
-        &Scene::parse(&bed(&lattice(), 1.0e-7), "first").unwrap(),
-        &dir.path().join("first.h5"),
-        &RunOptions::default(),
-    )
-    .unwrap();
+    first_run(dir.path(), 1.0e-7);
     let started = Scene::parse_in(&bed("[start]\ntrajectory = \"first.h5\"\n", 1.0e-7), "started", dir.path()).unwrap();
     let out = dir.path().join("deck");
     let files = magdem::reference::deck::write(Engine::Liggghts, &started, &out).unwrap();
@@ -154,12 +154,7 @@ fn the_deck_writes_the_started_positions_and_says_the_springs_start_at_zero() {
 #[test]
 fn a_start_numbered_in_space_is_the_same_state_renamed() {
     let dir = tempfile::tempdir().unwrap();
-    run(
-        &Scene::parse(&bed(&lattice(), 3.0e-7), "first").unwrap(),
-        &dir.path().join("first.h5"),
-        &RunOptions::default(),
-    )
-    .unwrap();
+    first_run(dir.path(), 3.0e-7);
     let start = |order: &str| {
         let text = bed(&format!("[start]\ntrajectory = \"first.h5\"\n{order}"), 3.0e-7);
         Scene::parse_in(&text, "started", dir.path()).unwrap()

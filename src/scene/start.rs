@@ -52,7 +52,7 @@ pub(super) fn load(
         })
         .collect::<Result<Vec<_>, _>>()?;
 
-    // The stored particles in the order they are numbered here; `renamed[i]`: stored i's number.
+    // The stored particles in the order they are numbered here.
     let wrapped: Vec<Vec3> = old.position.iter().map(|x| wrapped(x, domain)).collect();
     let visit: Vec<usize> = match start.order {
         ParticleOrder::Placement => (0..old.len()).collect(),
@@ -61,10 +61,6 @@ pub(super) fn load(
             morton_order(&wrapped, 2.0 * smallest, domain)
         }
     };
-    let mut renamed = vec![0u32; old.len()];
-    for (k, &i) in visit.iter().enumerate() {
-        renamed[i] = k as u32;
-    }
 
     let mut particles = Particles::default();
     for &i in &visit {
@@ -94,7 +90,7 @@ pub(super) fn load(
 
     let mut contacts = state.contacts;
     if start.order != ParticleOrder::Placement {
-        rename(&mut contacts, &renamed);
+        rename(&mut contacts, &visit);
     }
     let same_box = stored.domain.lo == spec.domain.lo
         && stored.domain.hi == spec.domain.hi
@@ -138,9 +134,13 @@ fn wrapped(x: &Vec3, domain: &Domain) -> Vec3 {
     x
 }
 
-/// The contact history with particle i renamed `renamed[i]`, sorted again. A pair whose order
-/// flips stores the spring of j against i: the relative tangential displacement, negated.
-fn rename(contacts: &mut ContactHistory, renamed: &[u32]) {
+/// The contact history with the stored particle `visit[k]` renamed k, sorted again. A pair whose
+/// order flips stores the spring of j against i: the relative tangential displacement, negated.
+fn rename(contacts: &mut ContactHistory, visit: &[usize]) {
+    let mut renamed = vec![0u32; visit.len()];
+    for (k, &i) in visit.iter().enumerate() {
+        renamed[i] = k as u32;
+    }
     for ((i, j), spring) in &mut contacts.pairs {
         let (a, b) = (renamed[*i as usize], renamed[*j as usize]);
         (*i, *j) = (a.min(b), a.max(b));
