@@ -454,6 +454,90 @@ pub fn bar_panels(
     Ok(())
 }
 
+/// Differences as dot panels on a grid of `columns`, written to `path` (PNG): per category one
+/// marker per group (side by side) with a bar of ± its error, and a line at zero. Unlike
+/// [`bar_panels`] the axis spans negative values, so a change of either sign reads at a glance.
+pub fn dot_panels(
+    path: &Path,
+    title: &str,
+    panels: &[BarPanel],
+    columns: usize,
+    panel_size: (u32, u32),
+) -> Result<(), Box<dyn std::error::Error>> {
+    register_font()?;
+    let rows = panels.len().div_ceil(columns.max(1));
+    let root =
+        BitMapBackend::new(path, (panel_size.0 * columns as u32, panel_size.1 * rows as u32 + 50)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let (head, body) = root.split_vertically(50);
+    head.titled(title, ("sans-serif", 24))?;
+    for (panel, area) in panels.iter().zip(body.split_evenly((rows, columns))) {
+        let n = panel.categories.len();
+        let ends = panel.groups.iter().flat_map(|g| {
+            g.values.iter().enumerate().flat_map(move |(k, &v)| {
+                let e = g.errors.get(k).copied().filter(|e| e.is_finite()).unwrap_or(0.0);
+                [v - e, v + e]
+            })
+        });
+        let (lo, hi) = ends.filter(|v| v.is_finite()).fold((0.0_f64, 0.0_f64), |(a, b), v| (a.min(v), b.max(v)));
+        let labelled = panel.groups.iter().any(|g| !g.label.is_empty());
+        let span = (hi - lo).max(1e-300);
+        let top = hi + span * if labelled { 0.35 } else { 0.08 };
+        let mut chart = ChartBuilder::on(&area)
+            .caption(&panel.title, ("sans-serif", 18))
+            .margin(15)
+            .x_label_area_size(if panel.categories.iter().any(|c| c.len() > 6) { 60 } else { 40 })
+            .y_label_area_size(80)
+            .build_cartesian_2d(-0.5..n as f64 - 0.5, lo - 0.08 * span..top)?;
+        let names = panel.categories.clone();
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .y_desc(panel.y_label.as_str())
+            .x_labels(n.min(40))
+            .x_label_formatter(&|x| {
+                let k = x.round();
+                if (x - k).abs() < 1e-6 && k >= 0.0 && (k as usize) < names.len() {
+                    names[k as usize].clone()
+                } else {
+                    String::new()
+                }
+            })
+            .y_label_formatter(&tick)
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 15))
+            .draw()?;
+        chart.draw_series([PathElement::new(vec![(-0.5, 0.0), (n as f64 - 0.5, 0.0)], BLACK.stroke_width(1))])?;
+        let width = 0.6 / panel.groups.len().max(1) as f64;
+        for (g, group) in panel.groups.iter().enumerate() {
+            let color = group.color;
+            let x = move |k: usize| k as f64 - 0.3 + (g as f64 + 0.5) * width;
+            let finite = group.values.iter().enumerate().filter(|(_, v)| v.is_finite());
+            chart.draw_series(finite.clone().filter_map(|(k, &v)| {
+                let e = group.errors.get(k).copied().filter(|e| e.is_finite())?;
+                Some(PathElement::new(vec![(x(k), v - e), (x(k), v + e)], color.stroke_width(2)))
+            }))?;
+            let drawn = chart.draw_series(finite.map(|(k, &v)| Circle::new((x(k), v), 6, color.stroke_width(2))))?;
+            if !group.label.is_empty() {
+                drawn
+                    .label(group.label.as_str())
+                    .legend(move |(x, y)| Circle::new((x + 8, y), 6, color.stroke_width(2)));
+            }
+        }
+        if labelled {
+            chart
+                .configure_series_labels()
+                .label_font(("sans-serif", 14))
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .position(SeriesLabelPosition::UpperRight)
+                .draw()?;
+        }
+    }
+    root.present()?;
+    Ok(())
+}
+
 /// Quartiles, Tukey fences (the most extreme data within 1.5 IQR of the box) and mean of a
 /// sample, for a box plot.
 #[derive(Debug, Clone)]
@@ -491,12 +575,14 @@ impl BoxStats {
 }
 
 /// A box-plot panel; `markers` are (label, mean, std) drawn as a dot with a ±std bar, for
-/// sources that give only those.
+/// sources that give only those; `limit`, when finite, a dashed grey line across the panel (a
+/// cap the values cannot pass, such as the box edge).
 pub struct BoxPanel {
     pub title: String,
     pub y_label: String,
     pub boxes: Vec<BoxStats>,
     pub markers: Vec<(String, f64, f64)>,
+    pub limit: f64,
 }
 
 /// Box-plot panels on a grid of `columns` (box: quartiles, red median line, whiskers to the
@@ -512,7 +598,7 @@ pub fn box_panels(
     let root = BitMapBackend::new(path, (560 * columns as u32, 460 * rows as u32 + 50)).into_drawing_area();
     root.fill(&WHITE)?;
     let (head, body) = root.split_vertically(50);
-    head.titled(title, ("sans-serif", 26))?;
+    head.titled(title, ("sans-serif", 22))?;
     let blue = RGBColor(20, 90, 200);
     for (panel, area) in panels.iter().zip(body.split_evenly((rows, columns))) {
         let labels: Vec<String> =
@@ -522,6 +608,7 @@ pub fn box_panels(
             .iter()
             .map(|b| b.upper_fence.max(b.mean))
             .chain(panel.markers.iter().map(|m| m.1 + m.2))
+            .chain([panel.limit].into_iter().filter(|l| l.is_finite()))
             .fold(0.0_f64, f64::max);
         let n = labels.len();
         let mut chart = ChartBuilder::on(&area)
@@ -547,6 +634,14 @@ pub fn box_panels(
             .label_style(("sans-serif", 14))
             .axis_desc_style(("sans-serif", 16))
             .draw()?;
+        if panel.limit.is_finite() {
+            let grey = RGBColor(110, 110, 110);
+            let dashes = (0..2 * n).map(|k| {
+                let x = -0.5 + k as f64 * 0.5;
+                PathElement::new(vec![(x, panel.limit), (x + 0.3, panel.limit)], grey.stroke_width(2))
+            });
+            chart.draw_series(dashes)?;
+        }
         for (k, b) in panel.boxes.iter().enumerate() {
             let x = k as f64;
             let color = b.color;

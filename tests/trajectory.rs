@@ -121,13 +121,21 @@ fn timings_do_not_change_the_trajectory() {
         .lines()
         .skip_while(|l| !l.starts_with("phase timings"))
         .skip(1)
+        .take_while(|l| !l.starts_with("neighbour ranges"))
         .map(|l| {
             let words: Vec<&str> = l.split_whitespace().collect();
             (words[0].to_string(), words[3].trim_end_matches('%').parse().unwrap())
         })
         .collect();
-    for phase in ["neighbours", "seed", "moments", "contact", "dipole", "drag", "integrate", "monitor"] {
+    for phase in ["neighbours", "pair-list", "seed", "moments", "contact", "dipole", "drag", "integrate", "monitor"] {
         assert!(shares.iter().any(|(name, _)| name == phase), "no {phase} in {stdout}");
+    }
+    // Each neighbour range says how often it was rebuilt: at least once, at the start.
+    let ranges: Vec<&str> = stdout.lines().skip_while(|l| !l.starts_with("neighbour ranges")).skip(1).collect();
+    assert!(!ranges.is_empty(), "no neighbour ranges in {stdout}");
+    for line in ranges.iter().filter(|l| l.trim_start().starts_with("within")) {
+        let rebuilds: u64 = line.split(": ").nth(1).and_then(|r| r.split(' ').next()).unwrap().parse().unwrap();
+        assert!(rebuilds >= 1, "{line}");
     }
     let total: f64 = shares.iter().map(|s| s.1).sum();
     assert!((total - 100.0).abs() < 0.5, "shares add to {total}%");

@@ -1,6 +1,7 @@
 //! `magdem run SCENE`: a scene in magdem's solver or, from a generated deck, in a reference code.
 
 use super::{current_exe, fail, load, stop_on_ctrl_c};
+use magdem::core::neighbours::PairRange;
 use magdem::reference::{self, deck::Coupling, Engine, ReferenceError};
 use magdem::run::{run as run_scene, RunFailure, RunOptions, RunSummary};
 use magdem::scene::Scene;
@@ -139,5 +140,16 @@ fn print_timings(summary: &RunSummary) {
     println!("phase timings:");
     for (name, d) in summary.simulation.timers().phases() {
         println!("  {name:<12} {:>9.3} s  {:>5.1}%", d.as_secs_f64(), 100.0 * d.as_secs_f64() / total.max(1e-12));
+    }
+    println!("neighbour ranges (neighbours: candidate upkeep and rebuilds; pair-list: filtering the listed pairs):");
+    for u in summary.simulation.neighbour_usage() {
+        let listed = u.listed.map_or("not listed".into(), |n| format!("{n} listed"));
+        match u.range {
+            PairRange::Within { range, skin } => println!(
+                "  within {range:.3e} m, skin up to {skin:.3e} m: {} rebuilds, skin in use {:.3e} m, {} candidates, {listed}",
+                u.rebuilds, u.skin_in_use, u.candidates
+            ),
+            PairRange::All => println!("  all pairs: searched at every evaluation, {listed}"),
+        }
     }
 }

@@ -4,6 +4,7 @@
 use super::domain::Domain;
 use super::parallel::{self, Pieces};
 use super::state::Vec3;
+use super::timers::PhaseTimers;
 
 /// A pair (i < j) closer than the search range; `r = x_i − x_j` (minimum image), `dist = |r|`.
 #[derive(Debug, Clone, Copy, Default)]
@@ -230,6 +231,13 @@ impl VerletList {
         out: &mut Vec<Pair>,
     ) -> Option<f64> {
         let rebuilt = self.update(positions, domain, range, skin);
+        self.filter_into(positions, domain, range, out);
+        rebuilt
+    }
+
+    /// Fills `out` with the candidates closer than `range` now, in (i, j) order (the candidates
+    /// must be up to date: [`Self::update`]).
+    pub fn filter_into(&mut self, positions: &[Vec3], domain: &Domain, range: f64, out: &mut Vec<Pair>) {
         // The filter gathers in the cell list's buffers (used only when it rebuilds).
         let (candidates, pieces) = (&self.candidates, &mut self.cells.pieces);
         if domain.periodic == [false; 3] {
@@ -237,7 +245,6 @@ impl VerletList {
         } else {
             filter(candidates, positions, range, out, pieces, |a, b| domain.displacement(a, b));
         }
-        rebuilt
     }
 }
 
@@ -369,6 +376,17 @@ impl Skins {
 /// Mean candidates per particle below which [`Skins::for_density`] widens the near skin.
 pub const DILUTE_CANDIDATES: f64 = 1.0;
 
+/// What one range of the neighbour layer did: see [`Neighbours::usage`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RangeUsage {
+    pub range: PairRange,
+    pub rebuilds: u64,
+    pub skin_in_use: f64,
+    pub candidates: usize,
+    /// Pairs in the last listing, for a listed range.
+    pub listed: Option<usize>,
+}
+
 /// One pair range of the neighbour layer: its candidates, and its pairs if some term lists them.
 #[derive(Debug, Clone)]
 struct Listed {
@@ -411,20 +429,46 @@ impl Neighbours {
         Self { lists }
     }
 
-    /// Brings the ranges `wanted` selects up to date for `positions`.
-    pub fn update(&mut self, positions: &[Vec3], domain: &Domain, wanted: impl Fn(PairRange) -> bool) {
+    /// Brings the ranges `wanted` selects up to date for `positions`, timing the candidates'
+    /// upkeep (the displacement check and the rebuilds) apart from the filtering of the listed
+    /// pairs.
+    pub fn update(
+        &mut self,
+        positions: &[Vec3],
+        domain: &Domain,
+        wanted: impl Fn(PairRange) -> bool,
+        timers: &mut PhaseTimers,
+    ) {
         for list in self.lists.iter_mut().filter(|l| wanted(l.range)) {
-            list.rebuilt = match (list.range, list.listed) {
-                (PairRange::Within { range, skin }, true) => {
-                    list.verlet.pairs_within(positions, domain, range, skin, &mut list.pairs)
+            list.rebuilt = match list.range {
+                PairRange::Within { range, skin } => {
+                    let rebuilt = timers.time("neighbours", || list.verlet.update(positions, domain, range, skin));
+                    if list.listed {
+                        timers.time("pair-list", || list.verlet.filter_into(positions, domain, range, &mut list.pairs));
+                    }
+                    rebuilt
                 }
-                (PairRange::Within { range, skin }, false) => list.verlet.update(positions, domain, range, skin),
-                (PairRange::All, _) => {
-                    list.cells.pairs_within(positions, domain, None, &mut list.pairs);
+                PairRange::All => {
+                    timers.time("all-pairs", || list.cells.pairs_within(positions, domain, None, &mut list.pairs));
                     None
                 }
             };
         }
+    }
+
+    /// Per range: how often its candidates were rebuilt, how many there are now and how many
+    /// pairs the last update listed (a diagnostic, for `magdem run --timings`).
+    pub fn usage(&self) -> Vec<RangeUsage> {
+        self.lists
+            .iter()
+            .map(|l| RangeUsage {
+                range: l.range,
+                rebuilds: l.verlet.rebuilds,
+                skin_in_use: l.verlet.skin_in_use(),
+                candidates: l.verlet.candidates().len(),
+                listed: l.listed.then_some(l.pairs.len()),
+            })
+            .collect()
     }
 
     fn list(&self, range: PairRange) -> Option<&Listed> {
@@ -575,8 +619,8 @@ mod tests {
             let mut listed = Neighbours::new([need(PairForm::Listed)]);
             let mut filtered = Neighbours::new([need(PairForm::Candidates)]);
             for step in 0..30 {
-                listed.update(&pos, &domain, |_| true);
-                filtered.update(&pos, &domain, |_| true);
+                listed.update(&pos, &domain, |_| true, &mut PhaseTimers::default());
+                filtered.update(&pos, &domain, |_| true, &mut PhaseTimers::default());
                 let c = filtered.candidates(range, &domain);
                 let got: Vec<Pair> = c.list.iter().filter_map(|&ij| c.pair(&pos, ij)).collect();
                 let want = listed.pairs(range);

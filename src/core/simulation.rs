@@ -1,13 +1,13 @@
 //! One simulation: state, force pipeline, integrator and monitor. A step runs the named phases
-//! neighbours → seed (forces start from the constant term's, torques from zero) → one phase per
-//! force term, the moments first (inside the integrator's force evaluation), then integrate and
-//! monitor; each is timed.
+//! neighbours (candidate upkeep) → pair-list (the listed ranges filtered) → seed (forces start
+//! from the constant term's, torques from zero) → one phase per force term, the moments first
+//! (inside the integrator's force evaluation), then integrate and monitor; each is timed.
 
 use super::domain::Domain;
 use super::forces::{ConstantForce, Context, ForceGroup, ForceTerm, Forces};
 use super::integrators::Integrator;
 use super::magnetisation::InductionError;
-use super::neighbours::Neighbours;
+use super::neighbours::{Neighbours, RangeUsage};
 use super::parallel;
 use super::stability::{Instability, Monitor, StepEstimate};
 use super::state::{State, Vec3};
@@ -63,8 +63,7 @@ impl ForceField {
         }
         let terms = &self.terms;
         let wanted = |range| terms.iter().any(|t| group.has(t.as_ref()) && t.pairs().is_some_and(|n| n.range == range));
-        let (neighbours, positions, domain) = (&mut self.neighbours, &state.particles.position, &self.domain);
-        self.timers.time("neighbours", || neighbours.update(positions, domain, wanted));
+        self.neighbours.update(&state.particles.position, &self.domain, wanted, &mut self.timers);
         let ctx = Context { domain: &self.domain, neighbours: &self.neighbours, dt };
         for term in self.terms.iter_mut().filter(|t| group.has(t.as_ref())) {
             let t0 = self.timers.start();
@@ -194,5 +193,10 @@ impl Simulation {
 
     pub fn timers(&self) -> &PhaseTimers {
         &self.field.timers
+    }
+
+    /// What each neighbour range did so far (rebuilds, candidates, listed pairs).
+    pub fn neighbour_usage(&self) -> Vec<RangeUsage> {
+        self.field.neighbours.usage()
     }
 }

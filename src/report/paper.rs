@@ -8,8 +8,8 @@ use super::runs::{experiment_files, load_runs_digested, Run};
 use super::tables::{col, floats, frame, markdown, read_csv, same, scol, ucol, write};
 use crate::analysis::stats::{ci95_half_width, summary};
 use crate::plot::{
-    bar_panels, box_panels, engine_colour, line_chart_with_legend, palette, BarGroup, BarPanel, BoxPanel, BoxStats,
-    RGBColor, Series, SeriesLabelPosition,
+    bar_panels, box_panels, dot_panels, engine_colour, line_chart_with_legend, palette, BarGroup, BarPanel, BoxPanel,
+    BoxStats, RGBColor, Series, SeriesLabelPosition,
 };
 use crate::scene::Scene;
 use polars::prelude::{DataFrame, PolarsResult};
@@ -556,12 +556,15 @@ fn box_section(runs: &[Run], paper: &Paper, out: &Path) -> Result<String, Error>
             BoxStats::of("magdem (all seeds)", engine_colour("magdem"), &magdem),
             BoxStats::of("paper simulation", palette(3), &paper_lengths(paper, c)?),
         ];
+        // Every seed of a concentration has the same box; dashed: its edge along the field.
+        let edge = here.first().map_or(f64::NAN, |r| r.box_extent * 1e6);
         panels.push(BoxPanel {
             title: format!(
                 "{}) {c} mg/ml; magdem: {capped} of {} lengths box-limited",
                 ["a", "b", "c", "d"][k % 4],
                 magdem.len()
             ),
+            limit: edge,
             y_label: "major axis length (µm)".into(),
             boxes: boxes.into_iter().flatten().collect(),
             markers: vec![("experiment (mean ± std)".into(), exp_mean[k], exp_std[k])],
@@ -569,14 +572,15 @@ fn box_section(runs: &[Run], paper: &Paper, out: &Path) -> Result<String, Error>
     }
     box_panels(
         &out.join("boxplots.png"),
-        "Case 1: aggregate length at 5 ms (box: quartiles, red: median, whiskers: Tukey fences, blue: mean)",
+        "Case 1 at 5 ms: quartiles, median (red), Tukey fences, mean (blue), box edge (dashed)",
         &panels,
         2,
     )?;
     Ok("## The box-plot figure\n\n\
         The paper's figure compares its simulated lengths with the experiment's as box plots. The experiment's distributions \
         are not published as numbers (only mean and std, Table 3), so the experiment appears as its mean ± std; the paper's \
-        simulated distribution is rebuilt from its Table 4 (n × 11 µm per aggregate).\n\n![Box plots](boxplots.png)\n\n"
+        simulated distribution is rebuilt from its Table 4 (n × 11 µm per aggregate). The dashed line is the box edge along the field: \
+        a magdem length near it is box-limited (its count is in each panel's title).\n\n![Box plots](boxplots.png)\n\n"
         .into())
 }
 
@@ -928,22 +932,18 @@ fn sensitivity_explanation(variant: &str) -> Option<&'static str> {
 
 /// The sensitivity figure: each variant's paired change with its CI95 over seeds.
 fn sensitivity_figure(bars: &[(String, convergence::Estimate)], concentration: f64, out: &Path) -> Result<(), Error> {
-    let series: Vec<Series> = bars
-        .iter()
-        .enumerate()
-        .map(|(k, (name, d))| {
-            Series::markers(name.clone(), vec![(k as f64, d.mean)], palette(k), 7).with_errors(vec![d.ci95])
-        })
-        .collect();
-    let zero = Series::line("", vec![(-0.5, 0.0), (bars.len() as f64 - 0.5, 0.0)], RGBColor(0, 0, 0));
-    line_chart_with_legend(
-        &out.join("sensitivity.png"),
-        &format!("Case 1, {} mg/ml: paired change of the mean length at 5 ms (± CI95 over seeds)", concentration),
-        "variant (see legend)",
-        "change against r-RESPA (%)",
-        &series.into_iter().chain([zero]).collect::<Vec<_>>(),
-        crate::plot::Legend { position: SeriesLabelPosition::UpperRight, headroom: 0.7 },
-    )?;
+    let panel = BarPanel {
+        title: format!("{concentration} mg/ml, each variant against r-RESPA, paired seed by seed"),
+        y_label: "change of the mean length at 5 ms (%)".into(),
+        categories: bars.iter().map(|(name, _)| name.clone()).collect(),
+        groups: vec![BarGroup {
+            label: "mean ± CI95 over seeds".into(),
+            color: palette(1),
+            values: bars.iter().map(|(_, d)| d.mean).collect(),
+            errors: bars.iter().map(|(_, d)| d.ci95).collect(),
+        }],
+    };
+    dot_panels(&out.join("sensitivity.png"), "Case 1: which choices move the mean length", &[panel], 1, (1000, 560))?;
     Ok(())
 }
 
@@ -1125,25 +1125,38 @@ fn reference_section(runs: &[Run], out: &Path, tables: &Path) -> Result<String, 
         ],
         &[0, 0, 0, 0, 0, 2, 2, 0, 0, 0, 1],
     )?;
-    let done: Vec<&&Run> = here.iter().filter(|r| r.completed()).collect();
-    if !done.is_empty() {
-        let series: Vec<Series> = done
-            .iter()
-            .map(|r| {
-                Series::line(
-                    format!("{} ({})", r.engine, r.scene),
-                    r.times.iter().zip(&r.mean_length).map(|(t, l)| (t * 1e3, l * 1e6)).collect(),
-                    engine_colour(&r.engine),
-                )
-            })
-            .collect();
+    // The figure: each reference engine's mean length minus magdem's, frame by frame (the
+    // curves themselves coincide to the width of a line).
+    let series: Vec<Series> = here
+        .iter()
+        .filter(|r| r.completed() && r.engine != "magdem")
+        .filter_map(|r| {
+            let native = here
+                .iter()
+                .find(|n| n.engine == "magdem" && n.scene == r.scene && n.seed == r.seed && n.completed())?;
+            let points: Vec<(f64, f64)> = r
+                .times
+                .iter()
+                .zip(&r.mean_length)
+                .zip(native.times.iter().zip(&native.mean_length))
+                .filter(|((t, _), (t0, _))| (*t - *t0).abs() <= 1e-9 * t.abs().max(1e-12))
+                .map(|((t, l), (_, l0))| (t * 1e3, (l - l0) * 1e6))
+                .collect();
+            Some(Series::line(
+                format!("{} − magdem ({}, seed {})", r.engine, r.scene, r.seed),
+                points,
+                engine_colour(&r.engine),
+            ))
+        })
+        .collect();
+    if !series.is_empty() {
         line_chart_with_legend(
             &out.join("reference-engines.png"),
-            "Case 1 with Stokes drag: mean length against time per engine",
+            "Case 1 with Stokes drag: each engine's mean length minus magdem's",
             "time (ms)",
-            "mean length (µm)",
+            "difference of the mean length (µm)",
             &series,
-            SeriesLabelPosition::UpperLeft,
+            crate::plot::Legend::above_data(0.3),
         )?;
         md += "\n![Engines](reference-engines.png)\n\n";
     }
@@ -1222,7 +1235,7 @@ fn reference_ensemble(runs: &[Run], out: &Path, tables: &Path) -> Result<String,
             })
             .collect(),
     };
-    bar_panels(
+    dot_panels(
         &out.join("reference-table3.png"),
         "Table 3 in LIGGGHTS and LAMMPS against magdem (same scenes, same seeds)",
         &[panel],

@@ -491,7 +491,7 @@ mod tests {
                     *x += *v * dt;
                     domain.wrap(x);
                 }
-                neighbours.update(&p.position, &domain, |_| true);
+                neighbours.update(&p.position, &domain, |_| true, &mut crate::core::timers::PhaseTimers::default());
                 let ctx = Context { domain: &domain, neighbours, dt };
                 state.fields.force.iter_mut().for_each(|f| *f = Vec3::zeros());
                 let (p, mut out) = Forces::of(state, ForceGroup::All);
@@ -546,7 +546,7 @@ mod tests {
                     }
                 }
             }
-            neighbours.update(&p.position, &domain, |_| true);
+            neighbours.update(&p.position, &domain, |_| true, &mut crate::core::timers::PhaseTimers::default());
             rebuilds += neighbours.rebuilt(near).is_some() as usize;
             let ctx = Context { domain: &domain, neighbours: &neighbours, dt };
             let mut every_particle = state.clone();
