@@ -351,6 +351,16 @@ pub struct BarPanel {
     pub groups: Vec<BarGroup>,
 }
 
+/// How [`BarPanel`] groups are drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Mark {
+    /// Bars from zero with thin grey spread lines clipped at zero: amounts.
+    Bars,
+    /// Circles with coloured ± bars on an axis that spans negative values, with a line at zero:
+    /// differences, whose sign matters.
+    Dots,
+}
+
 /// Bar panels on a grid of `columns`, written to `path` (PNG). Category labels are thinned to
 /// at most 20 per axis.
 pub fn bar_panels(
@@ -360,35 +370,62 @@ pub fn bar_panels(
     columns: usize,
     panel_size: (u32, u32),
 ) -> Result<(), Box<dyn std::error::Error>> {
+    category_panels(path, title, panels, columns, panel_size, Mark::Bars)
+}
+
+/// Differences as dot panels on a grid of `columns`, written to `path` (PNG): per category one
+/// marker per group (side by side) with a bar of ± its error, and a line at zero. Unlike
+/// [`bar_panels`] the axis spans negative values, so a change of either sign reads at a glance.
+pub fn dot_panels(
+    path: &Path,
+    title: &str,
+    panels: &[BarPanel],
+    columns: usize,
+    panel_size: (u32, u32),
+) -> Result<(), Box<dyn std::error::Error>> {
+    category_panels(path, title, panels, columns, panel_size, Mark::Dots)
+}
+
+fn category_panels(
+    path: &Path,
+    title: &str,
+    panels: &[BarPanel],
+    columns: usize,
+    panel_size: (u32, u32),
+    mark: Mark,
+) -> Result<(), Box<dyn std::error::Error>> {
     register_font()?;
     let rows = panels.len().div_ceil(columns.max(1));
     let root =
         BitMapBackend::new(path, (panel_size.0 * columns as u32, panel_size.1 * rows as u32 + 50)).into_drawing_area();
     root.fill(&WHITE)?;
     let (head, body) = root.split_vertically(50);
-    head.titled(title, ("sans-serif", 26))?;
+    head.titled(title, ("sans-serif", 24))?;
     for (panel, area) in panels.iter().zip(body.split_evenly((rows, columns))) {
         let n = panel.categories.len();
-        let top = panel
-            .groups
-            .iter()
-            .flat_map(|g| {
-                g.values
-                    .iter()
-                    .enumerate()
-                    .map(move |(k, v)| v + g.errors.get(k).copied().filter(|e| e.is_finite()).unwrap_or(0.0))
+        // The values' range with their spreads, zero included.
+        let ends = panel.groups.iter().flat_map(|g| {
+            g.values.iter().enumerate().flat_map(move |(k, &v)| {
+                let e = g.errors.get(k).copied().filter(|e| e.is_finite()).unwrap_or(0.0);
+                [v - e, v + e]
             })
-            .filter(|v| v.is_finite())
-            .fold(0.0_f64, f64::max);
-        // Room above the bars for the legend, when there is one.
+        });
+        let (lo, hi) = ends.filter(|v| v.is_finite()).fold((0.0_f64, 0.0_f64), |(a, b), v| (a.min(v), b.max(v)));
+        // Room above the data for the legend, when there is one.
         let labelled = panel.groups.iter().any(|g| !g.label.is_empty());
-        let headroom = if labelled { 1.3 } else { 1.1 };
+        let y_range = match mark {
+            Mark::Bars => 0.0..hi * if labelled { 1.3 } else { 1.1 } + 1e-300,
+            Mark::Dots => {
+                let span = (hi - lo).max(1e-300);
+                lo - 0.08 * span..hi + span * if labelled { 0.35 } else { 0.08 }
+            }
+        };
         let mut chart = ChartBuilder::on(&area)
             .caption(&panel.title, ("sans-serif", 20))
             .margin(15)
             .x_label_area_size(if panel.categories.iter().any(|c| c.len() > 6) { 70 } else { 40 })
-            .y_label_area_size(70)
-            .build_cartesian_2d(-0.5..n as f64 - 0.5, 0.0..top * headroom + 1e-300)?;
+            .y_label_area_size(80)
+            .build_cartesian_2d(-0.5..n as f64 - 0.5, y_range)?;
         let step = n.div_ceil(20).max(1);
         let names = panel.categories.clone();
         chart
@@ -408,120 +445,51 @@ pub fn bar_panels(
             .label_style(("sans-serif", 14))
             .axis_desc_style(("sans-serif", 16))
             .draw()?;
-        let width = 0.8 / panel.groups.len().max(1) as f64;
+        if mark == Mark::Dots {
+            chart.draw_series([PathElement::new(vec![(-0.5, 0.0), (n as f64 - 0.5, 0.0)], BLACK.stroke_width(1))])?;
+        }
+        let (slot, first) = match mark {
+            Mark::Bars => (0.8, -0.4),
+            Mark::Dots => (0.6, -0.3),
+        };
+        let width = slot / panel.groups.len().max(1) as f64;
         for (g, group) in panel.groups.iter().enumerate() {
             let color = group.color;
-            let left = |k: usize| k as f64 - 0.4 + g as f64 * width;
-            let drawn = chart.draw_series(
-                group
-                    .values
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, v)| v.is_finite())
-                    .map(|(k, &v)| Rectangle::new([(left(k), 0.0), (left(k) + width * 0.9, v)], color.filled())),
-            )?;
-            if !group.label.is_empty() {
-                drawn
-                    .label(group.label.as_str())
-                    .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 14, y + 6)], color.filled()));
-            }
-            chart.draw_series(
-                group
-                    .values
-                    .iter()
-                    .zip(&group.errors)
-                    .enumerate()
-                    .filter(|(_, (v, e))| v.is_finite() && e.is_finite())
-                    .map(|(k, (&v, &e))| {
+            let left = move |k: usize| k as f64 + first + g as f64 * width;
+            let finite = || group.values.iter().enumerate().filter(|(_, v)| v.is_finite());
+            let spreads =
+                finite().filter_map(|(k, &v)| Some((k, v, group.errors.get(k).copied().filter(|e| e.is_finite())?)));
+            let label = group.label.as_str();
+            match mark {
+                Mark::Bars => {
+                    let drawn =
+                        chart.draw_series(finite().map(|(k, &v)| {
+                            Rectangle::new([(left(k), 0.0), (left(k) + width * 0.9, v)], color.filled())
+                        }))?;
+                    if !label.is_empty() {
+                        drawn
+                            .label(label)
+                            .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 14, y + 6)], color.filled()));
+                    }
+                    // Thin and grey, so that the bars stay readable where the spread is large;
+                    // a spread below zero is clipped at the axis.
+                    chart.draw_series(spreads.map(|(k, v, e)| {
                         let x = left(k) + width * 0.45;
-                        // Thin and grey, so that the bars stay readable where the spread is large;
-                        // a spread below zero is clipped at the axis.
                         PathElement::new(vec![(x, (v - e).max(0.0)), (x, v + e)], RGBColor(90, 90, 90).stroke_width(1))
-                    }),
-            )?;
-        }
-        if labelled {
-            chart
-                .configure_series_labels()
-                .label_font(("sans-serif", 14))
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .position(SeriesLabelPosition::UpperRight)
-                .draw()?;
-        }
-    }
-    root.present()?;
-    Ok(())
-}
-
-/// Differences as dot panels on a grid of `columns`, written to `path` (PNG): per category one
-/// marker per group (side by side) with a bar of ± its error, and a line at zero. Unlike
-/// [`bar_panels`] the axis spans negative values, so a change of either sign reads at a glance.
-pub fn dot_panels(
-    path: &Path,
-    title: &str,
-    panels: &[BarPanel],
-    columns: usize,
-    panel_size: (u32, u32),
-) -> Result<(), Box<dyn std::error::Error>> {
-    register_font()?;
-    let rows = panels.len().div_ceil(columns.max(1));
-    let root =
-        BitMapBackend::new(path, (panel_size.0 * columns as u32, panel_size.1 * rows as u32 + 50)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let (head, body) = root.split_vertically(50);
-    head.titled(title, ("sans-serif", 24))?;
-    for (panel, area) in panels.iter().zip(body.split_evenly((rows, columns))) {
-        let n = panel.categories.len();
-        let ends = panel.groups.iter().flat_map(|g| {
-            g.values.iter().enumerate().flat_map(move |(k, &v)| {
-                let e = g.errors.get(k).copied().filter(|e| e.is_finite()).unwrap_or(0.0);
-                [v - e, v + e]
-            })
-        });
-        let (lo, hi) = ends.filter(|v| v.is_finite()).fold((0.0_f64, 0.0_f64), |(a, b), v| (a.min(v), b.max(v)));
-        let labelled = panel.groups.iter().any(|g| !g.label.is_empty());
-        let span = (hi - lo).max(1e-300);
-        let top = hi + span * if labelled { 0.35 } else { 0.08 };
-        let mut chart = ChartBuilder::on(&area)
-            .caption(&panel.title, ("sans-serif", 18))
-            .margin(15)
-            .x_label_area_size(if panel.categories.iter().any(|c| c.len() > 6) { 60 } else { 40 })
-            .y_label_area_size(80)
-            .build_cartesian_2d(-0.5..n as f64 - 0.5, lo - 0.08 * span..top)?;
-        let names = panel.categories.clone();
-        chart
-            .configure_mesh()
-            .disable_x_mesh()
-            .y_desc(panel.y_label.as_str())
-            .x_labels(n.min(40))
-            .x_label_formatter(&|x| {
-                let k = x.round();
-                if (x - k).abs() < 1e-6 && k >= 0.0 && (k as usize) < names.len() {
-                    names[k as usize].clone()
-                } else {
-                    String::new()
+                    }))?;
                 }
-            })
-            .y_label_formatter(&tick)
-            .label_style(("sans-serif", 14))
-            .axis_desc_style(("sans-serif", 15))
-            .draw()?;
-        chart.draw_series([PathElement::new(vec![(-0.5, 0.0), (n as f64 - 0.5, 0.0)], BLACK.stroke_width(1))])?;
-        let width = 0.6 / panel.groups.len().max(1) as f64;
-        for (g, group) in panel.groups.iter().enumerate() {
-            let color = group.color;
-            let x = move |k: usize| k as f64 - 0.3 + (g as f64 + 0.5) * width;
-            let finite = group.values.iter().enumerate().filter(|(_, v)| v.is_finite());
-            chart.draw_series(finite.clone().filter_map(|(k, &v)| {
-                let e = group.errors.get(k).copied().filter(|e| e.is_finite())?;
-                Some(PathElement::new(vec![(x(k), v - e), (x(k), v + e)], color.stroke_width(2)))
-            }))?;
-            let drawn = chart.draw_series(finite.map(|(k, &v)| Circle::new((x(k), v), 6, color.stroke_width(2))))?;
-            if !group.label.is_empty() {
-                drawn
-                    .label(group.label.as_str())
-                    .legend(move |(x, y)| Circle::new((x + 8, y), 6, color.stroke_width(2)));
+                Mark::Dots => {
+                    chart.draw_series(spreads.map(|(k, v, e)| {
+                        let x = left(k) + width * 0.5;
+                        PathElement::new(vec![(x, v - e), (x, v + e)], color.stroke_width(2))
+                    }))?;
+                    let drawn = chart.draw_series(
+                        finite().map(|(k, &v)| Circle::new((left(k) + width * 0.5, v), 6, color.stroke_width(2))),
+                    )?;
+                    if !label.is_empty() {
+                        drawn.label(label).legend(move |(x, y)| Circle::new((x + 8, y), 6, color.stroke_width(2)));
+                    }
+                }
             }
         }
         if labelled {
