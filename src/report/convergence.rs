@@ -143,7 +143,9 @@ fn level(label: impl Into<String>, y: f64, (x0, x1): (f64, f64), color: RGBColor
 
 /// r-RESPA runs of the case-1 scenes at concentration `c` on the paper's walled box (the
 /// magnetisation sweep's unsaturated variant and the sensitivity study's reference).
-fn respa_runs(runs: &[Run], c: f64) -> Vec<&Run> {
+/// The paper's walled box at concentration `c` under r-RESPA K = 10 (the magnetisation sweep's
+/// linear law and the sensitivity study's reference), one run per seed.
+pub fn respa_runs(runs: &[Run], c: f64) -> Vec<&Run> {
     let mut here = select(runs, &["paper-magnetisation"], "linear", c);
     for r in select(runs, &["paper-sensitivity"], "respa", c) {
         if !here.iter().any(|h| h.seed == r.seed) {
