@@ -515,16 +515,19 @@ fn growth_row(here: &[&Run], c: f64, exp: f64, end: f64) -> (GrowthRow, Estimate
 
 /// What is published on growth exponents, and why magdem's z belongs to another class.
 const GROWTH_LITERATURE: &str = "\nPublished growth exponents for field-induced chaining are not universal. For chains whose diffusivity falls as \
-           1/s, Smoluchowski kinetics give z = 1/2, which experiments on Brownian paramagnetic colloids approach but have \
-           not strictly matched (as reviewed in the microfluidics text quoted in the notes). Langevin simulations of dipolar \
-           particles find z from about 0.2, when the dipolar attraction dominates, to 0.5, when diffusion dominates (Suzuki, \
-           Kun & Ito, Phys. Rev. E 2009). Experiments on paramagnetic colloids (Fermigier & Gast 1992; Promislow, Gast & \
-           Fermigier 1995) are quoted at z ≈ 0.4–0.75, rising with concentration and field strength; this range is from \
-           memory of those papers, not checked against their text. magdem's particles are not Brownian: 11 µm beads at \
-           λ = μ0 m²/(2π d³ kT) ~ 10⁹. Their aggregation is deterministic and field-driven, which is a different universality \
-           class from the diffusion-limited experiments. Neither the paper nor the experiment states when the experiment's \
-           images were taken, so the report puts no experiment time on 5 ms: the dotted lines in the figure are the \
-           experiment's means at an unknown time.\n\n";
+           1/s, Smoluchowski kinetics give z = 1/2, a reference value that experiments on Brownian paramagnetic colloids have \
+           not strictly matched (a microflows text of Springer's Interdisciplinary Applied Mathematics series, its chapter 13 on \
+           chains of paramagnetic beads). Simulations of Ising \
+           dipolar particles under thermal noise find z from 0.2, where the dipolar attraction dominates, to 0.5, where \
+           diffusion does (Suzuki, Kun & Ito, Phys. Rev. E, 2009). magdem's particles are not Brownian: 11 µm beads at \
+           λ = μ0 m²/(2π d³ kT) ~ 10⁹, so their aggregation is deterministic and driven by the attraction, the low end of \
+           that range. The closest experimental analogue, millimetre dipoles floating on water whose motion is deterministic, \
+           follows Vicsek–Family dynamic scaling with exponents that change with concentration (Pál, Kun, Varga, Sohler & Sun, \
+           Phys. Rev. E 83, 061504, 2011); this report quotes only what those works' abstracts state, not their tables. The \
+           exponents of the experiments on Brownian paramagnetic colloids (Fermigier & Gast 1992; Promislow, Gast & Fermigier \
+           1995) are not quoted, since their values were not checked here. Neither the paper nor the experiment states when \
+           the experiment's images were taken, so the report puts no experiment time on 5 ms: the dotted lines in the figure \
+           are the experiment's means at an unknown time.\n\n";
 
 /// Stopping time: L(t) to 20 ms on log–log axes and its growth exponent.
 pub fn growth_section(
