@@ -425,17 +425,23 @@ fn box_findings(runs: &[Run], c: f64, by_factor: &BTreeMap<u64, Vec<&Run>>, effe
             a.len()
         ));
         if let Some(x1) = by_factor.get(&1) {
+            // The largest box with a CI (two seeds or more), so that the ranking has one.
+            let (f_big, big) = sizes.iter().rev().find(|(_, g)| g.len() >= 2).copied().unwrap_or((fb, b));
             effects.push(Effect {
                 concentration: c,
                 explanation: "box",
-                what: format!("periodic {fb}× the particles against the paper's box with walls"),
-                change: unpaired(&lengths(&respa_runs(runs, c)), &lengths(b)),
+                what: format!(
+                    "periodic {f_big}× the particles ({} seeds) against the paper's box with walls",
+                    big.len()
+                ),
+                change: unpaired(&lengths(&respa_runs(runs, c)), &lengths(big)),
             });
             let walls = paired(&respa_runs(runs, c), x1, |r| r.mean_length_um());
             findings.push(format!(
-                "{c} mg/ml, the paper's box: periodic side faces against walls {} % (paired over {} seeds)",
+                "{c} mg/ml, the paper's box: periodic side faces against walls {} % (paired over {} seed{})",
                 walls.signed_cell(1),
-                walls.n
+                walls.n,
+                if walls.n == 1 { "" } else { "s" }
             ));
         }
     }
