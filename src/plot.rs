@@ -351,9 +351,9 @@ pub struct BarPanel {
     pub groups: Vec<BarGroup>,
 }
 
-/// How [`BarPanel`] groups are drawn.
+/// How [`category_panels`] draws a panel's groups.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Mark {
+pub enum Mark {
     /// Bars from zero with thin grey spread lines clipped at zero: amounts.
     Bars,
     /// Circles with coloured ± bars on an axis that spans negative values, with a line at zero:
@@ -361,32 +361,9 @@ enum Mark {
     Dots,
 }
 
-/// Bar panels on a grid of `columns`, written to `path` (PNG). Category labels are thinned to
-/// at most 20 per axis.
-pub fn bar_panels(
-    path: &Path,
-    title: &str,
-    panels: &[BarPanel],
-    columns: usize,
-    panel_size: (u32, u32),
-) -> Result<(), Box<dyn std::error::Error>> {
-    category_panels(path, title, panels, columns, panel_size, Mark::Bars)
-}
-
-/// Differences as dot panels on a grid of `columns`, written to `path` (PNG): per category one
-/// marker per group (side by side) with a bar of ± its error, and a line at zero. Unlike
-/// [`bar_panels`] the axis spans negative values, so a change of either sign reads at a glance.
-pub fn dot_panels(
-    path: &Path,
-    title: &str,
-    panels: &[BarPanel],
-    columns: usize,
-    panel_size: (u32, u32),
-) -> Result<(), Box<dyn std::error::Error>> {
-    category_panels(path, title, panels, columns, panel_size, Mark::Dots)
-}
-
-fn category_panels(
+/// Category panels on a grid of `columns`, written to `path` (PNG): per category one bar or dot
+/// per group, side by side, as `mark` says. Category labels are thinned to at most 20 per axis.
+pub fn category_panels(
     path: &Path,
     title: &str,
     panels: &[BarPanel],
@@ -448,14 +425,15 @@ fn category_panels(
         if mark == Mark::Dots {
             chart.draw_series([PathElement::new(vec![(-0.5, 0.0), (n as f64 - 0.5, 0.0)], BLACK.stroke_width(1))])?;
         }
-        let (slot, first) = match mark {
-            Mark::Bars => (0.8, -0.4),
-            Mark::Dots => (0.6, -0.3),
+        // The share of a category's slot its groups fill, centred on the category.
+        let slot = match mark {
+            Mark::Bars => 0.8,
+            Mark::Dots => 0.6,
         };
         let width = slot / panel.groups.len().max(1) as f64;
         for (g, group) in panel.groups.iter().enumerate() {
             let color = group.color;
-            let left = move |k: usize| k as f64 + first + g as f64 * width;
+            let left = move |k: usize| k as f64 - slot / 2.0 + g as f64 * width;
             let finite = || group.values.iter().enumerate().filter(|(_, v)| v.is_finite());
             let spreads =
                 finite().filter_map(|(k, &v)| Some((k, v, group.errors.get(k).copied().filter(|e| e.is_finite())?)));

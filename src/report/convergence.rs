@@ -141,8 +141,6 @@ fn level(label: impl Into<String>, y: f64, (x0, x1): (f64, f64), color: RGBColor
     Series::markers(label, points, color, 2)
 }
 
-/// r-RESPA runs of the case-1 scenes at concentration `c` on the paper's walled box (the
-/// magnetisation sweep's unsaturated variant and the sensitivity study's reference).
 /// The paper's walled box at concentration `c` under r-RESPA K = 10 (the magnetisation sweep's
 /// linear law and the sensitivity study's reference), one run per seed.
 pub fn respa_runs(runs: &[Run], c: f64) -> Vec<&Run> {

@@ -8,8 +8,8 @@ use super::runs::{experiment_files, load_runs_digested, Run};
 use super::tables::{col, floats, frame, markdown, read_csv, same, scol, ucol, write};
 use crate::analysis::stats::{ci95_half_width, summary};
 use crate::plot::{
-    bar_panels, box_panels, dot_panels, engine_colour, line_chart_with_legend, palette, BarGroup, BarPanel, BoxPanel,
-    BoxStats, RGBColor, Series, SeriesLabelPosition,
+    box_panels, category_panels, engine_colour, line_chart_with_legend, palette, BarGroup, BarPanel, BoxPanel,
+    BoxStats, Mark, RGBColor, Series, SeriesLabelPosition,
 };
 use crate::scene::Scene;
 use polars::prelude::{DataFrame, PolarsResult};
@@ -488,12 +488,13 @@ fn table4_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Res
         col("paper_fraction", paper_frac_col),
     ])?;
     write(&mut df, tables, "table4")?;
-    bar_panels(
+    category_panels(
         &out.join("table4.png"),
         "Case 1: aggregate size distributions at 5 ms (x: particles per aggregate)",
         &panels,
         2,
         (760, 420),
+        Mark::Bars,
     )?;
     table4_summary(&summary_rows, tables)
 }
@@ -684,7 +685,7 @@ fn case2_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Resu
             groups: vec![BarGroup { label: String::new(), color: palette(2), values: vx, errors: vx_std }],
         },
     ];
-    bar_panels(&out.join("case2.png"), "Case 2: aggregates at 1.25 s", &panels, 2, (760, 480))?;
+    category_panels(&out.join("case2.png"), "Case 2: aggregates at 1.25 s", &panels, 2, (760, 480), Mark::Bars)?;
     md += "\n![Case 2](case2.png)\n\n";
     md += &case2_velocity_by_size(&here, out)?;
     Ok(md)
@@ -943,7 +944,14 @@ fn sensitivity_figure(bars: &[(String, convergence::Estimate)], concentration: f
             errors: bars.iter().map(|(_, d)| d.ci95).collect(),
         }],
     };
-    dot_panels(&out.join("sensitivity.png"), "Case 1: which choices move the mean length", &[panel], 1, (1000, 560))?;
+    category_panels(
+        &out.join("sensitivity.png"),
+        "Case 1: which choices move the mean length",
+        &[panel],
+        1,
+        (1000, 560),
+        Mark::Dots,
+    )?;
     Ok(())
 }
 
@@ -1051,12 +1059,13 @@ fn box_effect_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) ->
             findings.join("; ")
         );
     }
-    bar_panels(
+    category_panels(
         &out.join("box-and-count.png"),
         "Case 1: effect of the walls and of the particle count (± CI95)",
         &panels,
         2,
         (760, 460),
+        Mark::Bars,
     )?;
     md += "\n![Walls and particle count](box-and-count.png)\n\n";
     Ok(md)
@@ -1070,16 +1079,16 @@ fn reference_section(runs: &[Run], out: &Path, tables: &Path) -> Result<String, 
         md += "No runs of `experiments/paper/reference.toml`.\n\n";
         return Ok(md);
     }
-    // Position differences to magdem's run of the same scene and seed, frame by frame.
+    // magdem's completed run of the same scene and seed, which each engine is held against.
+    let native_of = |r: &Run| {
+        here.iter().copied().find(|n| n.engine == "magdem" && n.scene == r.scene && n.seed == r.seed && n.completed())
+    };
+    // Position differences to it, frame by frame.
     let differences: Vec<(f64, f64)> = here
         .iter()
-        .map(|r| {
-            let native =
-                here.iter().find(|n| n.engine == "magdem" && n.scene == r.scene && n.seed == r.seed && n.completed());
-            match native {
-                Some(n) if r.completed() => position_difference(&n.file, &r.file).unwrap_or((f64::NAN, f64::NAN)),
-                _ => (f64::NAN, f64::NAN),
-            }
+        .map(|r| match native_of(r) {
+            Some(n) if r.completed() => position_difference(&n.file, &r.file).unwrap_or((f64::NAN, f64::NAN)),
+            _ => (f64::NAN, f64::NAN),
         })
         .collect();
     let mut df = frame(vec![
@@ -1147,9 +1156,7 @@ fn reference_section(runs: &[Run], out: &Path, tables: &Path) -> Result<String, 
         .iter()
         .filter(|r| r.completed() && r.engine != "magdem")
         .filter_map(|r| {
-            let native = here
-                .iter()
-                .find(|n| n.engine == "magdem" && n.scene == r.scene && n.seed == r.seed && n.completed())?;
+            let native = native_of(r)?;
             let points: Vec<(f64, f64)> = r
                 .times
                 .iter()
@@ -1251,12 +1258,13 @@ fn reference_ensemble(runs: &[Run], out: &Path, tables: &Path) -> Result<String,
             })
             .collect(),
     };
-    dot_panels(
+    category_panels(
         &out.join("reference-table3.png"),
         "Table 3 in LIGGGHTS and LAMMPS against magdem (same scenes, same seeds)",
         &[panel],
         1,
         (900, 480),
+        Mark::Dots,
     )?;
     let mut df = frame(vec![
         col("concentration_mg_per_ml", c_col),
