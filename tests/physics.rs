@@ -766,6 +766,51 @@ fn rpy_refactorisation_every_k_steps_has_a_first_order_error_in_k() {
     assert!(e40 < relative_change * fell, "K = 40 error {e40:.3e} m, bound {:.3e} m", relative_change * fell);
 }
 
+/// The shielded Schiller–Naumann drag with its coefficients renewed every K steps
+/// (`refactor_every`): two touching 100 µm spheres (ρ = 5000) sediment one above the other, the
+/// upper one wholly in the lower one's shadow (A_eff = 0), pressed on it by contact. The pair's
+/// terminal velocity solves 2 m g (1 − ρ_f/ρ) = 6π μ a V (1 + 0.15 Re^0.687), Re ≈ 3 (a steady
+/// state: the held coefficients are renewed at it, so every K reaches the same V, to 1e-3 of it
+/// after 9 relaxation times and to 1e-6 of each other). On the way the coefficient lags by
+/// (K − 1)/2 steps on average: the position error against renewing at every step is first order
+/// in K − 1, from K = 10 to K = 40 to within 15 %.
+#[test]
+fn drag_coefficients_renewed_every_k_steps_keep_the_terminal_velocity_with_a_first_order_lag() {
+    let (a, rho, mu, rho_f) = (50.0e-6_f64, 5000.0, 1.0e-3, 1000.0);
+    let run = |k: u64| -> (Vec<Vec3>, f64) {
+        let text = format!(
+            "version = 1\n[domain]\nlo = [-1e-2, -1e-2, -1e-2]\nhi = [1e-2, 1e-2, 1e-2]\n{WATER}\
+             [[species]]\nname = \"p\"\ndiameter = {d:e}\ndensity = {rho}\nyoungs_modulus = 1.0e6\n\
+             poisson_ratio = 0.5\nfriction = 0.5\nrestitution = 0.5\n\
+             [[particles]]\nspecies = \"p\"\npositions = [[0.0, 0.0, 0.0], [0.0, 0.0, {d:e}]]\n\
+             [forces.gravity]\n[forces.contact]\n[forces.drag]\nrefactor_every = {k}\n\
+             [integration]\ndt = 5.0e-7\nend_time = 5.0e-2\n[output]\ninterval = 1.0e-3\n",
+            d = 2.0 * a
+        );
+        let sim = Scene::parse(&text, "column").unwrap_or_else(|e| panic!("{e}")).run_to_end().unwrap();
+        let v = sim.state.particles.velocity.iter().map(|v| -v.z).sum::<f64>() / 2.0;
+        (sim.state.particles.position.clone(), v)
+    };
+    let weight = 2.0 * 4.0 / 3.0 * PI * a.powi(3) * (rho - rho_f) * 9.81;
+    let mut terminal = weight / (6.0 * PI * mu * a);
+    for _ in 0..100 {
+        let re = rho_f * terminal * 2.0 * a / mu;
+        terminal = weight / (6.0 * PI * mu * a * (1.0 + 0.15 * re.powf(0.687)));
+    }
+    let (exact, v1) = run(1);
+    let ((x10, v10), (x40, v40)) = (run(10), run(40));
+    let error = |x: &[Vec3]| x.iter().zip(&exact).map(|(x, e)| (x - e).norm()).fold(0.0, f64::max);
+    let (e10, e40) = (error(&x10), error(&x40));
+    println!("terminal {terminal:.6e} m/s; V(K=1) {v1:.6e}, V(K=10) {v10:.6e}, V(K=40) {v40:.6e}; error K=10 {e10:.3e} m, K=40 {e40:.3e} m");
+    assert!((v1 / terminal - 1.0).abs() < 1e-3, "V(K=1) {v1} against the terminal {terminal}");
+    for v in [v10, v40] {
+        assert!((v / v1 - 1.0).abs() < 1e-6, "V {v} against V(K=1) {v1}");
+    }
+    assert!(e10 > 0.0, "renewing every 10 steps changed nothing: the coefficients were not held");
+    let ratio = e40 / e10;
+    assert!((ratio / (39.0 / 9.0) - 1.0).abs() < 0.15, "error ratio {ratio}, first order gives {}", 39.0 / 9.0);
+}
+
 /// A dense sphere sedimenting parallel to a plane wall (`forces.drag.wall`, face x-, gravity
 /// along −z) reaches U∞ / f_∥ with f_∥ the exact values of O'Neill (1964) / Goldman, Cox & Brenner
 /// (1967) at h/a = 1.1276 … 10.0677, to 1e-3 (the terminal velocity after 20 relaxation times);

@@ -91,6 +91,16 @@ fn resume_after_kill_is_bitwise_equal_with_multiple_time_stepping() {
     );
 }
 
+/// The shielded drag's coefficients renewed every 10 steps under r-RESPA (`refactor_every = 10`):
+/// checkpoints fall on renewals, so the resumed run is bitwise equal.
+#[test]
+fn resume_after_kill_is_bitwise_equal_with_the_drag_renewed_every_k_steps() {
+    let text = scene_text()
+        .replace("dt = 1.0e-8", "scheme = \"respa\"\ndt = 1.0e-8\nslow_every = 10")
+        .replace("[forces.drag]", "[forces.drag]\nrefactor_every = 10");
+    resume_after_kill("resume-drag", &text);
+}
+
 /// The adaptive integrator's proposed substep is in the checkpoint.
 #[test]
 fn resume_after_kill_is_bitwise_equal_with_the_adaptive_step() {

@@ -196,9 +196,9 @@ impl Scene {
     }
 
     /// Steps whose multiples a run checkpoints at when interrupted, so that the resumed run is
-    /// bitwise equal: the RPY factor's refactorisation interval, else 1.
+    /// bitwise equal: the drag's renewal interval (`forces.drag.refactor_every`), else 1.
     pub fn checkpoint_multiple(&self) -> u64 {
-        self.spec.forces.drag.as_ref().filter(|d| d.law == DragLawSpec::Rpy).map_or(1, |d| d.refactor_every)
+        self.spec.forces.drag.as_ref().map_or(1, |d| d.refactor_every)
     }
 
     /// Runs the scene in memory from t = 0 to its end (no trajectory file): the finished
@@ -331,6 +331,7 @@ impl Scene {
             let mut drag = Drag::new(law, shielding, d.rotational, medium);
             drag.exclude_linear = spec.integration.scheme.integrates_linear_drag();
             drag.wall = drag_wall.map(WallCorrection::new);
+            drag.renew_every = d.refactor_every;
             terms.push(Box::new(drag));
         }
         if let Some(g) = &f.gravity {
@@ -573,37 +574,35 @@ fn check_forces(
                 ));
             }
         }
-        if d.refactor_every != 1 && d.law != DragLawSpec::Rpy {
+        if d.refactor_every != 1 && d.law == DragLawSpec::Stokes && d.shielding == ShieldingSpec::None {
             return Err(invalid(
                 "forces.drag.refactor_every",
                 d.refactor_every,
-                "only law = \"rpy\" factorises a mobility; remove the key or set it to 1",
+                "Stokes drag without shielding has a constant coefficient, nothing to renew; remove the key or set it to 1",
             ));
         }
-        if d.law == DragLawSpec::Rpy {
-            let per_frame = steps_per_frame(spec);
-            let integration = &spec.integration;
-            let per_call = if integration.scheme.multiple_time_stepping() { integration.slow_every } else { 1 };
-            if d.refactor_every > 1 && !d.refactor_every.is_multiple_of(per_call) {
-                return Err(invalid(
-                    "forces.drag.refactor_every",
-                    d.refactor_every,
-                    format!(
-                        "must be a multiple of integration.slow_every = {per_call}: the factor is renewed at the start \
-                         of an outer step"
-                    ),
-                ));
-            }
-            if d.refactor_every == 0 || !per_frame.is_multiple_of(d.refactor_every) {
-                return Err(invalid(
-                    "forces.drag.refactor_every",
-                    d.refactor_every,
-                    format!(
-                        "must be a positive divisor of the {per_frame} steps per output frame, so that every \
-                         checkpoint falls on a refactorisation and a resumed run stays bitwise equal"
-                    ),
-                ));
-            }
+        let per_frame = steps_per_frame(spec);
+        let integration = &spec.integration;
+        let per_call = if integration.scheme.multiple_time_stepping() { integration.slow_every } else { 1 };
+        if d.refactor_every > 1 && !d.refactor_every.is_multiple_of(per_call) {
+            return Err(invalid(
+                "forces.drag.refactor_every",
+                d.refactor_every,
+                format!(
+                    "must be a multiple of integration.slow_every = {per_call}: the drag is renewed at the start of \
+                     an outer step"
+                ),
+            ));
+        }
+        if d.refactor_every == 0 || !per_frame.is_multiple_of(d.refactor_every) {
+            return Err(invalid(
+                "forces.drag.refactor_every",
+                d.refactor_every,
+                format!(
+                    "must be a positive divisor of the {per_frame} steps per output frame, so that every checkpoint \
+                     falls on a renewal and a resumed run stays bitwise equal"
+                ),
+            ));
         }
         if d.law == DragLawSpec::Rpy && spec.integration.scheme.integrates_linear_drag() {
             return Err(invalid(

@@ -380,9 +380,11 @@ pub struct DragSpec {
     /// smaller radius (default 1e-3).
     #[serde(default = "default_touch_tolerance")]
     pub touch_tolerance: f64,
-    /// With `law = "rpy"`: steps between refactorisations of the mobility (default 1, every
-    /// force evaluation); the drag uses each evaluation's velocities with the factor of the
-    /// positions at the last step divisible by it. Must divide the steps per output frame.
+    /// Steps between renewals of the drag's configuration-dependent part (default 1, every force
+    /// evaluation): with `law = "rpy"` the mobility's factor, otherwise each particle's coefficient
+    /// (shielded area and Schiller–Naumann factor). The drag uses each evaluation's velocities with
+    /// the part renewed at the last step divisible by it. Must divide the steps per output frame
+    /// (and be a multiple of `integration.slow_every` under multiple time stepping).
     #[serde(default = "default_refactor_every")]
     pub refactor_every: u64,
     /// Stokes drag near one plane wall of the box (with `law` stokes or schiller-naumann).

@@ -5,13 +5,16 @@
 //! Written as F = −12 μ u A/d · f(Re), which is exact Stokes (6π μ a u) for A = π a².
 //! With shielding `paper`, A = A_eff of [`super::shielding`]. With a wall, the components of u
 //! parallel to it are multiplied by the parallel-wall factor of [`super::wall_drag`].
+//! Each particle's coefficient c_i = 12 μ A_i/d_i · f(Re_i) may be renewed every `renew_every`
+//! steps and applied in between to each evaluation's velocity, F_i = −c_i u_i (as the RPY drag
+//! holds its factor, [`super::hydrodynamics`]).
 
 use super::shielding::shadow_area;
 use super::wall_drag::WallCorrection;
 use super::{Context, ForceTerm, Forces};
 use crate::core::neighbours::{PairForm, PairNeed, PairRange};
 use crate::core::parallel;
-use crate::core::state::{Particles, Vec3};
+use crate::core::state::{Particles, State, Vec3};
 use std::f64::consts::PI;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -54,6 +57,12 @@ pub struct Drag {
     pub exclude_linear: bool,
     /// Drag near a plane wall (parallel components), or none.
     pub wall: Option<WallCorrection>,
+    /// Steps between renewals of the coefficients c_i (shielded area and Schiller–Naumann
+    /// factor); 1 renews them at every evaluation.
+    pub renew_every: u64,
+    /// The step call began on a multiple of `renew_every`: renew at the next evaluation.
+    due: bool,
+    coefficient: Vec<f64>,
     shadow: Vec<f64>,
     flow_direction: Vec<Vec3>,
 }
@@ -67,6 +76,9 @@ impl Drag {
             fluid,
             exclude_linear: false,
             wall: None,
+            renew_every: 1,
+            due: false,
+            coefficient: vec![],
             shadow: vec![],
             flow_direction: vec![],
         }
@@ -122,6 +134,34 @@ impl Drag {
             }
         });
     }
+
+    /// c_i = 12 μ A_i/(2 a_i) · f(Re_i) from the current positions (shadows) and velocities.
+    fn renew_coefficients(&mut self, ctx: &Context, p: &Particles) {
+        if let Shielding::Paper { touch_tolerance, near } = self.shielding {
+            self.compute_shadows(ctx, p, touch_tolerance, near);
+        }
+        self.coefficient.resize(p.len(), 0.0);
+        let (law, shielding, fluid, shadow) = (self.law, self.shielding, self.fluid, &self.shadow);
+        parallel::for_each_share(&mut self.coefficient[..], |first, c| {
+            for (k, c) in c.iter_mut().enumerate() {
+                let i = first + k;
+                let a = p.radius[i];
+                let full = PI * a * a;
+                let area = match shielding {
+                    Shielding::None => full,
+                    Shielding::Paper { .. } => full - shadow[i],
+                };
+                let correction = match law {
+                    DragLaw::Stokes => 1.0,
+                    DragLaw::SchillerNaumann => {
+                        let u = p.velocity[i] - fluid.velocity;
+                        schiller_naumann(fluid.density * u.norm() * 2.0 * a / fluid.viscosity)
+                    }
+                };
+                *c = 12.0 * fluid.viscosity * area / (2.0 * a) * correction;
+            }
+        });
+    }
 }
 
 /// Schiller–Naumann correction 1 + 0.15 Re^0.687, with the power as exp(0.687 ln Re): two thirds
@@ -142,28 +182,21 @@ impl ForceTerm for Drag {
             Shielding::Paper { near, .. } => Some(PairNeed { range: near, form: PairForm::Listed }),
         }
     }
+    fn begin_step(&mut self, state: &State) {
+        self.due = state.step.is_multiple_of(self.renew_every);
+    }
     fn apply(&mut self, ctx: &Context, p: &Particles, out: &mut Forces) {
-        if let Shielding::Paper { touch_tolerance, near } = self.shielding {
-            self.compute_shadows(ctx, p, touch_tolerance, near);
+        if self.renew_every == 1 || self.due || self.coefficient.len() != p.len() {
+            self.renew_coefficients(ctx, p);
+            self.due = false;
         }
         let Particles { position, velocity, angular_velocity, radius, .. } = p;
         let (force, torque) = (&mut *out.force, &mut *out.torque);
         let drag = |i: usize, f: &mut Vec3, t: &mut Vec3| {
             let a = radius[i];
-            let full = PI * a * a;
-            let area = match self.shielding {
-                Shielding::None => full,
-                Shielding::Paper { .. } => full - self.shadow[i],
-            };
             let u = velocity[i] - self.fluid.velocity;
-            let correction = match self.law {
-                DragLaw::Stokes => 1.0,
-                DragLaw::SchillerNaumann => {
-                    schiller_naumann(self.fluid.density * u.norm() * 2.0 * a / self.fluid.viscosity)
-                }
-            };
             let linear = if self.exclude_linear { Self::stokes_coefficient(self.fluid.viscosity, a) } else { 0.0 };
-            let coefficient = 12.0 * self.fluid.viscosity * area / (2.0 * a) * correction;
+            let coefficient = self.coefficient[i];
             match &self.wall {
                 None => *f -= (coefficient - linear) * u,
                 Some(w) => *f -= coefficient * w.scale_parallel(u, w.factor(&position[i], a)) - linear * u,
