@@ -133,8 +133,9 @@ pub const PAPER_CHAIN_OVERLAP: f64 = 1e-3;
 /// runs). The particles start as the field leaves them: straight chains of [`PAPER_CHAIN`]
 /// touching spheres along the field (x), placed at random without coming within two diameters of
 /// another chain (the placement is seeded by `n`), so contacts, shielding and the dipole sums
-/// all work from the first step: 2 (c − 1)/c contacts per particle in chains of c.
-pub fn paper_scene(n: usize, steps: u64) -> String {
+/// all work from the first step: 2 (c − 1)/c contacts per particle in chains of c. `drag_every`
+/// is the drag's `refactor_every` (1: coefficients renewed every step, as the paper's runs).
+pub fn paper_scene(n: usize, steps: u64, drag_every: u64) -> String {
     use rand::{RngExt, SeedableRng};
     let d = 11.0e-6;
     let edge = 4.84e-4 * (n as f64 / 336.0).cbrt();
@@ -174,7 +175,7 @@ pub fn paper_scene(n: usize, steps: u64) -> String {
          boundary = {{ x = \"periodic\", y = \"periodic\", z = \"wall\" }}\n\
          [fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n[field]\nb0 = [0.4, 0.0, 0.0]\n{SPECIES}[[particles]]\nspecies = \"fe3o4\"\n\
          positions = [{}]\n[forces.contact]\nwalls = true\n[forces.dipole]\ninduction = \"paper\"\ncutoff_diameters = 15.0\n\
-         [forces.drag]\nlaw = \"schiller-naumann\"\nshielding = \"paper\"\n[forces.gravity]\ng = [0.0, 0.0, -9.81]\n\
+         [forces.drag]\nlaw = \"schiller-naumann\"\nshielding = \"paper\"\nrefactor_every = {drag_every}\n[forces.gravity]\ng = [0.0, 0.0, -9.81]\n\
          [integration]\nscheme = \"respa\"\nslow_every = 10\ndt = 1.0e-8\nend_time = {end:e}\n[output]\ninterval = {end:e}\n",
         positions.join(", ")
     )
@@ -393,7 +394,7 @@ mod tests {
     #[test]
     fn the_paper_scene_starts_as_straight_chains_that_touch_only_themselves() {
         let n = 2000;
-        let scene = Scene::parse(&paper_scene(n, 10), "paper").unwrap();
+        let scene = Scene::parse(&paper_scene(n, 10, 10), "paper").unwrap();
         let p = &scene.initial;
         assert_eq!(p.len(), n);
         let d = 2.0 * p.radius[0];

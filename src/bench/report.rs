@@ -367,11 +367,14 @@ impl Bench<'_> {
     /// study's largest), 10⁷ particle-steps per run (at least 100 steps), one and two threads;
     /// the phase shares at the middle size.
     fn paper_cases(&mut self, progress: &indicatif::ProgressBar) -> Result<(), Error> {
-        for n in paper_sizes(self.options.max_particles) {
-            let case = format!("paper physics {n}");
+        for (n, drag) in
+            paper_sizes(self.options.max_particles).into_iter().flat_map(|n| PaperDrag::ALL.map(|d| (n, d)))
+        {
+            let case = drag.case(n);
             progress.set_message(case.clone());
             let steps = ((1e6 / n as f64).round() as u64).max(10) * 10;
-            let scene = scene_in(&self.options.work.join(format!("paper-{n}")), "scene", &paper_scene(n, steps))?;
+            let dir = self.options.work.join(format!("paper-{n}-{}", drag.every()));
+            let scene = scene_in(&dir, "scene", &paper_scene(n, steps, drag.every()))?;
             let one = self.magdem(&case, &scene, 1, Work::Steps)?;
             self.memory.push((case.clone(), n, one.memory as f64 / n as f64));
             let two = self.magdem(&case, &scene, 2, Work::Steps)?;
@@ -383,7 +386,7 @@ impl Bench<'_> {
                 state.contacts.walls.len() as f64 / particles,
             ));
             drop((one, two));
-            if n == 10_000 {
+            if n == 10_000 && drag == PaperDrag::EveryStep {
                 self.profile(&case, &scene, Work::Steps)?;
             }
             progress.inc(1);
@@ -585,6 +588,41 @@ fn arithmetic_seconds(threads: usize) -> f64 {
 
 fn mpirun_available() -> bool {
     Command::new("mpirun").arg("--version").output().is_ok()
+}
+
+/// How the paper-physics scene renews its shielded drag (`forces.drag.refactor_every`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum PaperDrag {
+    /// Every step, as the paper's runs.
+    EveryStep,
+    /// Once per r-RESPA outer step (10 steps), applied to each step's velocities.
+    Held,
+}
+
+impl PaperDrag {
+    const ALL: [PaperDrag; 2] = [PaperDrag::EveryStep, PaperDrag::Held];
+
+    fn every(self) -> u64 {
+        match self {
+            PaperDrag::EveryStep => 1,
+            PaperDrag::Held => 10,
+        }
+    }
+
+    /// The case name: the size last, the drag before it.
+    fn case(self, n: usize) -> String {
+        match self {
+            PaperDrag::EveryStep => format!("paper physics {n}"),
+            PaperDrag::Held => format!("paper physics, drag held, {n}"),
+        }
+    }
+
+    fn label(self) -> &'static str {
+        match self {
+            PaperDrag::EveryStep => "every step",
+            PaperDrag::Held => "held 10 steps",
+        }
+    }
 }
 
 /// Sizes of the paper-physics cases: 10³, 10⁴, 10⁵ up to `max`.
@@ -794,10 +832,11 @@ fn scaling_figure(path: &Path, rows: &[Measurement]) -> Result<(), Error> {
             .map(|m| ((m.particles as f64).log10(), m.ns_per_particle_step().log10()))
             .collect()
     };
-    // The paper-physics cases carry their size in the case name.
+    // The paper-physics cases carry their size in the case name; the figure shows the paper's drag.
     let paper = |threads: usize| -> Vec<(f64, f64)> {
         rows.iter()
-            .filter(|m| m.case.starts_with("paper physics") && m.engine == "magdem" && m.threads == threads)
+            .filter(|m| m.case.strip_prefix("paper physics ").is_some_and(|n| n.parse::<usize>().is_ok()))
+            .filter(|m| m.engine == "magdem" && m.threads == threads)
             .map(|m| ((m.particles as f64).log10(), m.ns_per_particle_step().log10()))
             .collect()
     };
@@ -1063,9 +1102,10 @@ fn native_section(bench: &Bench) -> String {
 fn paper_section(bench: &Bench) -> String {
     let mut s = String::new();
     s += "\n## The paper's physics at scale\n\nCase 1 at 2.25 mg/ml with every term of the paper's model (`paper_scene` in `src/bench/mod.rs`): the paper's induction within 15 diameters, dipole forces, Schiller–Naumann drag with the shielded area, gravity, Hertz–Mindlin contacts and walls; the box scaled at equal concentration, periodic along x and y; r-RESPA with the magnetic forces every 10 steps, dt = 1e-8 s, as the 100× runs. The particles start as the field leaves them, in straight chains of ten touching spheres along the field placed at random (1.8 contacts per particle, 2 × (pairs) below), so contact, shielding and the dipole sums all work from the first step. 10⁷ particle-steps per run (at least 100 steps). The 5 ms column is the two-thread cost times the particles times 500 000 steps. The paper's own runs (about 300 particles) are cheaper per particle than these and run one per core: `make reproduce` runs its ensembles two at a time, one thread each.\n\n";
-    s += "| particles | steps | contacts per particle (pairs × 2 + walls) | 1 thread (ns per particle-step) | 2 threads (ns per particle-step) | 2 threads ÷ 1 | 1 and 2 threads bitwise equal | memory per particle | a 5 ms run on 2 threads |\n|---|---|---|---|---|---|---|---|---|\n";
-    for n in paper_sizes(bench.options.max_particles) {
-        let case = format!("paper physics {n}");
+    s += "The drag's coefficients (shielded area, Reynolds factor) are renewed every step as in the paper's runs, or held over each 10-step outer step and applied to each step's velocities (`forces.drag.refactor_every = 10`); what holding them changes in case 1 is the sensitivity study's `drag-held` variant in `reports/paper/`.\n\n";
+    s += "| particles | drag | steps | contacts per particle (pairs × 2 + walls) | 1 thread (ns per particle-step) | 2 threads (ns per particle-step) | 2 threads ÷ 1 | 1 and 2 threads bitwise equal | memory per particle | a 5 ms run on 2 threads |\n|---|---|---|---|---|---|---|---|---|---|\n";
+    for (n, drag) in paper_sizes(bench.options.max_particles).into_iter().flat_map(|n| PaperDrag::ALL.map(|d| (n, d))) {
+        let case = drag.case(n);
         let (Some(one), Some(two)) = (bench.find(&case, "magdem", 1), bench.find(&case, "magdem", 2)) else { continue };
         let contacts = bench
             .contacts
@@ -1079,7 +1119,8 @@ fn paper_section(bench: &Bench) -> String {
         let five_ms = two.ns_per_particle_step() * 1e-9 * n as f64 * 5e5;
         let _ = writeln!(
             s,
-            "| {n} | {} | {contacts} | {:.0} | {:.0} | {:.2}× | {bitwise} | {memory} | {:.0} min |",
+            "| {n} | {} | {} | {contacts} | {:.0} | {:.0} | {:.2}× | {bitwise} | {memory} | {:.0} min |",
+            drag.label(),
             one.steps,
             one.ns_per_particle_step(),
             two.ns_per_particle_step(),
