@@ -327,7 +327,8 @@ pub fn finite_size_section(
            periodic (the field lies along x), walls at top and bottom, r-RESPA, t = 5 ms. `box-limited` is the share of \
            aggregates whose extent along the field reaches 90 % of the box's or that wrap through a periodic face onto \
            themselves (percolating: no finite length, left out of the mean, which is then a lower bound). Wall time per run \
-           as run: one core per run, two runs at a time, except the 100× runs, which had both cores to themselves.\n\n";
+           as run: one core per run, two runs at a time, except the 100× runs, one at a time on two threads (with other work on \
+           the machine at times; seeds 2 and 3 number their particles along a Morton curve, which makes their steps faster).\n\n";
     md += &markdown(
         &df,
         &[
