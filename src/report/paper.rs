@@ -897,7 +897,10 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
     md += "\nThe paper's pipeline holds the moments and dipole forces over each 1e-6 s outer step while contacts are resolved at \
            1e-8 s. A contact closes and reopens within about 7e-8 s, so the held attraction keeps pulling on a pair that has already \
            rebounded. The fastest-aggregate column (the largest centre-of-mass speed of any aggregate in the last frame, collisions \
-           under way included) shows whether that pumped energy into the particles; compare it across the variants.\n";
+           under way included) shows whether that pumped energy into the particles; compare it across the variants. `drag-held` \
+           is a numerical choice, not a modelling one: the shielded drag's coefficients renewed once per outer step \
+           instead of every step (a 100× step 28 % shorter, `reports/performance-history.md`); it is not an explanation \
+           and stays out of the ranking below.\n";
     sensitivity_figure(&bars, first.concentration, out)?;
     md += "\n![Sensitivity](sensitivity.png)\n\n";
     Ok(md)
