@@ -1225,10 +1225,17 @@ fn reference_ensemble(runs: &[Run], out: &Path, tables: &Path) -> Result<String,
         for (engine, &(m, ci)) in ENGINES.iter().zip(&per_engine).skip(1) {
             if m.is_finite() && m0.is_finite() {
                 let within = (m - m0).abs() <= (ci * ci + ci0 * ci0).sqrt();
+                // Differences at round-off are written as such, not rounded to a signed zero.
+                let (d, rel) = (m - m0, 100.0 * (m - m0) / m0);
+                let shown = if d == 0.0 {
+                    "0 µm (identical)".to_string()
+                } else if d.abs() < 0.05 {
+                    format!("{d:+.1e} µm ({rel:+.1e} %)")
+                } else {
+                    format!("{d:+.1} µm ({rel:+.1} %)")
+                };
                 comparisons.push(format!(
-                    "{c} mg/ml {engine} {:+.1} µm ({:+.1}%, {})",
-                    m - m0 + 0.0,
-                    100.0 * (m - m0) / m0 + 0.0,
+                    "{c} mg/ml {engine} {shown}, {}",
                     if within { "within the CI95" } else { "outside the CI95" }
                 ));
             }
