@@ -367,9 +367,7 @@ impl Bench<'_> {
     /// study's largest), 10⁷ particle-steps per run (at least 100 steps), one and two threads;
     /// the phase shares at the middle size.
     fn paper_cases(&mut self, progress: &indicatif::ProgressBar) -> Result<(), Error> {
-        for (n, drag) in
-            paper_sizes(self.options.max_particles).into_iter().flat_map(|n| PaperDrag::ALL.map(|d| (n, d)))
-        {
+        for (n, drag) in paper_variants(self.options.max_particles) {
             let case = drag.case(n);
             progress.set_message(case.clone());
             let steps = ((1e6 / n as f64).round() as u64).max(10) * 10;
@@ -630,6 +628,11 @@ fn paper_sizes(max: usize) -> Vec<usize> {
     [1_000, 10_000, 100_000].into_iter().filter(|&n| n <= max.max(1_000)).collect()
 }
 
+/// The paper-physics cases: each size of [`paper_sizes`] with each drag setting.
+fn paper_variants(max: usize) -> Vec<(usize, PaperDrag)> {
+    paper_sizes(max).into_iter().flat_map(|n| PaperDrag::ALL.map(|d| (n, d))).collect()
+}
+
 fn scaling_sizes(max: usize) -> Vec<usize> {
     [1000, 3000, 10000, 30000, 100000, 300000].into_iter().filter(|&n| n <= max).collect()
 }
@@ -747,7 +750,7 @@ pub fn write(options: &Options) -> Result<PathBuf, Error> {
     };
     let total = 6
         + 2
-        + paper_sizes(options.max_particles).len() as u64
+        + paper_variants(options.max_particles).len() as u64
         + scaling_sizes(options.max_particles).len() as u64
         + 2 * options.mpi as u64;
     let progress = indicatif::ProgressBar::new(total)
@@ -1104,7 +1107,7 @@ fn paper_section(bench: &Bench) -> String {
     s += "\n## The paper's physics at scale\n\nCase 1 at 2.25 mg/ml with every term of the paper's model (`paper_scene` in `src/bench/mod.rs`): the paper's induction within 15 diameters, dipole forces, Schiller–Naumann drag with the shielded area, gravity, Hertz–Mindlin contacts and walls; the box scaled at equal concentration, periodic along x and y; r-RESPA with the magnetic forces every 10 steps, dt = 1e-8 s, as the 100× runs. The particles start as the field leaves them, in straight chains of ten touching spheres along the field placed at random (1.8 contacts per particle, 2 × (pairs) below), so contact, shielding and the dipole sums all work from the first step. 10⁷ particle-steps per run (at least 100 steps). The 5 ms column is the two-thread cost times the particles times 500 000 steps. The paper's own runs (about 300 particles) are cheaper per particle than these and run one per core: `make reproduce` runs its ensembles two at a time, one thread each.\n\n";
     s += "The drag's coefficients (shielded area, Reynolds factor) are renewed every step as in the paper's runs, or held over each 10-step outer step and applied to each step's velocities (`forces.drag.refactor_every = 10`); what holding them changes in case 1 is the sensitivity study's `drag-held` variant in `reports/paper/`.\n\n";
     s += "| particles | drag | steps | contacts per particle (pairs × 2 + walls) | 1 thread (ns per particle-step) | 2 threads (ns per particle-step) | 2 threads ÷ 1 | 1 and 2 threads bitwise equal | memory per particle | a 5 ms run on 2 threads |\n|---|---|---|---|---|---|---|---|---|---|\n";
-    for (n, drag) in paper_sizes(bench.options.max_particles).into_iter().flat_map(|n| PaperDrag::ALL.map(|d| (n, d))) {
+    for (n, drag) in paper_variants(bench.options.max_particles) {
         let case = drag.case(n);
         let (Some(one), Some(two)) = (bench.find(&case, "magdem", 1), bench.find(&case, "magdem", 2)) else { continue };
         let contacts = bench

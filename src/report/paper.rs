@@ -1225,7 +1225,7 @@ fn reference_ensemble(runs: &[Run], out: &Path, tables: &Path) -> Result<String,
         for (engine, &(m, ci)) in ENGINES.iter().zip(&per_engine).skip(1) {
             if m.is_finite() && m0.is_finite() {
                 let within = (m - m0).abs() <= (ci * ci + ci0 * ci0).sqrt();
-                // Differences at round-off are written as such, not rounded to a signed zero.
+                // Differences below the printed precision in exponent form, not rounded to a signed zero.
                 let (d, rel) = (m - m0, 100.0 * (m - m0) / m0);
                 let shown = if d == 0.0 {
                     "0 µm (identical)".to_string()

@@ -328,10 +328,9 @@ impl Scene {
                 ShieldingSpec::None => Shielding::None,
                 ShieldingSpec::Paper => Shielding::Paper { touch_tolerance: d.touch_tolerance, near },
             };
-            let mut drag = Drag::new(law, shielding, d.rotational, medium);
+            let mut drag = Drag::new(law, shielding, d.rotational, medium).renewed_every(d.refactor_every);
             drag.exclude_linear = spec.integration.scheme.integrates_linear_drag();
             drag.wall = drag_wall.map(WallCorrection::new);
-            drag.renew_every = d.refactor_every;
             terms.push(Box::new(drag));
         }
         if let Some(g) = &f.gravity {

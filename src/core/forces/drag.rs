@@ -5,13 +5,13 @@
 //! Written as F = −12 μ u A/d · f(Re), which is exact Stokes (6π μ a u) for A = π a².
 //! With shielding `paper`, A = A_eff of [`super::shielding`]. With a wall, the components of u
 //! parallel to it are multiplied by the parallel-wall factor of [`super::wall_drag`].
-//! Each particle's coefficient c_i = 12 μ A_i/d_i · f(Re_i) may be renewed every `renew_every`
-//! steps and applied in between to each evaluation's velocity, F_i = −c_i u_i (as the RPY drag
+//! Each particle's coefficient c_i = 12 μ A_i/d_i · f(Re_i) may be renewed every K steps
+//! ([`Drag::renewed_every`]) and applied in between to each evaluation's velocity, F_i = −c_i u_i (as the RPY drag
 //! holds its factor, [`super::hydrodynamics`]).
 
 use super::shielding::shadow_area;
 use super::wall_drag::WallCorrection;
-use super::{Context, ForceTerm, Forces};
+use super::{Context, ForceTerm, Forces, Renewal};
 use crate::core::neighbours::{PairForm, PairNeed, PairRange};
 use crate::core::parallel;
 use crate::core::state::{Particles, State, Vec3};
@@ -57,11 +57,9 @@ pub struct Drag {
     pub exclude_linear: bool,
     /// Drag near a plane wall (parallel components), or none.
     pub wall: Option<WallCorrection>,
-    /// Steps between renewals of the coefficients c_i (shielded area and Schiller–Naumann
-    /// factor); 1 renews them at every evaluation.
-    pub renew_every: u64,
-    /// The step call began on a multiple of `renew_every`: renew at the next evaluation.
-    due: bool,
+    /// When the coefficients c_i (shielded area and Schiller–Naumann factor) are renewed; every
+    /// evaluation unless [`Drag::renewed_every`] says otherwise.
+    renewal: Renewal,
     coefficient: Vec<f64>,
     shadow: Vec<f64>,
     flow_direction: Vec<Vec3>,
@@ -76,12 +74,17 @@ impl Drag {
             fluid,
             exclude_linear: false,
             wall: None,
-            renew_every: 1,
-            due: false,
+            renewal: Renewal::every(1),
             coefficient: vec![],
             shadow: vec![],
             flow_direction: vec![],
         }
+    }
+
+    /// The same drag with its coefficients renewed every `steps` steps ([`Renewal`]).
+    pub fn renewed_every(mut self, steps: u64) -> Self {
+        self.renewal = Renewal::every(steps);
+        self
     }
 
     /// Linear drag coefficient 6π μ a (kg/s) of an unshielded sphere in Stokes flow.
@@ -183,12 +186,11 @@ impl ForceTerm for Drag {
         }
     }
     fn begin_step(&mut self, state: &State) {
-        self.due = state.step.is_multiple_of(self.renew_every);
+        self.renewal.begin_step(state.step);
     }
     fn apply(&mut self, ctx: &Context, p: &Particles, out: &mut Forces) {
-        if self.renew_every == 1 || self.due || self.coefficient.len() != p.len() {
+        if self.renewal.now(self.coefficient.len() == p.len()) {
             self.renew_coefficients(ctx, p);
-            self.due = false;
         }
         let Particles { position, velocity, angular_velocity, radius, .. } = p;
         let (force, torque) = (&mut *out.force, &mut *out.torque);

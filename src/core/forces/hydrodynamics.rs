@@ -14,7 +14,7 @@
 
 use super::drag::Fluid;
 use super::wall_drag::PlaneWall;
-use super::{Context, ForceTerm, Forces, InductionError};
+use super::{Context, ForceTerm, Forces, InductionError, Renewal};
 use crate::core::state::{Particles, State, Vec3};
 use faer::linalg::solvers::DenseSolveCore;
 use nalgebra::Matrix3;
@@ -113,28 +113,25 @@ impl Resistance {
 }
 
 /// Drag with hydrodynamic interactions (RPY): F_h = −M⁻¹ (U − u_f) on every sphere, with each
-/// evaluation's velocities. With `refactor_every` = 1 the mobility is factorised at every
-/// evaluation; with K > 1 at the first evaluation of every step call that starts on a multiple
-/// of K (K must be a multiple of the integrator's steps per call), from the positions of that
-/// evaluation. A run checkpoints between calls on multiples of K, and a resumed run, which starts
-/// without a factor, forms it at the same evaluation as the uninterrupted one: bitwise equal.
+/// evaluation's velocities, the mobility factorised every `refactor_every` steps from the
+/// positions of the evaluation that renews it ([`Renewal`]: every evaluation for 1; a resumed run
+/// renews where the uninterrupted one did).
 /// With `rotational`, each sphere's own rotational Stokes drag −8π μ a³ ω (no rotational
 /// coupling). A factorisation failure (non-finite positions) leaves the force non-finite, which
 /// the run's monitor reports.
 pub struct RpyDrag {
     pub fluid: Fluid,
     pub rotational: bool,
-    pub refactor_every: u64,
     /// A no-slip wall the spheres move above (its image system in the mobility), or none.
     pub wall: Option<PlaneWall>,
     resistance: Option<Result<Resistance, NotPositiveDefinite>>,
-    /// The step call began on a multiple of `refactor_every`: renew at the next evaluation.
-    due: bool,
+    /// When the factor is renewed (every `refactor_every` steps).
+    renewal: Renewal,
 }
 
 impl RpyDrag {
     pub fn new(fluid: Fluid, rotational: bool, refactor_every: u64) -> Self {
-        Self { fluid, rotational, refactor_every: refactor_every.max(1), wall: None, resistance: None, due: false }
+        Self { fluid, rotational, wall: None, resistance: None, renewal: Renewal::every(refactor_every) }
     }
 }
 
@@ -143,13 +140,12 @@ impl ForceTerm for RpyDrag {
         "drag"
     }
     fn begin_step(&mut self, state: &State) {
-        self.due = state.step.is_multiple_of(self.refactor_every);
+        self.renewal.begin_step(state.step);
     }
     fn prepare(&mut self, _ctx: &Context, state: &State) -> Result<(), InductionError> {
-        if self.refactor_every == 1 || self.due || self.resistance.is_none() {
+        if self.renewal.now(self.resistance.is_some()) {
             let p = &state.particles;
             self.resistance = Some(Resistance::new(&p.position, &p.radius, self.fluid.viscosity, self.wall.as_ref()));
-            self.due = false;
         }
         Ok(())
     }

@@ -92,6 +92,38 @@ pub trait ForceTerm: Send {
     fn apply(&mut self, ctx: &Context, particles: &Particles, out: &mut Forces);
 }
 
+/// When a term that holds work over several steps (a mobility factor, drag coefficients) renews
+/// it: at the first evaluation of a step call that begins on a multiple of `every` (its
+/// [`ForceTerm::begin_step`]), at every evaluation with `every` = 1, and whenever nothing is held
+/// (the first evaluation, or after a checkpoint restore). Checkpoints fall on multiples of
+/// `every`, so a resumed run renews where the uninterrupted one did: bitwise equal.
+#[derive(Debug, Clone, Copy)]
+pub struct Renewal {
+    every: u64,
+    /// The step call began on a multiple of `every`: renew at the next evaluation.
+    due: bool,
+}
+
+impl Renewal {
+    /// Renewed every `every` steps (at least 1).
+    pub fn every(every: u64) -> Self {
+        Self { every: every.max(1), due: false }
+    }
+
+    /// Called from [`ForceTerm::begin_step`] with the step the call begins at.
+    pub fn begin_step(&mut self, step: u64) {
+        self.due = step.is_multiple_of(self.every);
+    }
+
+    /// Whether to renew at this evaluation, given whether anything is `held`; a renewal due at
+    /// this step call is then spent.
+    pub fn now(&mut self, held: bool) -> bool {
+        let renew = self.every == 1 || self.due || !held;
+        self.due &= !renew;
+        renew
+    }
+}
+
 /// Which forces an evaluation computes (multiple time stepping splits them).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ForceGroup {
