@@ -3,7 +3,7 @@
 
 use crate::core::simulation::{RunError, Simulation};
 use crate::core::timers::PhaseTimers;
-use crate::io::trajectory::{status, RunInfo, TrajectoryError, TrajectoryWriter};
+use crate::io::trajectory::{status, Cost, RunInfo, TrajectoryError, TrajectoryWriter};
 use crate::scene::Scene;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::path::Path;
@@ -171,6 +171,11 @@ pub fn run(scene: &Scene, output: &Path, options: &RunOptions) -> Result<RunSumm
     result
 }
 
+/// The cost of the piece of a run that began at `start`, on the current pool's threads.
+fn cost(start: &Instant) -> Cost {
+    Cost { wall_time: start.elapsed(), threads: rayon::current_num_threads() }
+}
+
 fn run_in_pool(scene: &Scene, output: &Path, options: &RunOptions) -> Result<RunSummary, RunFailure> {
     let start = Instant::now();
     let total = scene.total_steps();
@@ -184,7 +189,7 @@ fn run_in_pool(scene: &Scene, output: &Path, options: &RunOptions) -> Result<Run
         let writer = TrajectoryWriter::create(output, scene, &info)?;
         let mut sim = scene.simulation(None);
         if let Err(e) = sim.initialise() {
-            writer.finish(status::UNSTABLE, &e.to_string(), start.elapsed())?;
+            writer.finish(status::UNSTABLE, &e.to_string(), cost(&start))?;
             return Err(e.into());
         }
         let mut writer = writer;
@@ -211,14 +216,14 @@ fn run_in_pool(scene: &Scene, output: &Path, options: &RunOptions) -> Result<Run
     while sim.state.step < total {
         if let Err(e) = sim.step() {
             bar.abandon();
-            writer.finish(status::UNSTABLE, &e.to_string(), start.elapsed())?;
+            writer.finish(status::UNSTABLE, &e.to_string(), cost(&start))?;
             return Err(e.into());
         }
         let step = sim.state.step;
         if step % per_frame == 0 || step == total {
             if let Err(e) = check_space(scene, output, writer.frames(), sim.state.contacts.pairs.len()) {
                 bar.abandon();
-                writer.finish(status::INTERRUPTED, &e.to_string(), start.elapsed())?;
+                writer.finish(status::INTERRUPTED, &e.to_string(), cost(&start))?;
                 return Err(e);
             }
             writer.write_frame(&sim.state)?;
@@ -233,12 +238,12 @@ fn run_in_pool(scene: &Scene, output: &Path, options: &RunOptions) -> Result<Run
         if INTERRUPTED.load(Ordering::Relaxed) && step.is_multiple_of(checkpoint_multiple) {
             bar.abandon();
             writer.write_checkpoint(&sim.state)?;
-            writer.finish(status::INTERRUPTED, "interrupted by the user", start.elapsed())?;
+            writer.finish(status::INTERRUPTED, "interrupted by the user", cost(&start))?;
             return Err(RunFailure::Interrupted { step, time: sim.state.time });
         }
     }
     bar.finish_and_clear();
-    writer.finish(status::COMPLETED, "", start.elapsed())?;
+    writer.finish(status::COMPLETED, "", cost(&start))?;
     Ok(RunSummary {
         steps: sim.state.step,
         frames: writer.frames(),

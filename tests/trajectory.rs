@@ -244,6 +244,28 @@ fn ctrl_c_and_resume(name: &str, text: &str, multiple: u64) {
     assert_identical(&full, &interrupted);
 }
 
+/// A finished run records the threads it ran on beside its wall time (the finite-size table
+/// reads both), for one thread and for two.
+#[test]
+fn a_run_records_its_thread_count() {
+    let work = workdir("threads");
+    let dir = work.path();
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, scene_text().replace("end_time = 3.0e-4", "end_time = 2.0e-5")).unwrap();
+    for threads in [1u64, 2] {
+        let file = dir.join(format!("run-{threads}.h5"));
+        let out = Command::new(env!("CARGO_BIN_EXE_magdem"))
+            .args(["run", path(&scene), "-q", "-o", path(&file)])
+            .env("RAYON_NUM_THREADS", threads.to_string())
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let t = Trajectory::open(&file).unwrap();
+        assert_eq!(t.attr::<u64>("threads").unwrap(), threads);
+        assert!(t.attr::<f64>("wall_time_s").unwrap() > 0.0);
+    }
+}
+
 /// The file opens in h5py with the documented layout (h5dump when Python/h5py is absent).
 #[test]
 fn trajectory_is_readable_from_python() {

@@ -347,23 +347,27 @@ impl TrajectoryWriter {
         .map_err(self.err())
     }
 
-    /// Records how the run ended and adds `wall_time` to the file's `wall_time_s` (summed over
-    /// resumed pieces).
-    pub fn finish(
-        &self,
-        run_status: &str,
-        message: &str,
-        wall_time: std::time::Duration,
-    ) -> Result<(), TrajectoryError> {
+    /// Records how the run ended, adds `cost.wall_time` to the file's `wall_time_s` (summed over
+    /// resumed pieces) and sets `threads` to the piece's thread count.
+    pub fn finish(&self, run_status: &str, message: &str, cost: Cost) -> Result<(), TrajectoryError> {
         (|| -> H5Result<()> {
             write_str_attr(&self.file, "status", run_status)?;
             write_str_attr(&self.file, "status_message", message)?;
             let before: f64 = self.file.attr("wall_time_s").and_then(|a| a.read_scalar()).unwrap_or(0.0);
-            write_scalar_attr(&self.file, "wall_time_s", before + wall_time.as_secs_f64())?;
+            write_scalar_attr(&self.file, "wall_time_s", before + cost.wall_time.as_secs_f64())?;
+            write_scalar_attr(&self.file, "threads", cost.threads as u64)?;
             self.file.flush()
         })()
         .map_err(self.err())
     }
+}
+
+/// What a run (or a resumed piece of one) cost: its wall time and the threads it ran on (the
+/// engine processes, for a reference engine).
+#[derive(Debug, Clone, Copy)]
+pub struct Cost {
+    pub wall_time: std::time::Duration,
+    pub threads: usize,
 }
 
 /// Read access to a trajectory file.

@@ -8,6 +8,7 @@ use super::deck::{self, FIX_ID};
 use super::{dump, Engine, ReferenceError, ReferenceRun};
 use crate::core::simulation::ForceField;
 use crate::core::state::{State, Vec3};
+use crate::io::trajectory::Cost;
 use crate::scene::Scene;
 use libloading::Library;
 use std::ffi::{c_char, c_int, c_void, CString};
@@ -271,7 +272,7 @@ pub fn run_coupled(engine: Engine, scene: &Scene, dir: &Path, output: &Path) -> 
         scene,
         output,
         &frames,
-        start.elapsed(),
+        Cost { wall_time: start.elapsed(), threads: 1 },
     )?;
     Ok(ReferenceRun { frames: frames.len(), log, wall_time: start.elapsed() })
 }

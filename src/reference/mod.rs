@@ -13,7 +13,7 @@ pub mod dump;
 pub mod files_route;
 pub mod library;
 
-use crate::io::trajectory::{status, RunInfo, TrajectoryError, TrajectoryWriter};
+use crate::io::trajectory::{status, Cost, RunInfo, TrajectoryError, TrajectoryWriter};
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -125,7 +125,7 @@ pub fn run_binary(
         ),
         _ => "velocity-verlet (nve/sphere)".to_string(),
     };
-    store(engine, &integrator, scene, output, &frames, start.elapsed())?;
+    store(engine, &integrator, scene, output, &frames, Cost { wall_time: start.elapsed(), threads: procs })?;
     Ok(ReferenceRun { frames: frames.len(), log, wall_time: start.elapsed() })
 }
 
@@ -153,12 +153,12 @@ fn store(
     scene: &Scene,
     output: &Path,
     frames: &[crate::core::state::State],
-    wall_time: std::time::Duration,
+    cost: Cost,
 ) -> Result<(), ReferenceError> {
     let mut writer = TrajectoryWriter::create(output, scene, &RunInfo { engine: engine.name(), integrator })?;
     for state in frames {
         writer.write_frame(state)?;
     }
-    writer.finish(status::COMPLETED, "", wall_time)?;
+    writer.finish(status::COMPLETED, "", cost)?;
     Ok(())
 }

@@ -273,6 +273,7 @@ pub fn finite_size_section(
     }
     let (mut c_col, mut f_col, mut p_col, mut n_col, mut m_col, mut ci_col, mut cap_col, mut perc_col, mut wall_col) =
         (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
+    let mut threads_col = vec![];
     let mut series = vec![];
     let mut findings = vec![];
     for (k, (&c, &exp)) in t.concentration.iter().zip(&t.experiment).enumerate() {
@@ -299,6 +300,7 @@ pub fn finite_size_section(
             cap_col.push(box_limited(group));
             perc_col.push(group.iter().map(|r| r.percolating() as f64).sum::<f64>());
             wall_col.push(mean_over(group, |r| r.wall_time));
+            threads_col.push(thread_counts(group));
             pts.push((particles, e.mean));
             errs.push(e.ci95);
             edge.push((particles, 1e6 * mean_over(group, |r| r.box_extent)));
@@ -321,14 +323,17 @@ pub fn finite_size_section(
         col("box_limited_fraction", cap_col),
         col("percolating_aggregates", perc_col),
         col("wall_time_per_run_s", wall_col),
+        scol("threads_per_run", threads_col),
     ])?;
     write(&mut df, tables, "finite_size")?;
     md += "The paper's box scaled by f^(1/3) per side at equal concentration (f times the particles), side faces x and y \
            periodic (the field lies along x), walls at top and bottom, r-RESPA, t = 5 ms. `box-limited` is the share of \
            aggregates whose extent along the field reaches 90 % of the box's or that wrap through a periodic face onto \
            themselves (percolating: no finite length, left out of the mean, which is then a lower bound). Wall time per run \
-           as run: one core per run, two runs at a time, except the 100× runs, one at a time on two threads (with other work on \
-           the machine at times; seeds 2 and 3 number their particles along a Morton curve, which makes their steps faster).\n\n";
+           as run, two runs at a time when each had one thread, with other work on the machine at times; `threads` as each run \
+           recorded it (– for runs made before the count was recorded: those ran on one thread, two at a time, except the \
+           2.25 mg/ml 100× runs, one at a time on two threads). Seeds 2 and 3 of the 30× and 100× boxes number their \
+           particles along a Morton curve, which makes their steps faster.\n\n";
     md += &markdown(
         &df,
         &[
@@ -341,8 +346,9 @@ pub fn finite_size_section(
             "box-limited",
             "percolating (all seeds)",
             "wall time/run (s)",
+            "threads",
         ],
-        &[3, 0, 0, 0, 1, 1, 3, 0, 0],
+        &[3, 0, 0, 0, 1, 1, 3, 0, 0, 0],
     )?;
     if !findings.is_empty() {
         md += &format!("\n{}.\n", findings.join("; "));
@@ -363,6 +369,15 @@ pub fn finite_size_section(
            (a chain cannot be longer without percolating); dotted lines: the experiment's mean (about 10⁶ particles; its own \
            spread is not a CI and is not drawn).\n\n";
     Ok(md)
+}
+
+/// The distinct thread counts of a group's runs ("1", "1, 2"; "–" where not recorded).
+fn thread_counts(group: &[&Run]) -> String {
+    let mut counts: Vec<String> =
+        group.iter().map(|r| if r.threads.is_finite() { format!("{:.0}", r.threads) } else { "–".into() }).collect();
+    counts.sort();
+    counts.dedup();
+    counts.join(", ")
 }
 
 /// The 100× runs with the shielded drag held over each outer step
@@ -427,10 +442,11 @@ fn size_trend(c: f64, by_factor: &BTreeMap<u64, Vec<&Run>>) -> Option<String> {
     };
     Some(format!(
         "{trend}; the next size, {:.0} particles ({factor}× the paper's), would take about {:.1} h of wall time per run at \
-         the {f_max}× runs' measured {:.0} s for {particles:.0} particles",
+         the {f_max}× runs' measured {:.0} s for {particles:.0} particles (threads per run: {})",
         next * particles,
         next * wall / 3600.0,
-        wall
+        wall,
+        thread_counts(largest)
     ))
 }
 

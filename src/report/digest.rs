@@ -28,6 +28,7 @@ struct Entry {
     status: String,
     message: String,
     wall_time: f64,
+    threads: f64,
     box_extent: f64,
     times: Vec<f64>,
     mean_length: Vec<f64>,
@@ -43,6 +44,7 @@ impl Entry {
             status: run.status.clone(),
             message: run.message.clone(),
             wall_time: run.wall_time,
+            threads: run.threads,
             box_extent: run.box_extent,
             times: run.times.clone(),
             mean_length: run.mean_length.clone(),
@@ -55,6 +57,7 @@ impl Entry {
         run.status = self.status.clone();
         run.message = self.message.clone();
         run.wall_time = self.wall_time;
+        run.threads = self.threads;
         run.box_extent = self.box_extent;
         run.times = self.times.clone();
         run.mean_length = self.mean_length.clone();
@@ -89,6 +92,8 @@ fn read(dir: &Path) -> Result<BTreeMap<String, Entry>, Error> {
         floats(&runs, "wall_time_s")?,
         floats(&runs, "box_extent_m")?,
     );
+    // Digests written before the thread count was recorded have no such column.
+    let threads = floats(&runs, "threads").unwrap_or_else(|_| vec![f64::NAN; runs.height()]);
     for (k, id) in strings(&runs, "id")?.into_iter().enumerate() {
         let entry = Entry {
             scene_hash: hash[k].clone(),
@@ -96,6 +101,7 @@ fn read(dir: &Path) -> Result<BTreeMap<String, Entry>, Error> {
             status: st[k].clone(),
             message: msg[k].clone(),
             wall_time: wall[k],
+            threads: threads[k],
             box_extent: extent[k],
             times: vec![],
             mean_length: vec![],
@@ -161,6 +167,7 @@ fn encode(entries: &BTreeMap<String, Entry>) -> Result<[Vec<u8>; 3], Error> {
         scol("status", entries.values().map(|e| e.status.clone()).collect()),
         scol("message", entries.values().map(|e| e.message.clone()).collect()),
         col("wall_time_s", all(|e| e.wall_time)),
+        col("threads", all(|e| e.threads)),
         col("box_extent_m", all(|e| e.box_extent)),
     ])?;
     let mut frames = DataFrame::new(vec![
@@ -322,6 +329,7 @@ mod tests {
             status: status::COMPLETED.into(),
             message: "ok".into(),
             wall_time: 12.345,
+            threads: 2.0,
             box_extent: 3e-4,
             times: vec![0.0, 1e-4, 2e-4],
             mean_length: vec![5.5e-6, f64::NAN, 1.1e-5],
@@ -350,7 +358,7 @@ mod tests {
         let (a, b, c) = (&read_back[0], &read_back[1], &read_back[2]);
         assert_eq!(a.source, Source::Digest);
         assert_eq!((a.status.as_str(), a.message.as_str()), ("completed", "ok"));
-        assert_eq!(bits(&[a.wall_time, a.box_extent]), bits(&[12.345, 3e-4]));
+        assert_eq!(bits(&[a.wall_time, a.threads, a.box_extent]), bits(&[12.345, 2.0, 3e-4]));
         assert_eq!(bits(&a.times), bits(&made[0].times));
         assert_eq!(bits(&a.mean_length), bits(&made[0].mean_length));
         assert_eq!(bits(&a.box_limited), bits(&made[0].box_limited));
@@ -378,5 +386,22 @@ mod tests {
         sync(&mut both, dir.path(), 1e-3).unwrap();
         assert!(both.iter().all(|r| r.source == Source::Digest));
         assert_eq!((both[0].wall_time, both[1].wall_time), (1.0, 12.345));
+    }
+
+    /// A digest written before threads were recorded (no `threads` column) still reads, with
+    /// the thread count unknown.
+    #[test]
+    fn a_digest_without_thread_counts_reads_them_as_unknown() {
+        let dir = tempfile::tempdir().unwrap();
+        sync(&mut [finished_run("a")], dir.path(), 1e-3).unwrap();
+        let path = dir.path().join("e").join("runs.parquet");
+        let mut old =
+            ParquetReader::new(std::fs::File::open(&path).unwrap()).finish().unwrap().drop("threads").unwrap();
+        ParquetWriter::new(std::fs::File::create(&path).unwrap()).finish(&mut old).unwrap();
+        let mut read_back = vec![run("a", "h1")];
+        sync(&mut read_back, dir.path(), 1e-3).unwrap();
+        assert_eq!(read_back[0].source, Source::Digest);
+        assert!(read_back[0].threads.is_nan());
+        assert_eq!(read_back[0].wall_time, 12.345);
     }
 }

@@ -37,6 +37,9 @@ pub struct Run {
     pub status: String,
     pub message: String,
     pub wall_time: f64,
+    /// Threads the run's last piece ran on (engine processes for a reference engine); NaN where
+    /// the trajectory or digest predates the record.
+    pub threads: f64,
     pub file: PathBuf,
     pub times: Vec<f64>,
     /// Mean aggregate length at each frame (m), over the aggregates that do not percolate.
@@ -189,6 +192,7 @@ fn load(
         status: "missing".into(),
         message: String::new(),
         wall_time: f64::NAN,
+        threads: f64::NAN,
         file: file.clone(),
         times: vec![],
         mean_length: vec![],
@@ -224,6 +228,7 @@ fn read_run(
     run.status = t.attr_string("status").map_err(|e| e.to_string())?;
     run.message = t.attr_string("status_message").unwrap_or_default();
     run.wall_time = t.attr::<f64>("wall_time_s").unwrap_or(f64::NAN);
+    run.threads = t.attr::<u64>("threads").map_or(f64::NAN, |n| n as f64);
     if run.completed() {
         let reader = FrameReader::new(&t).map_err(|e| e.to_string())?;
         let frames = reader.times.len();
