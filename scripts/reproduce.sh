@@ -9,7 +9,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=target/release/magdem
 start=$(date +%s)
-"$bin" experiment experiments/paper/*.toml
+"$bin" experiment --no-digests experiments/paper/*.toml
 elapsed=$(( $(date +%s) - start ))
 "$bin" report paper --wall-time "$elapsed"
 echo "reproduce: experiments took $elapsed s of wall time; report in reports/paper/README.md"

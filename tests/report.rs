@@ -86,6 +86,12 @@ fn report_tables_are_the_analysis_of_the_runs() {
     };
     let readme = report(Some(12.0));
     let text = std::fs::read_to_string(&readme).unwrap();
+    let measured = |out: &Path| {
+        let m = ParquetReader::new(std::fs::File::open(out.join("tables/measurement.parquet")).unwrap()).finish().unwrap();
+        ["runs", "projected_all_um", "projected_2_um", "image_all_um", "image_2_um"]
+            .map(|c| m.column(c).unwrap().cast(&DataType::Float64).unwrap().f64().unwrap().get(0).unwrap().to_bits())
+    };
+    let first_measures = measured(&out);
 
     // Independent analysis of the three runs' last frames.
     let means: Vec<f64> = (1..=3)
@@ -173,6 +179,8 @@ fn report_tables_are_the_analysis_of_the_runs() {
     let source: Vec<String> =
         runs_table.column("source").unwrap().str().unwrap().into_no_null_iter().map(str::to_string).collect();
     assert_eq!(source.iter().filter(|s| *s == "digest").count(), 2, "{source:?}");
+    // The image measures, which need positions, are kept in the digests too.
+    assert_eq!(measured(&out), first_measures, "the measurement table from digests is the first one");
     assert!(out.join("digests/paper-table3/aggregates.parquet").exists());
 }
 

@@ -5,7 +5,6 @@
 
 use super::runs::Run;
 use super::tables::{col, markdown, same, scol, write};
-use crate::analysis::image::Imaging;
 use crate::analysis::stats::{ci95_half_width, slope_ci95, summary};
 use crate::core::magnetisation::MU0;
 use crate::plot::{chart, palette, Legend, RGBColor, Scale, Series, SeriesLabelPosition};
@@ -18,7 +17,7 @@ use std::path::Path;
 type Error = Box<dyn std::error::Error>;
 
 /// The Table 3 ensemble: the default experiment and its opt-in continuation to 20 seeds.
-pub const TABLE3: [&str; 2] = ["paper-table3", "paper-table3-seeds"];
+pub const TABLE3: [&str; 2] = super::runs::IMAGED;
 
 /// What the paper and the experiment report per concentration (Table 3).
 pub struct Targets {
@@ -416,7 +415,8 @@ fn held_drag_at_scale(runs: &[Run]) -> Option<String> {
 /// The mean length's trend against the particle count at concentration `c`, L ∝ N^β fitted
 /// over every run (a chain capped by the box grows with its edge, β = 1/3; a converged length has
 /// β = 0), and what the next size of the 1-2-4-10-30-100 series would cost at the largest size's
-/// measured wall time, taken as linear in the particles.
+/// fastest measured wall time (the runs made with the newest code and numbering), taken as linear
+/// in the particles.
 fn size_trend(c: f64, by_factor: &BTreeMap<u64, Vec<&Run>>) -> Option<String> {
     let points: Vec<(f64, f64)> = by_factor
         .values()
@@ -428,7 +428,12 @@ fn size_trend(c: f64, by_factor: &BTreeMap<u64, Vec<&Run>>) -> Option<String> {
     let (beta, ci) = slope_ci95(&points);
     let (f_max, largest) = by_factor.iter().next_back()?;
     let particles = mean_over(largest, |r| r.particles as f64);
-    let wall = mean_over(largest, |r| r.wall_time);
+    let fastest = largest
+        .iter()
+        .copied()
+        .filter(|r| r.wall_time.is_finite())
+        .min_by(|a, b| a.wall_time.total_cmp(&b.wall_time))?;
+    let wall = fastest.wall_time;
     let factor = [1, 2, 4, 10, 30, 100, 300, 1000, 3000].into_iter().find(|&f| f > *f_max).unwrap_or(3 * f_max);
     let next = factor as f64 / *f_max as f64;
     let trend = if beta.is_finite() {
@@ -442,11 +447,13 @@ fn size_trend(c: f64, by_factor: &BTreeMap<u64, Vec<&Run>>) -> Option<String> {
     };
     Some(format!(
         "{trend}; the next size, {:.0} particles ({factor}× the paper's), would take about {:.1} h of wall time per run at \
-         the {f_max}× runs' measured {:.0} s for {particles:.0} particles (threads per run: {})",
+         the fastest {f_max}× run's {:.0} s for {particles:.0} particles{} (the {f_max}× runs took {:.0}–{:.0} s)",
         next * particles,
         next * wall / 3600.0,
         wall,
-        thread_counts(largest)
+        if fastest.threads.is_finite() { format!(" on {:.0} thread(s)", fastest.threads) } else { String::new() },
+        wall,
+        largest.iter().map(|r| r.wall_time).fold(f64::NAN, f64::max)
     ))
 }
 
@@ -935,23 +942,18 @@ pub fn measurement_section(
     t: &Targets,
     tables: &Path,
     effects: &mut Vec<Effect>,
-    gap: f64,
 ) -> Result<String, Error> {
     let mut md = String::from("## Measurement: what an image of the same chains gives\n\n");
-    let imaging = Imaging { axes: [0, 1], pixel: 0.5e-6 };
     let names = ["3-D, all", "3-D, 2+", "projected, all", "projected, 2+", "image, all", "image, 2+"];
     let mut table: Vec<Vec<Estimate>> = vec![];
     let mut done = vec![];
     for (&c, &exp) in t.concentration.iter().zip(&t.experiment) {
-        // Images need the particles' positions: the runs whose trajectories are here.
-        let here: Vec<&Run> = table3_runs(runs, c).into_iter().filter(|r| r.has_trajectory()).collect();
+        // The runs imaged where their trajectories were read (here, or where a digest was made).
+        let here: Vec<&Run> = table3_runs(runs, c).into_iter().filter(|r| r.image.is_some()).collect();
         if here.is_empty() {
             continue;
         }
-        let mut per_run: Vec<[f64; 6]> = vec![];
-        for r in &here {
-            per_run.push(measures(r, &imaging, gap)?);
-        }
+        let per_run: Vec<[f64; 6]> = here.iter().map(|r| measures(r)).collect();
         let column = |k: usize| Estimate::of(&per_run.iter().map(|m| m[k]).collect::<Vec<_>>());
         table.push((0..6).map(column).collect());
         done.push((c, exp, here.len()));
@@ -1009,27 +1011,18 @@ pub fn measurement_section(
 
 /// The six measures of one run's last frame (µm): 3-D, projected and image lengths, each over
 /// all aggregates and over those of two or more particles.
-fn measures(r: &Run, imaging: &Imaging, gap: f64) -> Result<[f64; 6], Error> {
-    let t = crate::io::trajectory::Trajectory::open(&r.file)?;
-    let reader = crate::analysis::trajectory::FrameReader::new(&t)?;
-    let radius = reader.radius().to_vec();
-    let position = t.frame_vectors("position", reader.times.len() - 1)?;
+fn measures(r: &Run) -> [f64; 6] {
     let m = |v: Vec<f64>| if v.is_empty() { f64::NAN } else { 1e6 * summary(&v).mean };
-    let (_, last) = reader.aggregates(-1, gap)?;
-    let finite: Vec<&crate::analysis::aggregates::Aggregate> = last.iter().filter(|a| !a.percolating).collect();
-    let projected = |a: &&crate::analysis::aggregates::Aggregate| {
-        imaging.major_axis(&a.positions, &a.members.iter().map(|&i| radius[i]).collect::<Vec<_>>())
-    };
-    let domain = reader.domain();
-    let regions = imaging.image(&position, &radius, &domain.lo, &domain.hi);
-    Ok([
-        m(finite.iter().map(|a| a.length).collect()),
-        m(finite.iter().filter(|a| a.size() > 1).map(|a| a.length).collect()),
-        m(finite.iter().map(projected).collect()),
-        m(finite.iter().filter(|a| a.size() > 1).map(projected).collect()),
-        m(regions.iter().map(|g| g.major_axis).collect()),
-        m(regions.iter().filter(|g| g.particles.len() > 1).map(|g| g.major_axis).collect()),
-    ])
+    let finite = || r.last.iter().filter(|a| !a.percolating);
+    let [projected, projected_2, image, image_2] = r.image.unwrap_or([f64::NAN; 4]);
+    [
+        m(finite().map(|a| a.length).collect()),
+        m(finite().filter(|a| a.size > 1).map(|a| a.length).collect()),
+        projected,
+        projected_2,
+        image,
+        image_2,
+    ]
 }
 
 /// Every explanation ranked by the size of its effect at each concentration.

@@ -7,8 +7,8 @@
 //! and `aggregates.parquet` (id and one [`AggregateSummary`] per row, the last frame's). A run
 //! whose trajectory is absent is read from its digest when the digest's scene hash and gap
 //! tolerance are the run's own; a run read from its trajectory replaces its digest row. The
-//! members' positions are not kept: what needs them (figures, image measurement, trajectory
-//! differences) reads trajectories and leaves digest-only runs out, saying so.
+//! members' positions are not kept: what needs them (figures, trajectory differences) reads
+//! trajectories and leaves digest-only runs out, saying so.
 
 use super::runs::{AggregateSummary, Run, Source};
 use super::tables::{col, floats, scol, ucol};
@@ -34,6 +34,7 @@ struct Entry {
     mean_length: Vec<f64>,
     box_limited: Vec<f64>,
     last: Vec<AggregateSummary>,
+    image: Option<[f64; 4]>,
 }
 
 impl Entry {
@@ -50,6 +51,7 @@ impl Entry {
             mean_length: run.mean_length.clone(),
             box_limited: run.box_limited.clone(),
             last: run.last.clone(),
+            image: run.image,
         }
     }
 
@@ -63,6 +65,7 @@ impl Entry {
         run.mean_length = self.mean_length.clone();
         run.box_limited = self.box_limited.clone();
         run.last = self.last.clone();
+        run.image = self.image;
         run.source = Source::Digest;
     }
 }
@@ -92,8 +95,11 @@ fn read(dir: &Path) -> Result<BTreeMap<String, Entry>, Error> {
         floats(&runs, "wall_time_s")?,
         floats(&runs, "box_extent_m")?,
     );
-    // Digests written before the thread count was recorded have no such column.
+    // Digests written before the thread count or the image measures were recorded have no such
+    // columns; image measures of another imaging are not this report's.
     let threads = floats(&runs, "threads").unwrap_or_else(|_| vec![f64::NAN; runs.height()]);
+    let imaging = strings(&runs, "imaging").unwrap_or_else(|_| vec![String::new(); runs.height()]);
+    let image_columns = IMAGE_COLUMNS.map(|c| floats(&runs, c).unwrap_or_else(|_| vec![f64::NAN; runs.height()]));
     for (k, id) in strings(&runs, "id")?.into_iter().enumerate() {
         let entry = Entry {
             scene_hash: hash[k].clone(),
@@ -107,6 +113,7 @@ fn read(dir: &Path) -> Result<BTreeMap<String, Entry>, Error> {
             mean_length: vec![],
             box_limited: vec![],
             last: vec![],
+            image: (imaging[k] == imaging_key()).then(|| image_columns.each_ref().map(|c| c[k])),
         };
         entries.insert(id, entry);
     }
@@ -169,7 +176,14 @@ fn encode(entries: &BTreeMap<String, Entry>) -> Result<[Vec<u8>; 3], Error> {
         col("wall_time_s", all(|e| e.wall_time)),
         col("threads", all(|e| e.threads)),
         col("box_extent_m", all(|e| e.box_extent)),
+        scol(
+            "imaging",
+            entries.values().map(|e| if e.image.is_some() { imaging_key() } else { String::new() }).collect(),
+        ),
     ])?;
+    for (k, name) in IMAGE_COLUMNS.iter().enumerate() {
+        runs.with_column(col(name, entries.values().map(|e| e.image.map_or(f64::NAN, |m| m[k])).collect()))?;
+    }
     let mut frames = DataFrame::new(vec![
         scol("id", ids(|e| e.times.len())),
         col("time_s", each(|e| &e.times)),
@@ -195,6 +209,14 @@ fn encode(entries: &BTreeMap<String, Entry>) -> Result<[Vec<u8>; 3], Error> {
         Ok(buf)
     };
     Ok([bytes(&mut runs)?, bytes(&mut frames)?, bytes(&mut aggs)?])
+}
+
+/// The columns of [`Run::image`], in its order.
+const IMAGE_COLUMNS: [&str; 4] = ["projected_all_um", "projected_2plus_um", "image_all_um", "image_2plus_um"];
+
+/// The imaging the image columns were measured with ("" where a run was not imaged).
+fn imaging_key() -> String {
+    format!("{:?}", super::runs::IMAGING)
 }
 
 const FILES: [&str; 3] = ["runs.parquet", "frames.parquet", "aggregates.parquet"];
@@ -293,8 +315,8 @@ pub fn provenance(runs: &[Run]) -> String {
         0 => format!("all {here} runs read were on this machine"),
         _ => format!(
             "{here} runs read there, {digested} from the report's [`digests/`](digests/) of runs made where their \
-             trajectories were kept: per-frame mean lengths and last-frame aggregates, no positions, so the figures \
-             and image measurements that need positions use the runs read there only"
+             trajectories were kept: per-frame mean lengths, last-frame aggregates and image measures, no positions, \
+             so the figures that need positions use the runs read there only"
         ),
     }
 }
@@ -331,6 +353,7 @@ mod tests {
             wall_time: 12.345,
             threads: 2.0,
             box_extent: 3e-4,
+            image: Some([1.25e2, f64::NAN, 3.5, 4.75]),
             times: vec![0.0, 1e-4, 2e-4],
             mean_length: vec![5.5e-6, f64::NAN, 1.1e-5],
             box_limited: vec![0.0, 0.0, 1.0 / 3.0],
@@ -360,6 +383,7 @@ mod tests {
         assert_eq!((a.status.as_str(), a.message.as_str()), ("completed", "ok"));
         assert_eq!(bits(&[a.wall_time, a.threads, a.box_extent]), bits(&[12.345, 2.0, 3e-4]));
         assert_eq!(bits(&a.times), bits(&made[0].times));
+        assert_eq!(a.image.map(|m| bits(&m)), made[0].image.map(|m| bits(&m)));
         assert_eq!(bits(&a.mean_length), bits(&made[0].mean_length));
         assert_eq!(bits(&a.box_limited), bits(&made[0].box_limited));
         assert_eq!(a.last.len(), 2);
@@ -388,8 +412,8 @@ mod tests {
         assert_eq!((both[0].wall_time, both[1].wall_time), (1.0, 12.345));
     }
 
-    /// A digest written before threads were recorded (no `threads` column) still reads, with
-    /// the thread count unknown.
+    /// A digest written before threads or image measures were recorded (no such columns) still
+    /// reads, with them unknown.
     #[test]
     fn a_digest_without_thread_counts_reads_them_as_unknown() {
         let dir = tempfile::tempdir().unwrap();
@@ -402,6 +426,15 @@ mod tests {
         sync(&mut read_back, dir.path(), 1e-3).unwrap();
         assert_eq!(read_back[0].source, Source::Digest);
         assert!(read_back[0].threads.is_nan());
+        assert!(read_back[0].image.is_some(), "the image columns were kept");
         assert_eq!(read_back[0].wall_time, 12.345);
+
+        // Nor an imaging: the run's image measures are unknown.
+        let mut older =
+            ParquetReader::new(std::fs::File::open(&path).unwrap()).finish().unwrap().drop("imaging").unwrap();
+        ParquetWriter::new(std::fs::File::create(&path).unwrap()).finish(&mut older).unwrap();
+        let mut read_back = vec![run("a", "h1")];
+        sync(&mut read_back, dir.path(), 1e-3).unwrap();
+        assert_eq!((read_back[0].source, read_back[0].image), (Source::Digest, None));
     }
 }

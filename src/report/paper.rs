@@ -103,7 +103,7 @@ pub fn write_report(options: &PaperReportOptions) -> Result<PathBuf, Error> {
     md += &convergence::finite_size_section(&runs, &targets, out, &tables, &mut effects)?;
     md += &convergence::growth_section(&runs, &targets, out, &tables, &mut effects)?;
     md += &convergence::magnetisation_section(&runs, &targets, out, &tables, &mut effects)?;
-    md += &convergence::measurement_section(&runs, &targets, &tables, &mut effects, options.gap)?;
+    md += &convergence::measurement_section(&runs, &targets, &tables, &mut effects)?;
     md += &sensitivity_section(&runs, out, &tables, &mut effects)?;
     md += &convergence::ranking_section(&effects, &targets, &runs, &tables)?;
     md += &figures::shielding_figure(out)?;
@@ -640,7 +640,7 @@ fn case2_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Resu
         col("ci95_velocity", vx_ci),
     ])?;
     write(&mut df, tables, "table2")?;
-    let scene = Scene::parse(&here.iter().find(|r| r.has_trajectory()).unwrap_or(&here[0]).scene_text()?, "case 2")?;
+    let scene = Scene::parse(&here[0].scene_text, "case 2")?;
     let s = &scene.species[0];
     let b0 = scene.spec.field.as_ref().map_or(0.0, |f| nalgebra::Vector3::from(f.b0).norm());
     let h = b0 / crate::core::magnetisation::MU0;
@@ -742,12 +742,6 @@ fn short_source(s: &str) -> String {
         "paper sim".into()
     } else {
         "V&M sim".into()
-    }
-}
-
-impl Run {
-    fn scene_text(&self) -> Result<String, Error> {
-        Ok(crate::io::trajectory::Trajectory::open(&self.file)?.scene_text()?)
     }
 }
 

@@ -2,6 +2,7 @@
 //! its last frame and the mean aggregate length at every frame.
 
 use crate::analysis::aggregates::{box_limits, Aggregate};
+use crate::analysis::image::Imaging;
 use crate::analysis::stats::summary;
 use crate::analysis::trajectory::FrameReader;
 use crate::core::state::Vec3;
@@ -9,6 +10,13 @@ use crate::io::trajectory::{status, Trajectory};
 use crate::scene::experiment::Experiment;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
+
+/// How the experiment's microscope is emulated ([`Run::image`]): the imaging plane x–y (the
+/// field, along x, lies in it; the view is along gravity) and pixels of 0.5 µm.
+pub const IMAGING: Imaging = Imaging { axes: [0, 1], pixel: 0.5e-6 };
+
+/// The experiments whose runs are imaged ([`Run::image`]): the Table 3 ensemble.
+pub const IMAGED: [&str; 2] = ["paper-table3", "paper-table3-seeds"];
 
 /// One point of an experiment and what its trajectory holds.
 #[derive(Default)]
@@ -50,6 +58,12 @@ pub struct Run {
     pub box_extent: f64,
     /// Aggregates of the last frame.
     pub last: Vec<AggregateSummary>,
+    /// The last frame as an image measures it (µm; [`super::convergence::measure_images`]):
+    /// projected and image MajorAxisLength means, each over all aggregates and over those of two
+    /// or more particles. Measured on the Table 3 runs only; `None` for the others.
+    pub image: Option<[f64; 4]>,
+    /// The run's scene as written (TOML).
+    pub scene_text: String,
     /// Where this run's numbers were read: its trajectory, or the report's digest of it.
     pub source: Source,
 }
@@ -199,6 +213,8 @@ fn load(
         box_limited: vec![],
         box_extent: f64::NAN,
         last: vec![],
+        image: None,
+        scene_text: point.scene.text.clone(),
         source: Source::None,
     };
     if !file.exists() {
@@ -270,9 +286,32 @@ fn read_run(
                     .any(|&i| now[i].x - domain.lo.x < 3.0 * radius[i] || domain.hi.x - now[i].x < 3.0 * radius[i]),
         };
         run.last = last.iter().map(summarise).collect();
+        if IMAGED.contains(&run.experiment.as_str()) {
+            run.image = Some(image_measures(&last, &now, reader.radius(), domain));
+        }
     }
     run.source = Source::Trajectory;
     Ok(())
+}
+
+/// [`Run::image`] of a last frame: its aggregates `last` and the particles' `position`s.
+fn image_measures(
+    last: &[Aggregate],
+    position: &[Vec3],
+    radius: &[f64],
+    domain: &crate::core::domain::Domain,
+) -> [f64; 4] {
+    let m = |v: Vec<f64>| if v.is_empty() { f64::NAN } else { 1e6 * summary(&v).mean };
+    let finite = || last.iter().filter(|a| !a.percolating);
+    let projected =
+        |a: &Aggregate| IMAGING.major_axis(&a.positions, &a.members.iter().map(|&i| radius[i]).collect::<Vec<_>>());
+    let regions = IMAGING.image(position, radius, &domain.lo, &domain.hi);
+    [
+        m(finite().map(projected).collect()),
+        m(finite().filter(|a| a.size() > 1).map(projected).collect()),
+        m(regions.iter().map(|g| g.major_axis).collect()),
+        m(regions.iter().filter(|g| g.particles.len() > 1).map(|g| g.major_axis).collect()),
+    ]
 }
 
 /// |M| of the first species in the applied field at the box centre (A/m).
