@@ -87,7 +87,8 @@ fn report_tables_are_the_analysis_of_the_runs() {
     let readme = report(Some(12.0));
     let text = std::fs::read_to_string(&readme).unwrap();
     let measured = |out: &Path| {
-        let m = ParquetReader::new(std::fs::File::open(out.join("tables/measurement.parquet")).unwrap()).finish().unwrap();
+        let m =
+            ParquetReader::new(std::fs::File::open(out.join("tables/measurement.parquet")).unwrap()).finish().unwrap();
         ["runs", "projected_all_um", "projected_2_um", "image_all_um", "image_2_um"]
             .map(|c| m.column(c).unwrap().cast(&DataType::Float64).unwrap().f64().unwrap().get(0).unwrap().to_bits())
     };

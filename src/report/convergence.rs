@@ -372,11 +372,14 @@ pub fn finite_size_section(
 
 /// The distinct thread counts of a group's runs ("1", "1, 2"; "–" where not recorded).
 fn thread_counts(group: &[&Run]) -> String {
-    let mut counts: Vec<String> =
-        group.iter().map(|r| if r.threads.is_finite() { format!("{:.0}", r.threads) } else { "–".into() }).collect();
-    counts.sort();
+    let mut counts: Vec<u64> = group.iter().filter(|r| r.threads.is_finite()).map(|r| r.threads as u64).collect();
+    counts.sort_unstable();
     counts.dedup();
-    counts.join(", ")
+    let mut cells: Vec<String> = counts.iter().map(u64::to_string).collect();
+    if group.iter().any(|r| !r.threads.is_finite()) {
+        cells.push("–".into());
+    }
+    cells.join(", ")
 }
 
 /// The 100× runs with the shielded drag held over each outer step
@@ -415,8 +418,7 @@ fn held_drag_at_scale(runs: &[Run]) -> Option<String> {
 /// The mean length's trend against the particle count at concentration `c`, L ∝ N^β fitted
 /// over every run (a chain capped by the box grows with its edge, β = 1/3; a converged length has
 /// β = 0), and what the next size of the 1-2-4-10-30-100 series would cost at the largest size's
-/// fastest measured wall time (the runs made with the newest code and numbering), taken as linear
-/// in the particles.
+/// fastest measured wall time, taken as linear in the particles.
 fn size_trend(c: f64, by_factor: &BTreeMap<u64, Vec<&Run>>) -> Option<String> {
     let points: Vec<(f64, f64)> = by_factor
         .values()
@@ -428,12 +430,8 @@ fn size_trend(c: f64, by_factor: &BTreeMap<u64, Vec<&Run>>) -> Option<String> {
     let (beta, ci) = slope_ci95(&points);
     let (f_max, largest) = by_factor.iter().next_back()?;
     let particles = mean_over(largest, |r| r.particles as f64);
-    let fastest = largest
-        .iter()
-        .copied()
-        .filter(|r| r.wall_time.is_finite())
-        .min_by(|a, b| a.wall_time.total_cmp(&b.wall_time))?;
-    let wall = fastest.wall_time;
+    let fastest =
+        largest.iter().copied().filter(|r| r.wall_time.is_finite()).min_by(|a, b| a.wall_time.total_cmp(&b.wall_time));
     let factor = [1, 2, 4, 10, 30, 100, 300, 1000, 3000].into_iter().find(|&f| f > *f_max).unwrap_or(3 * f_max);
     let next = factor as f64 / *f_max as f64;
     let trend = if beta.is_finite() {
@@ -445,15 +443,20 @@ fn size_trend(c: f64, by_factor: &BTreeMap<u64, Vec<&Run>>) -> Option<String> {
     } else {
         format!("{c} mg/ml: too few runs for a trend")
     };
+    let Some(fastest) = fastest else { return Some(trend) };
+    let (wall, slowest) = (fastest.wall_time, largest.iter().map(|r| r.wall_time).fold(f64::NAN, f64::max));
+    let threads =
+        if fastest.threads.is_finite() { format!(" on {:.0} thread(s)", fastest.threads) } else { String::new() };
+    let range = if largest.len() > 1 {
+        format!(" (the {f_max}× runs took {wall:.0}–{slowest:.0} s)")
+    } else {
+        String::new()
+    };
     Some(format!(
         "{trend}; the next size, {:.0} particles ({factor}× the paper's), would take about {:.1} h of wall time per run at \
-         the fastest {f_max}× run's {:.0} s for {particles:.0} particles{} (the {f_max}× runs took {:.0}–{:.0} s)",
+         the fastest {f_max}× run's {wall:.0} s for {particles:.0} particles{threads}{range}",
         next * particles,
         next * wall / 3600.0,
-        wall,
-        if fastest.threads.is_finite() { format!(" on {:.0} thread(s)", fastest.threads) } else { String::new() },
-        wall,
-        largest.iter().map(|r| r.wall_time).fold(f64::NAN, f64::max)
     ))
 }
 
@@ -965,8 +968,17 @@ pub fn measurement_section(
             change,
         });
     }
+    let unimaged = t.concentration.iter().flat_map(|&c| table3_runs(runs, c)).filter(|r| r.image.is_none()).count();
+    let left_out = if unimaged > 0 {
+        format!(
+            "{unimaged} completed Table 3 runs are left out, read from digests made before the image measures were kept \
+             (running their experiment files again with `magdem experiment --no-digests` adds the measures)"
+        )
+    } else {
+        String::new()
+    };
     if done.is_empty() {
-        return Ok(md + "No Table 3 runs.\n\n");
+        return Ok(md + &format!("No Table 3 runs with image measures. {left_out}\n\n"));
     }
     let mut columns = vec![
         col("concentration_mg_per_ml", done.iter().map(|d| d.0).collect()),
@@ -991,7 +1003,11 @@ pub fn measurement_section(
            chains overlapping in projection merge. This is the limit of a depth of field as deep as the sample, which \
            the experiment's is not. The truth lies between *projected* and *image*;\n\
            - *all* counts single particles and *2+* leaves them out.\n\n\
-           Mean over seeds of each run's mean, ± CI95 over seeds (µm):\n\n";
+           Mean over seeds of each run's mean, ± CI95 over seeds (µm)";
+    if unimaged > 0 {
+        md += &format!("; {left_out}");
+    }
+    md += ":\n\n";
     let _ = write!(
         md,
         "| c (mg/ml) | runs | {} | experiment |\n|---|---|{}---|\n",

@@ -3,7 +3,8 @@
 //!
 //! A report's `digests/<experiment>/` holds three Parquet tables (h5py-free, polars/pandas read
 //! them): `runs.parquet` (one row per run: id, scene hash, gap tolerance, status, message, wall
-//! time, box extent), `frames.parquet` (id, time, mean length, box-limited fraction per frame)
+//! time, threads, box extent, and the imaging and four image measures of [`Run::image`], empty
+//! and NaN for runs not imaged), `frames.parquet` (id, time, mean length, box-limited fraction per frame)
 //! and `aggregates.parquet` (id and one [`AggregateSummary`] per row, the last frame's). A run
 //! whose trajectory is absent is read from its digest when the digest's scene hash and gap
 //! tolerance are the run's own; a run read from its trajectory replaces its digest row. The
@@ -99,6 +100,7 @@ fn read(dir: &Path) -> Result<BTreeMap<String, Entry>, Error> {
     // columns; image measures of another imaging are not this report's.
     let threads = floats(&runs, "threads").unwrap_or_else(|_| vec![f64::NAN; runs.height()]);
     let imaging = strings(&runs, "imaging").unwrap_or_else(|_| vec![String::new(); runs.height()]);
+    let key = imaging_key();
     let image_columns = IMAGE_COLUMNS.map(|c| floats(&runs, c).unwrap_or_else(|_| vec![f64::NAN; runs.height()]));
     for (k, id) in strings(&runs, "id")?.into_iter().enumerate() {
         let entry = Entry {
@@ -113,7 +115,7 @@ fn read(dir: &Path) -> Result<BTreeMap<String, Entry>, Error> {
             mean_length: vec![],
             box_limited: vec![],
             last: vec![],
-            image: (imaging[k] == imaging_key()).then(|| image_columns.each_ref().map(|c| c[k])),
+            image: (imaging[k] == key).then(|| image_columns.each_ref().map(|c| c[k])),
         };
         entries.insert(id, entry);
     }
@@ -167,6 +169,7 @@ fn encode(entries: &BTreeMap<String, Entry>) -> Result<[Vec<u8>; 3], Error> {
     let bools = |name: &str, f: fn(&AggregateSummary) -> bool| {
         Column::new(name.into(), aggregates().map(f).collect::<Vec<bool>>())
     };
+    let key = imaging_key();
     let mut runs = DataFrame::new(vec![
         scol("id", entries.keys().cloned().collect()),
         scol("scene_sha256", entries.values().map(|e| e.scene_hash.clone()).collect()),
@@ -178,7 +181,7 @@ fn encode(entries: &BTreeMap<String, Entry>) -> Result<[Vec<u8>; 3], Error> {
         col("box_extent_m", all(|e| e.box_extent)),
         scol(
             "imaging",
-            entries.values().map(|e| if e.image.is_some() { imaging_key() } else { String::new() }).collect(),
+            entries.values().map(|e| if e.image.is_some() { key.clone() } else { String::new() }).collect(),
         ),
     ])?;
     for (k, name) in IMAGE_COLUMNS.iter().enumerate() {
@@ -214,9 +217,10 @@ fn encode(entries: &BTreeMap<String, Entry>) -> Result<[Vec<u8>; 3], Error> {
 /// The columns of [`Run::image`], in its order.
 const IMAGE_COLUMNS: [&str; 4] = ["projected_all_um", "projected_2plus_um", "image_all_um", "image_2plus_um"];
 
-/// The imaging the image columns were measured with ("" where a run was not imaged).
+/// The imaging the image columns were measured with ("" where a run was not imaged): its
+/// parameters and the version of the measurement, raised when the measurement itself changes.
 fn imaging_key() -> String {
-    format!("{:?}", super::runs::IMAGING)
+    format!("{:?} v{}", super::runs::IMAGING, super::runs::IMAGE_MEASURE_VERSION)
 }
 
 const FILES: [&str; 3] = ["runs.parquet", "frames.parquet", "aggregates.parquet"];

@@ -15,6 +15,9 @@ use std::path::{Path, PathBuf};
 /// field, along x, lies in it; the view is along gravity) and pixels of 0.5 µm.
 pub const IMAGING: Imaging = Imaging { axes: [0, 1], pixel: 0.5e-6 };
 
+/// The version of [`Run::image`]'s measurement: digests made with another are not read back.
+pub const IMAGE_MEASURE_VERSION: u32 = 1;
+
 /// The experiments whose runs are imaged ([`Run::image`]): the Table 3 ensemble.
 pub const IMAGED: [&str; 2] = ["paper-table3", "paper-table3-seeds"];
 
@@ -58,7 +61,7 @@ pub struct Run {
     pub box_extent: f64,
     /// Aggregates of the last frame.
     pub last: Vec<AggregateSummary>,
-    /// The last frame as an image measures it (µm; [`super::convergence::measure_images`]):
+    /// The last frame as an image measures it (µm; [`IMAGING`]):
     /// projected and image MajorAxisLength means, each over all aggregates and over those of two
     /// or more particles. Measured on the Table 3 runs only; `None` for the others.
     pub image: Option<[f64; 4]>,
@@ -225,6 +228,7 @@ fn load(
         run.status = status::UNREADABLE.into();
         run.message = e.to_string().split_whitespace().collect::<Vec<_>>().join(" ");
         (run.times, run.mean_length, run.box_limited, run.last) = (vec![], vec![], vec![], vec![]);
+        (run.image, run.threads) = (None, f64::NAN);
     }
     Ok(run)
 }
