@@ -16,8 +16,7 @@ use std::path::Path;
 
 type Error = Box<dyn std::error::Error>;
 
-/// The Table 3 ensemble: the default experiment and its opt-in continuation to 20 seeds.
-pub const TABLE3: [&str; 2] = super::runs::IMAGED;
+pub use super::runs::TABLE3;
 
 /// What the paper and the experiment report per concentration (Table 3).
 pub struct Targets {
@@ -950,9 +949,11 @@ pub fn measurement_section(
     let names = ["3-D, all", "3-D, 2+", "projected, all", "projected, 2+", "image, all", "image, 2+"];
     let mut table: Vec<Vec<Estimate>> = vec![];
     let mut done = vec![];
+    let mut unimaged = 0;
     for (&c, &exp) in t.concentration.iter().zip(&t.experiment) {
         // The runs imaged where their trajectories were read (here, or where a digest was made).
-        let here: Vec<&Run> = table3_runs(runs, c).into_iter().filter(|r| r.image.is_some()).collect();
+        let (here, missing): (Vec<&Run>, Vec<&Run>) = table3_runs(runs, c).into_iter().partition(|r| r.image.is_some());
+        unimaged += missing.len();
         if here.is_empty() {
             continue;
         }
@@ -968,7 +969,6 @@ pub fn measurement_section(
             change,
         });
     }
-    let unimaged = t.concentration.iter().flat_map(|&c| table3_runs(runs, c)).filter(|r| r.image.is_none()).count();
     let left_out = if unimaged > 0 {
         format!(
             "{unimaged} completed Table 3 runs are left out, read from digests made before the image measures were kept \
@@ -1028,7 +1028,7 @@ pub fn measurement_section(
 /// The six measures of one run's last frame (µm): 3-D, projected and image lengths, each over
 /// all aggregates and over those of two or more particles.
 fn measures(r: &Run) -> [f64; 6] {
-    let m = |v: Vec<f64>| if v.is_empty() { f64::NAN } else { 1e6 * summary(&v).mean };
+    let m = |v: Vec<f64>| super::runs::mean_um(&v);
     let finite = || r.last.iter().filter(|a| !a.percolating);
     let [projected, projected_2, image, image_2] = r.image.unwrap_or([f64::NAN; 4]);
     [

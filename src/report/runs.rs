@@ -18,8 +18,18 @@ pub const IMAGING: Imaging = Imaging { axes: [0, 1], pixel: 0.5e-6 };
 /// The version of [`Run::image`]'s measurement: digests made with another are not read back.
 pub const IMAGE_MEASURE_VERSION: u32 = 1;
 
-/// The experiments whose runs are imaged ([`Run::image`]): the Table 3 ensemble.
-pub const IMAGED: [&str; 2] = ["paper-table3", "paper-table3-seeds"];
+/// The Table 3 ensemble: the default experiment and its opt-in continuation to 20 seeds (the
+/// runs that are imaged, [`Run::image`]).
+pub const TABLE3: [&str; 2] = ["paper-table3", "paper-table3-seeds"];
+
+/// Mean of lengths in metres as µm, NaN for none.
+pub fn mean_um(lengths: &[f64]) -> f64 {
+    if lengths.is_empty() {
+        f64::NAN
+    } else {
+        1e6 * summary(lengths).mean
+    }
+}
 
 /// One point of an experiment and what its trajectory holds.
 #[derive(Default)]
@@ -290,7 +300,7 @@ fn read_run(
                     .any(|&i| now[i].x - domain.lo.x < 3.0 * radius[i] || domain.hi.x - now[i].x < 3.0 * radius[i]),
         };
         run.last = last.iter().map(summarise).collect();
-        if IMAGED.contains(&run.experiment.as_str()) {
+        if TABLE3.contains(&run.experiment.as_str()) {
             run.image = Some(image_measures(&last, &now, reader.radius(), domain));
         }
     }
@@ -305,7 +315,7 @@ fn image_measures(
     radius: &[f64],
     domain: &crate::core::domain::Domain,
 ) -> [f64; 4] {
-    let m = |v: Vec<f64>| if v.is_empty() { f64::NAN } else { 1e6 * summary(&v).mean };
+    let m = |v: Vec<f64>| mean_um(&v);
     let finite = || last.iter().filter(|a| !a.percolating);
     let projected =
         |a: &Aggregate| IMAGING.major_axis(&a.positions, &a.members.iter().map(|&i| radius[i]).collect::<Vec<_>>());
