@@ -4,7 +4,7 @@
 mod common;
 
 use magdem::io::trajectory::Trajectory;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 use tempfile::TempDir;
 
@@ -43,6 +43,14 @@ fn workdir(name: &str) -> TempDir {
     let work = tempfile::Builder::new().prefix(&format!("magdem-{name}-")).tempdir().unwrap();
     std::fs::write(work.path().join("scene.toml"), scene_text()).unwrap();
     work
+}
+
+/// [`workdir`] with its scene ending at `end_time` (as written in TOML, seconds): a short run.
+fn workdir_ending_at(name: &str, end_time: &str) -> (TempDir, PathBuf) {
+    let work = workdir(name);
+    let scene = work.path().join("scene.toml");
+    std::fs::write(&scene, scene_text().replace("end_time = 3.0e-4", &format!("end_time = {end_time}"))).unwrap();
+    (work, scene)
 }
 
 fn magdem(args: &[&str]) -> std::process::Output {
@@ -116,10 +124,8 @@ fn resume_after_kill_is_bitwise_equal_with_the_adaptive_step() {
 /// every phase of this scene is reported with a share, the shares adding to 100%.
 #[test]
 fn timings_do_not_change_the_trajectory() {
-    let work = workdir("timings");
+    let (work, scene) = workdir_ending_at("timings", "1.0e-4");
     let dir = work.path();
-    let scene = dir.join("scene.toml");
-    std::fs::write(&scene, scene_text().replace("end_time = 3.0e-4", "end_time = 1.0e-4")).unwrap();
     let (plain, timed) = (dir.join("plain.h5"), dir.join("timed.h5"));
     let out = magdem(&["run", path(&scene), "-q", "-o", path(&plain)]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
@@ -248,10 +254,8 @@ fn ctrl_c_and_resume(name: &str, text: &str, multiple: u64) {
 /// reads both), for one thread and for two.
 #[test]
 fn a_run_records_its_thread_count() {
-    let work = workdir("threads");
+    let (work, scene) = workdir_ending_at("threads", "2.0e-5");
     let dir = work.path();
-    let scene = dir.join("scene.toml");
-    std::fs::write(&scene, scene_text().replace("end_time = 3.0e-4", "end_time = 2.0e-5")).unwrap();
     for threads in [1u64, 2] {
         let file = dir.join(format!("run-{threads}.h5"));
         let out = Command::new(env!("CARGO_BIN_EXE_magdem"))
@@ -269,11 +273,9 @@ fn a_run_records_its_thread_count() {
 /// The file opens in h5py with the documented layout (h5dump when Python/h5py is absent).
 #[test]
 fn trajectory_is_readable_from_python() {
-    let work = workdir("h5py");
+    let (work, scene) = workdir_ending_at("h5py", "4.0e-5");
     let dir = work.path();
-    let scene = dir.join("scene.toml");
     let file = dir.join("run.h5");
-    std::fs::write(&scene, scene_text().replace("end_time = 3.0e-4", "end_time = 4.0e-5")).unwrap();
     assert!(magdem(&["run", path(&scene), "-q", "-o", path(&file)]).status.success());
     let script = r#"
 import sys, h5py, numpy as np
@@ -316,10 +318,8 @@ print("h5py ok", pos.shape)
 /// not resumed into; every refusal exits 2 with one line naming the file.
 #[test]
 fn an_existing_output_is_refused_unless_overwritten() {
-    let work = workdir("overwrite");
+    let (work, scene) = workdir_ending_at("overwrite", "4.0e-5");
     let dir = work.path();
-    let scene = dir.join("scene.toml");
-    std::fs::write(&scene, scene_text().replace("end_time = 3.0e-4", "end_time = 4.0e-5")).unwrap();
     let file = dir.join("run.h5");
     assert!(magdem(&["run", path(&scene), "-q", "-o", path(&file)]).status.success());
     let before = std::fs::read(&file).unwrap();
@@ -348,10 +348,8 @@ fn an_existing_output_is_refused_unless_overwritten() {
 /// leaves no stuck lock, and `--resume` continues its file.
 #[test]
 fn a_second_writer_is_refused_and_a_killed_one_leaves_no_lock() {
-    let work = workdir("lock");
+    let (work, scene) = workdir_ending_at("lock", "3.0e-3");
     let dir = work.path();
-    let scene = dir.join("scene.toml");
-    std::fs::write(&scene, scene_text().replace("end_time = 3.0e-4", "end_time = 3.0e-3")).unwrap();
     let file = dir.join("run.h5");
     let mut first = Command::new(env!("CARGO_BIN_EXE_magdem"))
         .args(["run", path(&scene), "-q", "-o", path(&file)])
@@ -444,10 +442,8 @@ fn a_full_disk_stops_the_run_cleanly_and_resume_continues() {
 /// file from `info`, `analyse` and `run --resume`.
 #[test]
 fn damaged_and_foreign_files_are_refused_with_one_line_naming_them() {
-    let work = workdir("damaged");
+    let (work, scene) = workdir_ending_at("damaged", "4.0e-5");
     let dir = work.path();
-    let scene = dir.join("scene.toml");
-    std::fs::write(&scene, scene_text().replace("end_time = 3.0e-4", "end_time = 4.0e-5")).unwrap();
     let good = dir.join("good.h5");
     assert!(magdem(&["run", path(&scene), "-q", "-o", path(&good)]).status.success());
     let bytes = std::fs::read(&good).unwrap();
@@ -510,10 +506,8 @@ fn every_state_field_round_trips_through_the_checkpoint() {
 #[test]
 fn a_closed_output_pipe_ends_the_command_quietly() {
     use std::os::unix::process::ExitStatusExt;
-    let work = workdir("pipe");
-    let dir = work.path();
-    let (scene, file) = (dir.join("scene.toml"), dir.join("run.h5"));
-    std::fs::write(&scene, scene_text().replace("end_time = 3.0e-4", "end_time = 4.0e-5")).unwrap();
+    let (work, scene) = workdir_ending_at("pipe", "4.0e-5");
+    let file = work.path().join("run.h5");
     assert!(magdem(&["run", path(&scene), "-q", "-o", path(&file)]).status.success());
     let mut child = Command::new(env!("CARGO_BIN_EXE_magdem"))
         .args(["analyse", path(&file)])
