@@ -198,3 +198,63 @@ fn box_statistics_follow_the_definitions() {
     assert!((b.mean - 14.5).abs() < 1e-12);
     assert!(BoxStats::of("x", RGBColor(0, 0, 0), &[]).is_none());
 }
+
+/// The sensitivity study at a concentration other than the paper's 2.25 mg/ml: each change is
+/// paired seed by seed with the `respa` reference of the same concentration, in the table and in
+/// the ranking of explanations at that concentration.
+#[test]
+fn sensitivity_changes_are_paired_and_ranked_at_their_own_concentration() {
+    let work = tempfile::Builder::new().prefix("magdem-sensitivity-").tempdir().unwrap();
+    let dir = work.path();
+    let experiments = dir.join("experiments");
+    std::fs::create_dir_all(&experiments).unwrap();
+    std::fs::write(dir.join("case1-c0.563.toml"), scene()).unwrap();
+    let runs = dir.join("runs");
+    let file = experiments.join("sensitivity-concentrations.toml");
+    std::fs::write(
+        &file,
+        format!(
+            "name = \"paper-sensitivity-concentrations\"\nbases = [\"../case1-c0.563.toml\"]\noutput = \"{}\"\n\
+             [sweep]\nseed = [1, 2, 3]\n[variants.respa]\n[variants.no-induction]\n\"forces.dipole.induction\" = \"none\"\n",
+            runs.display()
+        ),
+    )
+    .unwrap();
+    let experiment = Experiment::from_file(&file).unwrap();
+    run_experiment(&experiment, &ExperimentOptions { jobs: Some(2), ..Default::default() }).unwrap();
+    let out = dir.join("report");
+    write_report(&PaperReportOptions {
+        experiments: experiments.clone(),
+        reference: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("reference/paper"),
+        out: out.clone(),
+        gap: 1e-3,
+        wall_time: None,
+    })
+    .unwrap();
+
+    // Independently: each seed's mean length, then the paired relative change.
+    let mean_length = |variant: &str, seed: u64| {
+        let t = Trajectory::open(&runs.join(format!("case1-c0.563__{variant}__seed-{seed}.h5"))).unwrap();
+        let (_, aggs) = frame_aggregates(&t, -1, 1e-3).unwrap();
+        summary(&aggs.iter().map(|a| a.length * 1e6).collect::<Vec<_>>()).mean
+    };
+    let reference: Vec<f64> = (1..=3).map(|s| mean_length("respa", s)).collect();
+    let changed: Vec<f64> = (1..=3).map(|s| mean_length("no-induction", s)).collect();
+    let base = summary(&reference).mean;
+    let expected =
+        summary(&reference.iter().zip(&changed).map(|(a, b)| 100.0 * (b - a) / base).collect::<Vec<_>>()).mean;
+    assert!(expected != 0.0, "induction changes the chains: {reference:?} vs {changed:?}");
+
+    let number = |df: &DataFrame, column: &str| df.column(column).unwrap().f64().unwrap().get(0).unwrap();
+    let sensitivity = read_csv(&out.join("tables/sensitivity.csv"));
+    assert_eq!(sensitivity.height(), 1, "one change at one concentration");
+    assert_eq!(number(&sensitivity, "concentration_mg_per_ml"), 0.563);
+    let reported = number(&sensitivity, "paired_change_percent");
+    assert!((reported - expected).abs() <= 1e-9 * expected.abs(), "table {reported} vs analysis {expected}");
+
+    let ranking = read_csv(&out.join("tables/explanations.csv"));
+    let induction = ranking.filter(&ranking.column("explanation").unwrap().str().unwrap().equal("induction")).unwrap();
+    assert_eq!(induction.height(), 1, "{ranking}");
+    assert_eq!(number(&induction, "concentration_mg_per_ml"), 0.563);
+    assert_eq!(number(&induction, "change_percent"), reported);
+}

@@ -798,59 +798,80 @@ fn approach_section(runs: &[Run], out: &Path) -> Result<String, Error> {
     ))
 }
 
+/// The sensitivity experiments: `sensitivity.toml` (2.25 mg/ml, ten seeds, numerical and
+/// physical changes) and `sensitivity-concentrations.toml` (the physical changes at the other three).
+const SENSITIVITY: [&str; 2] = ["paper-sensitivity", "paper-sensitivity-concentrations"];
+
 fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Vec<Effect>) -> Result<String, Error> {
-    let variants: Vec<&Run> = runs.iter().filter(|r| r.experiment == "paper-sensitivity").collect();
     let mut md = String::from("## Sensitivity: which choices move the case-1 answer\n\n");
-    let Some(first) = variants.first() else {
-        md += "No runs of `experiments/paper/sensitivity.toml`.\n\n";
-        return Ok(md);
-    };
-    let mut groups: BTreeMap<String, Vec<&Run>> = BTreeMap::new();
-    for r in &variants {
-        groups.entry(r.variant.clone()).or_default().push(r);
+    // Concentration (as printed) → variant → runs.
+    let mut studies: BTreeMap<u64, BTreeMap<String, Vec<&Run>>> = BTreeMap::new();
+    for r in runs.iter().filter(|r| SENSITIVITY.contains(&r.experiment.as_str())) {
+        let key = (r.concentration * 1e3).round() as u64;
+        studies.entry(key).or_default().entry(r.variant.clone()).or_default().push(r);
     }
-    let reference: Vec<&Run> =
-        groups.get("respa").map_or(vec![], |g| g.iter().copied().filter(|r| r.completed()).collect());
-    if reference.is_empty() {
+    studies.retain(|_, groups| !reference_of(groups).is_empty());
+    if studies.is_empty() {
         md += "Not run: `experiments/paper/opt-in/sensitivity.toml` (its reference variant `respa` has no completed runs) enters here \
                when its runs exist.\n\n";
         return Ok(md);
     }
-    let base = convergence::Estimate::of(&reference.iter().map(|r| r.mean_length_um()).collect::<Vec<_>>());
-    let shared: Vec<String> = reference.first().map(|r| r.variant_overrides.clone()).unwrap_or_default();
-    let (mut names, mut changes, mut done_runs, mut means, mut deltas, mut delta_cis, mut outcome, mut cost) =
-        (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
-    let (mut capped, mut fastest) = (vec![], vec![]);
-    let mut bars = vec![];
-    for (name, group) in groups.iter().filter(|(name, _)| name.as_str() != "respa") {
-        let ok: Vec<&Run> = group.iter().copied().filter(|r| r.completed()).collect();
-        let d = convergence::paired_change(&reference, &ok);
-        names.push(name.clone());
-        changes.push(
-            group[0].variant_overrides.iter().filter(|o| !shared.contains(o)).cloned().collect::<Vec<_>>().join(", "),
-        );
-        done_runs.push(ok.len() as u64);
-        means.push(mean(&ok.iter().map(|r| r.mean_length_um()).collect::<Vec<_>>()));
-        capped.push(mean(&ok.iter().map(|r| r.box_limited_fraction()).collect::<Vec<_>>()));
-        // A held force that pumps energy into contacts shows as aggregates still flying at the end.
-        fastest.push(ok.iter().flat_map(|r| r.last.iter().map(|a| a.com_velocity.norm())).fold(f64::NAN, f64::max));
-        deltas.push(d.mean);
-        delta_cis.push(d.ci95);
-        outcome.push(variant_outcome(group, ok.len()));
-        cost.push(mean(&group.iter().map(|r| r.wall_time).collect::<Vec<_>>()));
-        if d.n > 0 {
-            bars.push((name.clone(), d));
-            if let Some(explanation) = sensitivity_explanation(name) {
-                effects.push(Effect {
-                    concentration: first.concentration,
-                    explanation,
-                    what: format!("{name} against r-RESPA, paired over {} seeds", d.n),
-                    change: d,
-                });
+    let (mut conc, mut names, mut changes, mut done_runs, mut means) = (vec![], vec![], vec![], vec![], vec![]);
+    let (mut deltas, mut delta_cis, mut outcome, mut cost, mut capped, mut fastest) =
+        (vec![], vec![], vec![], vec![], vec![], vec![]);
+    let (mut panels, mut references) = (vec![], vec![]);
+    for groups in studies.values() {
+        let reference = reference_of(groups);
+        let c = reference[0].concentration;
+        let base = convergence::Estimate::of(&reference.iter().map(|r| r.mean_length_um()).collect::<Vec<_>>());
+        let shared = reference[0].variant_overrides.clone();
+        references.push(format!(
+            "{c} mg/ml: `{}`, seeds {}, reference {} µm",
+            reference[0].scene,
+            seed_list(&reference.iter().map(|r| r.seed).collect::<Vec<_>>()),
+            base.cell(1)
+        ));
+        let mut bars = vec![];
+        for (name, group) in groups.iter().filter(|(name, _)| name.as_str() != "respa") {
+            let ok: Vec<&Run> = group.iter().copied().filter(|r| r.completed()).collect();
+            let d = convergence::paired_change(&reference, &ok);
+            conc.push(c);
+            names.push(name.clone());
+            changes.push(
+                group[0]
+                    .variant_overrides
+                    .iter()
+                    .filter(|o| !shared.contains(o))
+                    .cloned()
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            );
+            done_runs.push(ok.len() as u64);
+            means.push(mean(&ok.iter().map(|r| r.mean_length_um()).collect::<Vec<_>>()));
+            capped.push(mean(&ok.iter().map(|r| r.box_limited_fraction()).collect::<Vec<_>>()));
+            // A held force that pumps energy into contacts shows as aggregates still flying at the end.
+            fastest.push(ok.iter().flat_map(|r| r.last.iter().map(|a| a.com_velocity.norm())).fold(f64::NAN, f64::max));
+            deltas.push(d.mean);
+            delta_cis.push(d.ci95);
+            outcome.push(variant_outcome(group, ok.len()));
+            cost.push(mean(&group.iter().map(|r| r.wall_time).collect::<Vec<_>>()));
+            if d.n > 0 {
+                bars.push((name.clone(), d));
+                if let Some(explanation) = sensitivity_explanation(name) {
+                    effects.push(Effect {
+                        concentration: c,
+                        explanation,
+                        what: format!("{name} against r-RESPA, paired over {} seeds", d.n),
+                        change: d,
+                    });
+                }
             }
         }
+        let seeds = reference.len();
+        panels.push(sensitivity_panel(&bars, c, seeds));
     }
     let mut df = frame(vec![
+        col("concentration_mg_per_ml", conc),
         scol("variant", names),
         scol("change", changes),
         ucol("runs", done_runs),
@@ -864,17 +885,17 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
     ])?;
     write(&mut df, tables, "sensitivity")?;
     md += &format!(
-        "`experiments/paper/opt-in/sensitivity.toml`: scene `{}`, seeds {}; one change at a time against the reference variant \
-         `respa` ({}: mean length {} µm). Each change is paired seed by seed: each seed's difference over the \
-         reference mean, mean ± CI95 over the seeds. A change matters when its CI95 excludes zero.\n\n",
-        first.scene,
-        seed_list(&reference.iter().map(|r| r.seed).collect::<Vec<_>>()),
-        shared.join(", "),
-        base.cell(1)
+        "`experiments/paper/opt-in/sensitivity.toml` (2.25 mg/ml, ten seeds: numerical and physical choices) and \
+         `sensitivity-concentrations.toml` (the physical choices and the paper's pipeline at the other concentrations, three \
+         seeds); one change at a time against the reference variant `respa` (integration.scheme = \"respa\", \
+         integration.slow_every = 10) of the same scene and seeds ({}). Each change is paired seed by seed: each seed's \
+         difference over the reference mean, mean ± CI95 over the seeds. A change matters when its CI95 excludes zero.\n\n",
+        references.join("; ")
     );
     md += &markdown(
         &df,
         &[
+            "c (mg/ml)",
             "variant",
             "change",
             "runs",
@@ -886,7 +907,7 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
             "wall time/run (s)",
             "outcome",
         ],
-        &[0, 0, 0, 1, 3, 4, 1, 1, 0, 0],
+        &[3, 0, 0, 0, 1, 3, 4, 1, 1, 0, 0],
     )?;
     md += "\nThe paper's pipeline holds the moments and dipole forces over each 1e-6 s outer step while contacts are resolved at \
            1e-8 s. A contact closes and reopens within about 7e-8 s, so the held attraction keeps pulling on a pair that has already \
@@ -895,7 +916,14 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
            is a numerical choice, not a modelling one: the shielded drag's coefficients renewed once per outer step \
            instead of every step (a 100× step 28 % shorter, `reports/performance-history.md`); it is not an explanation \
            and stays out of the ranking below.\n";
-    sensitivity_figure(&bars, first.concentration, out)?;
+    category_panels(
+        &out.join("sensitivity.png"),
+        "Case 1: which choices move the mean length (each variant against r-RESPA, paired seed by seed)",
+        &panels,
+        2,
+        (900, 520),
+        Mark::Dots,
+    )?;
     md += "\n![Sensitivity](sensitivity.png)\n\n";
     Ok(md)
 }
@@ -928,10 +956,16 @@ fn sensitivity_explanation(variant: &str) -> Option<&'static str> {
     }
 }
 
-/// The sensitivity figure: each variant's paired change with its CI95 over seeds.
-fn sensitivity_figure(bars: &[(String, convergence::Estimate)], concentration: f64, out: &Path) -> Result<(), Error> {
-    let panel = BarPanel {
-        title: format!("{concentration} mg/ml, each variant against r-RESPA, paired seed by seed"),
+/// The completed runs of a sensitivity study's reference variant `respa`.
+fn reference_of<'a>(groups: &BTreeMap<String, Vec<&'a Run>>) -> Vec<&'a Run> {
+    groups.get("respa").map_or(vec![], |g| g.iter().copied().filter(|r| r.completed()).collect())
+}
+
+/// One concentration's panel of the sensitivity figure: each variant's paired change with its
+/// CI95 over seeds.
+fn sensitivity_panel(bars: &[(String, convergence::Estimate)], concentration: f64, seeds: usize) -> BarPanel {
+    BarPanel {
+        title: format!("{concentration} mg/ml ({seeds} seeds)"),
         y_label: "change of the mean length at 5 ms (%)".into(),
         categories: bars.iter().map(|(name, _)| name.clone()).collect(),
         groups: vec![BarGroup {
@@ -940,16 +974,7 @@ fn sensitivity_figure(bars: &[(String, convergence::Estimate)], concentration: f
             values: bars.iter().map(|(_, d)| d.mean).collect(),
             errors: bars.iter().map(|(_, d)| d.ci95).collect(),
         }],
-    };
-    category_panels(
-        &out.join("sensitivity.png"),
-        "Case 1: which choices move the mean length",
-        &[panel],
-        1,
-        (1000, 560),
-        Mark::Dots,
-    )?;
-    Ok(())
+    }
 }
 
 /// The paper's box in the walls-and-count comparison.
