@@ -15,14 +15,17 @@ impl Domain {
         self.hi - self.lo
     }
 
-    /// Minimum-image displacement a − b.
+    /// Minimum-image displacement a − b: d − L·round(d/L) on periodic axes. Only a component
+    /// reaching half the box needs it (below, round(d/L) is 0), so most pairs skip the division.
     #[inline]
     pub fn displacement(&self, a: &Vec3, b: &Vec3) -> Vec3 {
         let mut d = a - b;
         for k in 0..3 {
             if self.periodic[k] {
                 let l = self.hi[k] - self.lo[k];
-                d[k] -= l * (d[k] / l).round();
+                if d[k].abs() >= 0.5 * l {
+                    d[k] -= l * (d[k] / l).round();
+                }
             }
         }
         d
