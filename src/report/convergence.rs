@@ -1042,6 +1042,21 @@ fn measures(r: &Run) -> [f64; 6] {
 }
 
 /// Every explanation ranked by the size of its effect at each concentration.
+/// The explanations the ranking weighs at each concentration; each block names those without a
+/// measurement at its concentration.
+const EXPLANATIONS: [&str; 10] = [
+    "box",
+    "stopping time",
+    "magnetisation",
+    "measurement",
+    "induction",
+    "shielding",
+    "restitution",
+    "integration",
+    "the paper's pipeline",
+    "seeds",
+];
+
 pub fn ranking_section(effects: &[Effect], t: &Targets, runs: &[Run], tables: &Path) -> Result<String, Error> {
     let mut md = String::from("## Why the numbers differ\n\n");
     if effects.is_empty() {
@@ -1085,6 +1100,11 @@ pub fn ranking_section(effects: &[Effect], t: &Targets, runs: &[Run], tables: &P
             m_col.push(e.change.mean);
             ci_col.push(e.change.ci95);
             n_col.push(e.change.n as f64);
+        }
+        let missing: Vec<&str> =
+            EXPLANATIONS.iter().copied().filter(|x| !here.iter().any(|e| e.explanation == *x)).collect();
+        if !missing.is_empty() {
+            let _ = writeln!(md, "\nNot measured at {c} mg/ml: {}.", missing.join(", "));
         }
         md += "\n";
     }
