@@ -53,37 +53,42 @@ fn read_csv(path: &Path) -> DataFrame {
         .unwrap()
 }
 
-#[test]
-fn report_tables_are_the_analysis_of_the_runs() {
+/// A work directory holding [`scene`] and the experiment `experiments/FILE.toml` named `name`
+/// (its `[sweep]` and `[variants]` in `table`), run on two jobs into `runs/`; returns the
+/// directory's guard, its `experiments/` and its `runs/`.
+fn ran(file: &str, name: &str, table: &str) -> (tempfile::TempDir, PathBuf, PathBuf) {
     let work = tempfile::Builder::new().prefix("magdem-report-").tempdir().unwrap();
     let dir = work.path();
     let experiments = dir.join("experiments");
     std::fs::create_dir_all(&experiments).unwrap();
     std::fs::write(dir.join("case1-c0.563.toml"), scene()).unwrap();
     let runs = dir.join("runs");
-    let file = experiments.join("table3.toml");
-    std::fs::write(
-        &file,
-        format!(
-            "name = \"paper-table3\"\nbases = [\"../case1-c0.563.toml\"]\noutput = \"{}\"\n[sweep]\nseed = [1, 2, 3]\n",
-            runs.display()
-        ),
-    )
-    .unwrap();
+    let file = experiments.join(file);
+    let text =
+        format!("name = \"{name}\"\nbases = [\"../case1-c0.563.toml\"]\noutput = \"{}\"\n{table}", runs.display());
+    std::fs::write(&file, text).unwrap();
     let experiment = Experiment::from_file(&file).unwrap();
     run_experiment(&experiment, &ExperimentOptions { jobs: Some(2), ..Default::default() }).unwrap();
+    (work, experiments, runs)
+}
 
-    let out = dir.join("report");
-    let report = |wall_time| {
-        write_report(&PaperReportOptions {
-            experiments: experiments.clone(),
-            reference: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("reference/paper"),
-            out: out.clone(),
-            gap: 1e-3,
-            wall_time,
-        })
-        .unwrap()
-    };
+/// The paper report of the runs of `experiments`, written to `out`; returns its README.
+fn paper_report(experiments: &Path, out: &Path, wall_time: Option<f64>) -> PathBuf {
+    write_report(&PaperReportOptions {
+        experiments: experiments.to_path_buf(),
+        reference: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("reference/paper"),
+        out: out.to_path_buf(),
+        gap: 1e-3,
+        wall_time,
+    })
+    .unwrap()
+}
+
+#[test]
+fn report_tables_are_the_analysis_of_the_runs() {
+    let (work, experiments, runs) = ran("table3.toml", "paper-table3", "[sweep]\nseed = [1, 2, 3]\n");
+    let out = work.path().join("report");
+    let report = |wall_time| paper_report(&experiments, &out, wall_time);
     let readme = report(Some(12.0));
     let text = std::fs::read_to_string(&readme).unwrap();
     let measured = |out: &Path| {
@@ -204,33 +209,13 @@ fn box_statistics_follow_the_definitions() {
 /// the ranking of explanations at that concentration.
 #[test]
 fn sensitivity_changes_are_paired_and_ranked_at_their_own_concentration() {
-    let work = tempfile::Builder::new().prefix("magdem-sensitivity-").tempdir().unwrap();
-    let dir = work.path();
-    let experiments = dir.join("experiments");
-    std::fs::create_dir_all(&experiments).unwrap();
-    std::fs::write(dir.join("case1-c0.563.toml"), scene()).unwrap();
-    let runs = dir.join("runs");
-    let file = experiments.join("sensitivity-concentrations.toml");
-    std::fs::write(
-        &file,
-        format!(
-            "name = \"paper-sensitivity-concentrations\"\nbases = [\"../case1-c0.563.toml\"]\noutput = \"{}\"\n\
-             [sweep]\nseed = [1, 2, 3]\n[variants.respa]\n[variants.no-induction]\n\"forces.dipole.induction\" = \"none\"\n",
-            runs.display()
-        ),
-    )
-    .unwrap();
-    let experiment = Experiment::from_file(&file).unwrap();
-    run_experiment(&experiment, &ExperimentOptions { jobs: Some(2), ..Default::default() }).unwrap();
-    let out = dir.join("report");
-    write_report(&PaperReportOptions {
-        experiments: experiments.clone(),
-        reference: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("reference/paper"),
-        out: out.clone(),
-        gap: 1e-3,
-        wall_time: None,
-    })
-    .unwrap();
+    let (work, experiments, runs) = ran(
+        "sensitivity-concentrations.toml",
+        "paper-sensitivity-concentrations",
+        "[sweep]\nseed = [1, 2, 3]\n[variants.respa]\n[variants.no-induction]\n\"forces.dipole.induction\" = \"none\"\n",
+    );
+    let out = work.path().join("report");
+    paper_report(&experiments, &out, None);
 
     // Independently: each seed's mean length, then the paired relative change.
     let mean_length = |variant: &str, seed: u64| {

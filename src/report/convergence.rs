@@ -1041,7 +1041,6 @@ fn measures(r: &Run) -> [f64; 6] {
     ]
 }
 
-/// Every explanation ranked by the size of its effect at each concentration.
 /// The explanations the ranking weighs at each concentration; each block names those without a
 /// measurement at its concentration.
 const EXPLANATIONS: [&str; 10] = [
@@ -1057,6 +1056,7 @@ const EXPLANATIONS: [&str; 10] = [
     "seeds",
 ];
 
+/// Every explanation ranked by the size of its effect at each concentration.
 pub fn ranking_section(effects: &[Effect], t: &Targets, runs: &[Run], tables: &Path) -> Result<String, Error> {
     let mut md = String::from("## Why the numbers differ\n\n");
     if effects.is_empty() {
