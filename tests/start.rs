@@ -182,7 +182,10 @@ fn a_start_numbered_in_space_is_the_same_state_renamed() {
         assert_eq!(*renamed, if x < y { *spring } else { -*spring });
         flipped += (x > y) as usize;
     }
-    assert!(flipped > 0 && b.pairs.windows(2).all(|w| w[0].0 < w[1].0), "flipped pairs, sorted again");
+    assert!(
+        flipped > 0 && b.pairs.iter().zip(b.pairs.iter().skip(1)).all(|(x, y)| x.0 < y.0),
+        "flipped pairs, sorted again"
+    );
     for ((i, face), spring) in &a.walls {
         let key = (new[*i as usize] as u32, *face);
         assert!(b.walls.iter().any(|(k, s)| *k == key && s == spring), "wall spring of {i} on face {face}");

@@ -485,7 +485,8 @@ fn every_state_field_round_trips_through_the_checkpoint() {
         }
     }
     state.particles.has_permanent_moments = true;
-    state.contacts.pairs = vec![((0, 3), Vec3::new(1e-9, -2e-9, 3e-9)), ((4, 59), Vec3::new(-1e-10, 0.0, 5e-10))];
+    state.contacts.pairs =
+        vec![((0, 3), Vec3::new(1e-9, -2e-9, 3e-9)), ((4, 59), Vec3::new(-1e-10, 0.0, 5e-10))].into();
     state.contacts.walls = vec![((2, 1), Vec3::new(0.0, 7e-10, -1e-10)), ((2, 4), Vec3::new(3e-11, 0.0, 0.0))];
     (state.step, state.time, state.next_substep) = (123_456, 1.23456e-3, Some(3.3e-10));
     let work = workdir("round-trip");

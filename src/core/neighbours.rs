@@ -149,6 +149,8 @@ pub struct VerletList {
     cells: CellList,
     scratch: Vec<Pair>,
     candidates: Vec<(u32, u32)>,
+    /// `reach[j]`: the lowest row i of a candidate (i, j') with j' ≥ j (`u32::MAX` if none).
+    reach: Vec<u32>,
     reference: Vec<Vec3>,
     built_for: Option<(f64, f64)>,
     /// The skin of the last build (at most the declared one).
@@ -206,6 +208,15 @@ impl VerletList {
         self.cells.pairs_within(positions, domain, Some(range + self.in_use), &mut self.scratch);
         self.candidates.clear();
         self.candidates.extend(self.scratch.iter().map(|p| (p.i, p.j)));
+        self.reach.clear();
+        self.reach.resize(positions.len(), u32::MAX);
+        for &(i, j) in &self.candidates {
+            let lowest = &mut self.reach[j as usize];
+            *lowest = (*lowest).min(i);
+        }
+        for j in (1..self.reach.len()).rev() {
+            self.reach[j - 1] = self.reach[j - 1].min(self.reach[j]);
+        }
         self.reference.clear();
         self.reference.extend_from_slice(positions);
         self.built_for = Some((range, skin));
@@ -217,6 +228,13 @@ impl VerletList {
     /// Candidate pairs (i < j) within range + skin of the last build, sorted by (i, j).
     pub fn candidates(&self) -> &[(u32, u32)] {
         &self.candidates
+    }
+
+    /// The lowest row i of a candidate (i, j) with j ≥ `lo` (at most `lo`; 0 before a build):
+    /// the rows before it reach no particle from `lo` on, so a share of particles from `lo`
+    /// skips them.
+    pub fn first_row_reaching(&self, lo: usize) -> usize {
+        self.reach.get(lo).map_or(0, |&i| (i as usize).min(lo))
     }
 
     /// Fills `out` with the pairs closer than `range` in (i, j) order; `skin` is the largest
@@ -323,6 +341,7 @@ pub struct PairNeed {
 #[derive(Debug, Clone, Copy)]
 pub struct Candidates<'a> {
     pub list: &'a [(u32, u32)],
+    verlet: Option<&'a VerletList>,
     range2: f64,
     domain: &'a Domain,
     periodic: bool,
@@ -336,6 +355,13 @@ impl Candidates<'_> {
         let r = if self.periodic { self.domain.displacement(a, b) } else { a - b };
         let d2 = r.norm_squared();
         (d2 < self.range2).then(|| Pair { i, j, r, dist: d2.sqrt() })
+    }
+
+    /// The lowest row with a candidate reaching particle `lo` or beyond
+    /// ([`VerletList::first_row_reaching`]; 0 without candidates); every pair within the range,
+    /// listed by any term, is a candidate, so the bound holds for listed pairs of the range too.
+    pub fn first_row_reaching(&self, lo: usize) -> usize {
+        self.verlet.map_or(0, |v| v.first_row_reaching(lo))
     }
 }
 
@@ -487,11 +513,12 @@ impl Neighbours {
     /// The candidates of `range` (a [`PairRange::Within`]; none for a range no term declared) in
     /// `domain`, the one the layer was updated for.
     pub fn candidates<'a>(&'a self, range: PairRange, domain: &'a Domain) -> Candidates<'a> {
-        let (list, range2) = match (self.list(range), range) {
-            (Some(l), PairRange::Within { range, .. }) => (l.verlet.candidates(), range * range),
-            _ => (&[][..], 0.0),
+        let (verlet, range2) = match (self.list(range), range) {
+            (Some(l), PairRange::Within { range, .. }) => (Some(&l.verlet), range * range),
+            _ => (None, 0.0),
         };
-        Candidates { list, range2, domain, periodic: domain.periodic != [false; 3] }
+        let list = verlet.map_or(&[][..], |v| v.candidates());
+        Candidates { list, verlet, range2, domain, periodic: domain.periodic != [false; 3] }
     }
 
     /// The listed pairs within `range` (`None`: all pairs) when some term lists that range, with
@@ -575,6 +602,24 @@ mod tests {
     /// A skin of a whole range narrows to its floor while the particles drift slowly (rebuilds
     /// rare) and widens again while they drift fast (rebuilds frequent); the pairs are the
     /// brute-force ones throughout.
+    /// The row bound a share of particles from `lo` starts its earlier rows at: no candidate of a
+    /// row before it reaches `lo` or beyond, and one of its own row does (unless it is `lo`).
+    #[test]
+    fn the_first_row_reaching_a_share_is_the_lowest_whose_candidates_reach_it() {
+        let (_, domain, pos) = random_box(9, [true, false, true]);
+        let mut list = VerletList::default();
+        assert_eq!(list.first_row_reaching(150), 0, "before a build, no row is skipped");
+        list.update(&pos, &domain, 0.1, 0.02);
+        let candidates = list.candidates();
+        for lo in [1, 17, 150, 299] {
+            let first = list.first_row_reaching(lo);
+            assert!(candidates.iter().all(|&(i, j)| (i as usize) >= first || (j as usize) < lo), "lo {lo}");
+            let reaching = candidates.iter().any(|&(i, j)| i as usize == first && j as usize >= lo);
+            assert!(first == lo || reaching, "lo {lo}: row {first} reaches nothing from lo on");
+            assert!(first < lo, "lo {lo}: 300 particles in a 0.1-range box have partners across any split");
+        }
+    }
+
     #[test]
     fn a_wide_skin_narrows_when_rebuilds_are_rare_and_widens_when_they_are_frequent() {
         let (mut rng, domain, mut pos) = random_box(3, [true; 3]);

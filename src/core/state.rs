@@ -301,8 +301,73 @@ pub type WallFace = u8;
 /// checkpoint stores them in a deterministic order.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ContactHistory {
-    pub pairs: Vec<((u32, u32), Vec3)>,
+    pub pairs: PairSprings,
     pub walls: Vec<((u32, WallFace), Vec3)>,
+}
+
+/// A pair contact's key (i < j) and tangential spring.
+pub type PairSpring = ((u32, u32), Vec3);
+
+/// The pair contacts' springs, sorted by key, held in consecutive pieces: the contact pass writes
+/// one piece per share of particles, in parallel, and the pieces are never joined (a join would
+/// copy every spring on one thread each step). Read as one sequence.
+#[derive(Debug, Clone, Default)]
+pub struct PairSprings {
+    pieces: Vec<Vec<PairSpring>>,
+}
+
+impl PairSprings {
+    /// Pieces each sorted by key, every key of a piece below those of the pieces after it.
+    pub fn from_pieces(pieces: Vec<Vec<PairSpring>>) -> Self {
+        debug_assert!(
+            pieces.iter().flatten().zip(pieces.iter().flatten().skip(1)).all(|(a, b)| a.0 < b.0),
+            "springs sorted by key"
+        );
+        Self { pieces }
+    }
+
+    pub fn pieces(&self) -> &[Vec<PairSpring>] {
+        &self.pieces
+    }
+
+    pub fn into_pieces(self) -> Vec<Vec<PairSpring>> {
+        self.pieces
+    }
+
+    pub fn iter(&self) -> impl Iterator<Item = &PairSpring> + Clone + '_ {
+        self.pieces.iter().flatten()
+    }
+
+    pub fn len(&self) -> usize {
+        self.pieces.iter().map(Vec::len).sum()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.pieces.iter().all(Vec::is_empty)
+    }
+}
+
+/// Springs in any order, sorted by key.
+impl From<Vec<PairSpring>> for PairSprings {
+    fn from(mut springs: Vec<PairSpring>) -> Self {
+        springs.sort_unstable_by_key(|(key, _)| *key);
+        Self { pieces: vec![springs] }
+    }
+}
+
+/// The same springs in the same order, however they are split into pieces.
+impl PartialEq for PairSprings {
+    fn eq(&self, other: &Self) -> bool {
+        self.iter().eq(other.iter())
+    }
+}
+
+impl<'a> IntoIterator for &'a PairSprings {
+    type Item = &'a PairSpring;
+    type IntoIter = std::iter::Flatten<std::slice::Iter<'a, Vec<PairSpring>>>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.pieces.iter().flatten()
+    }
 }
 
 /// What the last force evaluation saw that the stability monitor needs.

@@ -318,7 +318,8 @@ impl TrajectoryWriter {
             }
             let (pairs, walls) = (&state.contacts.pairs, &state.contacts.walls);
             let keys =
-                Array2::from_shape_fn((pairs.len(), 2), |(r, c)| if c == 0 { pairs[r].0 .0 } else { pairs[r].0 .1 });
+                Array2::from_shape_vec((pairs.len(), 2), pairs.iter().flat_map(|((i, j), _)| [*i, *j]).collect())
+                    .expect("two keys per spring");
             let shear = vec3_rows(&pairs.iter().map(|p| p.1).collect::<Vec<_>>());
             let wkeys =
                 Array2::from_shape_fn(
@@ -434,14 +435,11 @@ impl Trajectory {
         let shear: Array2<f64> = ck.dataset("pair_shear")?.read_2d()?;
         let wkeys: Array2<u32> = ck.dataset("wall_keys")?.read_2d()?;
         let wshear: Array2<f64> = ck.dataset("wall_shear")?.read_2d()?;
-        let mut contacts = ContactHistory::default();
-        for (k, s) in keys.rows().into_iter().zip(rows_vec3(&shear)) {
-            contacts.pairs.push(((k[0], k[1]), s));
-        }
+        let pairs: Vec<_> = keys.rows().into_iter().zip(rows_vec3(&shear)).map(|(k, s)| ((k[0], k[1]), s)).collect();
+        let mut contacts = ContactHistory { pairs: pairs.into(), ..Default::default() };
         for (k, s) in wkeys.rows().into_iter().zip(rows_vec3(&wshear)) {
             contacts.walls.push(((k[0], k[1] as u8), s));
         }
-        contacts.pairs.sort_unstable_by_key(|(k, _)| *k);
         contacts.walls.sort_unstable_by_key(|(k, _)| *k);
         let step: u64 = ck.attr("step")?.read_scalar()?;
         let time: f64 = ck.attr("time")?.read_scalar()?;

@@ -61,12 +61,8 @@ pub fn read(engine: Engine, path: &Path, scene: &Scene) -> Result<Vec<State>, Re
         }
         let p = &state.particles;
         cells.pairs_within(&p.position, &scene.domain, Some(largest_d), &mut pairs);
-        for pair in &pairs {
-            if pair.dist < p.radius[pair.i as usize] + p.radius[pair.j as usize] {
-                state.contacts.pairs.push(((pair.i, pair.j), Vec3::zeros()));
-            }
-        }
-        state.contacts.pairs.sort_unstable_by_key(|(k, _)| *k);
+        let touching = pairs.iter().filter(|q| q.dist < p.radius[q.i as usize] + p.radius[q.j as usize]);
+        state.contacts.pairs = touching.map(|q| ((q.i, q.j), Vec3::zeros())).collect::<Vec<_>>().into();
         frames.push(state);
     }
     if frames.is_empty() {

@@ -4,7 +4,7 @@ use super::placement::morton_order;
 use super::spec::ParticleOrder;
 use super::{fmt3, invalid, SceneError, SceneSpec, StartSpec};
 use crate::core::domain::Domain;
-use crate::core::state::{ContactHistory, Particles, Species, Vec3};
+use crate::core::state::{ContactHistory, PairSpring, Particles, Species, Vec3};
 use crate::io::trajectory::Trajectory;
 use sha2::{Digest, Sha256};
 use std::path::Path;
@@ -141,14 +141,11 @@ fn rename(contacts: &mut ContactHistory, visit: &[usize]) {
     for (k, &i) in visit.iter().enumerate() {
         renamed[i] = k as u32;
     }
-    for ((i, j), spring) in &mut contacts.pairs {
-        let (a, b) = (renamed[*i as usize], renamed[*j as usize]);
-        (*i, *j) = (a.min(b), a.max(b));
-        if a > b {
-            *spring = -*spring;
-        }
-    }
-    contacts.pairs.sort_unstable_by_key(|(key, _)| *key);
+    let flipped = |&((i, j), spring): &PairSpring| {
+        let (a, b) = (renamed[i as usize], renamed[j as usize]);
+        ((a.min(b), a.max(b)), if a > b { -spring } else { spring })
+    };
+    contacts.pairs = contacts.pairs.iter().map(flipped).collect::<Vec<_>>().into();
     for ((i, _), _) in &mut contacts.walls {
         *i = renamed[*i as usize];
     }

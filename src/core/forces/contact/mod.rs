@@ -9,7 +9,7 @@ mod walls;
 use super::{Context, ForceTerm, Forces};
 use crate::core::neighbours::{Candidates, Pair, PairForm, PairNeed, PairRange};
 use crate::core::parallel;
-use crate::core::state::{ContactDiagnostics, Particles, Species, Vec3, WallFace};
+use crate::core::state::{ContactDiagnostics, PairSpring, PairSprings, Particles, Species, Vec3, WallFace};
 pub use law::PairMaterial;
 use law::{ContactLaw, Lanes, LANES};
 use std::sync::Mutex;
@@ -72,7 +72,7 @@ impl ReducedCache {
 }
 
 /// What a share of the pair pass leaves: its part of the next history, its largest overlap.
-type ShareOut = (Vec<((u32, u32), Vec3)>, ContactDiagnostics);
+type ShareOut = (Vec<PairSpring>, ContactDiagnostics);
 
 /// Particle–particle and particle–wall contacts.
 ///
@@ -93,20 +93,43 @@ pub struct Contact {
     wall_found: Vec<WallTouch>,
     wall_touching: Vec<(WallTouch, Vec3)>,
     outcomes: Vec<[ContactOutcome; LANES]>,
-    /// Per particle share of the pair pass: its next history and largest overlap.
+    /// Per particle share of the pair pass: its piece of the next history and largest overlap.
     shares: Vec<Mutex<ShareOut>>,
-    spare_pairs: Vec<((u32, u32), Vec3)>,
+    /// The pieces of the history before last, reused for the next one.
+    spare_pairs: Vec<Vec<PairSpring>>,
     spare_walls: Vec<((u32, WallFace), Vec3)>,
 }
 
-/// The spring stored under `key` in the sorted `history`, advancing the merge `cursor`.
-fn spring<K: Ord + Copy>(history: &[(K, Vec3)], cursor: &mut usize, key: K) -> Vec3 {
-    while *cursor < history.len() && history[*cursor].0 < key {
-        *cursor += 1;
+/// A merge cursor over springs sorted by key, held in consecutive pieces (each sorted, every key
+/// of a piece below those of the pieces after it): looked up with ascending keys, it finds each
+/// spring by walking forward, never searching.
+struct Springs<'a, K> {
+    pieces: &'a [Vec<(K, Vec3)>],
+    piece: usize,
+    at: usize,
+}
+
+impl<'a, K: Ord + Copy> Springs<'a, K> {
+    /// Positioned at the first spring whose key is not below `from`.
+    fn from(pieces: &'a [Vec<(K, Vec3)>], from: K) -> Self {
+        let piece = pieces.iter().position(|p| p.last().is_some_and(|last| last.0 >= from)).unwrap_or(pieces.len());
+        let at = pieces.get(piece).map_or(0, |p| p.partition_point(|s| s.0 < from));
+        Self { pieces, piece, at }
     }
-    match history.get(*cursor) {
-        Some(&(k, s)) if k == key => s,
-        _ => Vec3::zeros(),
+
+    /// The spring stored under `key` (zero if none), advancing past the keys below it.
+    #[inline(always)]
+    fn get(&mut self, key: K) -> Vec3 {
+        while let Some(p) = self.pieces.get(self.piece) {
+            while self.at < p.len() && p[self.at].0 < key {
+                self.at += 1;
+            }
+            if let Some(&(k, s)) = p.get(self.at) {
+                return if k == key { s } else { Vec3::zeros() };
+            }
+            (self.piece, self.at) = (self.piece + 1, 0);
+        }
+        Vec3::zeros()
     }
 }
 
@@ -189,7 +212,7 @@ impl Contact {
     }
 
     /// The touching pairs among the near `items` that `keep(j)` selects, in order, their springs
-    /// merged from `history` (sorted, covering them), computed [`LANES`] at a time;
+    /// merged from `history` (positioned at or before the first), computed [`LANES`] at a time;
     /// `emit(pair, outcome)` receives each in order.
     #[allow(clippy::too_many_arguments)]
     fn in_lanes<S: NearSource>(
@@ -197,13 +220,13 @@ impl Contact {
         p: &Particles,
         source: &S,
         items: &[S::Item],
-        history: &[((u32, u32), Vec3)],
+        mut history: Springs<(u32, u32)>,
         dt: f64,
         keep: impl Fn(u32) -> bool,
         mut emit: impl FnMut(&Pair, &ContactOutcome),
     ) {
         let (mut lanes, mut batch) = (Lanes::default(), [(Pair::default(), 0.0); LANES]);
-        let (mut cache, mut cursor, mut used) = (ReducedCache::default(), 0, 0);
+        let (mut cache, mut used) = (ReducedCache::default(), 0);
         let mut flush = |lanes: &mut Lanes, batch: &[(Pair, f64)]| {
             self.law.apply(lanes, dt);
             for (l, (pair, diameter)) in batch.iter().enumerate() {
@@ -220,7 +243,7 @@ impl Contact {
         };
         for pair in items.iter().filter_map(touching) {
             let (i, j) = (pair.i as usize, pair.j as usize);
-            let s = spring(history, &mut cursor, (pair.i, pair.j));
+            let s = history.get((pair.i, pair.j));
             let reduced = cache.get((p.radius[i], p.radius[j], p.mass[i], p.mass[j]));
             batch[used] = (pair, self.fill_pair(&mut lanes, used, p, &pair, reduced, s));
             used += 1;
@@ -233,7 +256,8 @@ impl Contact {
     }
 
     /// Pair contacts on the particles `lo..lo + force.len()` (a share; `force` and `torque` are
-    /// its slices): first the pairs (i, j) of earlier rows with j in the share, in order (they
+    /// its slices): first the pairs (i, j) of earlier rows (from `first_row`, the first whose
+    /// candidates reach the share) with j in the share, in order (they
     /// come first in each j's serial sum; the share before computes them too, for its own i),
     /// then the share's own rows, whose j beyond the share are left to the shares after. Each
     /// particle's force and torque are so summed in the serial order, on any split.
@@ -243,21 +267,21 @@ impl Contact {
         source: &S,
         p: &Particles,
         dt: f64,
-        history: &[((u32, u32), Vec3)],
-        lo: usize,
+        history: &PairSprings,
+        (first_row, lo): (usize, usize),
         (force, torque): (&mut [Vec3], &mut [Vec3]),
         (next, diag): &mut ShareOut,
     ) {
         let near = source.items();
         let hi = lo + force.len();
         let row_below = |bound: usize| near.partition_point(|q| (S::ij(q).0 as usize) < bound);
-        let (rows, rest) = (row_below(lo), row_below(hi));
-        let split = history.partition_point(|h| (h.0 .0 as usize) < lo);
+        let (reaching, rows, rest) = (row_below(first_row), row_below(lo), row_below(hi));
+        let history_from = |row: usize| Springs::from(history.pieces(), (row as u32, 0));
         self.in_lanes(
             p,
             source,
-            &near[..rows],
-            &history[..split],
+            &near[reaching..rows],
+            history_from(first_row),
             dt,
             |j| (lo..hi).contains(&(j as usize)),
             |q, o| {
@@ -270,7 +294,7 @@ impl Contact {
         *diag = ContactDiagnostics::default();
         let mut adder = RowAdder::new(lo, diag, next);
         let add = |q: &Pair, o: &ContactOutcome| adder.add(force, torque, q, o);
-        self.in_lanes(p, source, &near[rows..rest], &history[split..], dt, |_| true, add);
+        self.in_lanes(p, source, &near[rows..rest], history_from(lo), dt, |_| true, add);
         adder.finish(force, torque);
     }
 
@@ -279,9 +303,6 @@ impl Contact {
         let (shares, size) = parallel::split_of(out.force.len());
         let mut slots = std::mem::take(&mut self.shares);
         slots.resize_with(shares.max(slots.len()), Default::default);
-        // The first share writes the next history in place; the others are appended to it.
-        *slots[0].get_mut().expect("no share running") =
-            (std::mem::take(&mut self.spare_pairs), ContactDiagnostics::default());
         // The near pairs as another term lists them, or the candidates filtered as they are read:
         // the same pairs, bit for bit.
         let listed = match self.near {
@@ -295,24 +316,29 @@ impl Contact {
             // writing a history's length at every contact into a cache line the other share also
             // writes is false sharing.
             let mut share = std::mem::take(&mut *slot);
+            let rows = (candidates.first_row_reaching(lo), lo);
             match listed {
-                Some(pairs) => self.share_pass(&pairs, p, ctx.dt, &history, lo, parts, &mut share),
-                None => self.share_pass(&candidates, p, ctx.dt, &history, lo, parts, &mut share),
+                Some(pairs) => self.share_pass(&pairs, p, ctx.dt, &history, rows, parts, &mut share),
+                None => self.share_pass(&candidates, p, ctx.dt, &history, rows, parts, &mut share),
             }
             *slot = share;
         });
-        // The shares' histories in order; the first largest overlap, as the serial pass finds it.
-        let (mut next, first_diag) = std::mem::take(slots[0].get_mut().expect("the shares are done"));
-        *diag = first_diag;
-        for slot in &mut slots[1..shares] {
-            let (piece, share_diag) = slot.get_mut().expect("the shares are done");
-            next.extend_from_slice(piece);
-            if share_diag.max_overlap_ratio > diag.max_overlap_ratio {
-                *diag = *share_diag;
-            }
-        }
-        out.contacts.pairs = next;
-        self.spare_pairs = history;
+        // The shares' pieces in order, each slot given a spare for the next step; the first
+        // largest overlap, as the serial pass finds it.
+        let mut spares = std::mem::take(&mut self.spare_pairs);
+        *diag = ContactDiagnostics::default();
+        let pieces = slots[..shares]
+            .iter_mut()
+            .map(|slot| {
+                let (piece, share_diag) = slot.get_mut().expect("the shares are done");
+                if share_diag.max_overlap_ratio > diag.max_overlap_ratio {
+                    *diag = *share_diag;
+                }
+                std::mem::replace(piece, spares.pop().unwrap_or_default())
+            })
+            .collect();
+        out.contacts.pairs = PairSprings::from_pieces(pieces);
+        self.spare_pairs = history.into_pieces();
         self.shares = slots;
     }
 
@@ -320,9 +346,9 @@ impl Contact {
         let history = std::mem::take(&mut out.contacts.walls);
         let mut found = std::mem::take(&mut self.wall_found);
         self.wall_scan.find(p, ctx.domain, ctx.neighbours.rebuilt(self.near), &mut found);
-        let mut cursor = 0;
+        let mut springs = Springs::from(std::slice::from_ref(&history), (0, 0));
         self.wall_touching.clear();
-        self.wall_touching.extend(found.iter().map(|&t| (t, spring(&history, &mut cursor, (t.i, t.face)))));
+        self.wall_touching.extend(found.iter().map(|&t| (t, springs.get((t.i, t.face)))));
         self.wall_found = found;
         let (touching, mut batches) = (&self.wall_touching, std::mem::take(&mut self.outcomes));
         let fill = |lanes: &mut Lanes, l, c: usize| self.fill_wall(lanes, l, p, &touching[c].0, touching[c].1);
@@ -391,13 +417,13 @@ impl NearSource for &[Pair] {
 struct RowAdder<'a> {
     lo: usize,
     diag: &'a mut ContactDiagnostics,
-    next: &'a mut Vec<((u32, u32), Vec3)>,
+    next: &'a mut Vec<PairSpring>,
     /// The row's particle (share index) and its force and torque so far.
     row: Option<(usize, Vec3, Vec3)>,
 }
 
 impl<'a> RowAdder<'a> {
-    fn new(lo: usize, diag: &'a mut ContactDiagnostics, next: &'a mut Vec<((u32, u32), Vec3)>) -> Self {
+    fn new(lo: usize, diag: &'a mut ContactDiagnostics, next: &'a mut Vec<PairSpring>) -> Self {
         RowAdder { lo, diag, next, row: None }
     }
 
@@ -457,6 +483,34 @@ mod tests {
     use crate::core::forces::ForceGroup;
     use crate::core::neighbours::Neighbours;
     use crate::core::state::State;
+
+    /// Springs split into pieces anywhere (empty pieces included) are found as in one sorted
+    /// piece, from any starting key, by ascending lookups of present and absent keys.
+    #[test]
+    fn springs_in_pieces_are_found_as_in_one() {
+        let all: Vec<PairSpring> = (0..40u32).map(|k| ((k / 4, 2 * k + 1), Vec3::repeat(k as f64 + 1.0))).collect();
+        let keys: Vec<(u32, u32)> = (0..44u32).flat_map(|k| [(k / 4, 2 * k), (k / 4, 2 * k + 1)]).collect();
+        let lookup = |pieces: &[Vec<PairSpring>], from: u32| {
+            let mut springs = Springs::from(pieces, (from, 0));
+            keys.iter().filter(|k| k.0 >= from).map(|&k| springs.get(k)).collect::<Vec<_>>()
+        };
+        for cuts in [vec![], vec![0, 0, 13], vec![5, 20, 20, 39], vec![40]] {
+            let mut pieces = vec![];
+            let mut start = 0;
+            for &cut in cuts.iter().chain([&40]) {
+                pieces.push(all[start..cut].to_vec());
+                start = cut;
+            }
+            for from in [0, 3, 7, 12] {
+                let found = lookup(&pieces, from);
+                assert_eq!(found, lookup(std::slice::from_ref(&all), from), "cuts {cuts:?}, from row {from}");
+                assert_eq!(
+                    found.iter().filter(|s| **s != Vec3::zeros()).count(),
+                    40usize.saturating_sub(4 * from as usize)
+                );
+            }
+        }
+    }
 
     /// Where another term lists the near range, the pair pass reads that list instead of
     /// filtering the candidates: the same forces, torques and springs, bit for bit, step by
