@@ -896,6 +896,30 @@ fn reproduce_wall_time() -> Option<u64> {
     text[..at].rsplit(' ').next()?.parse().ok()
 }
 
+/// What mutual induction changes in case 1 at 2.25 mg/ml, from the committed paper report's
+/// ranking table (its sensitivity study's `no-induction` runs), or where to find it.
+fn induction_effect() -> String {
+    induction_effect_in(Path::new("reports/paper/tables/explanations.csv"))
+}
+
+fn induction_effect_in(explanations: &Path) -> String {
+    let measured = || -> Option<String> {
+        let table = crate::report::tables::read_csv(explanations).ok()?;
+        let text = |name: &str| table.column(name).ok()?.str().ok().cloned();
+        let number = |name: &str| crate::report::tables::floats(&table, name).ok();
+        let (explanation, c) = (text("explanation")?, number("concentration_mg_per_ml")?);
+        let (change, ci95, n) = (number("change_percent")?, number("ci95_percent")?, number("runs_or_pairs")?);
+        let k = (0..c.len()).find(|&k| explanation.get(k) == Some("induction") && (c[k] - 2.25).abs() < 1e-9)?;
+        Some(format!(
+            "the sensitivity study of `reports/paper/README.md` moves the 2.25 mg/ml mean length by {:+.1} ± {:.1} % ({} seeds, paired)",
+            change[k], ci95[k], n[k]
+        ))
+    };
+    measured().unwrap_or_else(|| {
+        "the 2.25 mg/ml mean length moves by the sensitivity study's `no-induction` change in `reports/paper/README.md`".into()
+    })
+}
+
 /// The issue's targets against this run's medians: one line each, met or not.
 fn targets(bench: &Bench) -> String {
     let verdict = |x: f64, target: f64| if x >= target { "met" } else { "not met" };
@@ -1049,14 +1073,16 @@ fn dipole_section(bench: &Bench, agreement: &[(String, f64)]) -> String {
     s
 }
 
-/// Cost and memory per particle against N.
 /// The native LAMMPS deck beside magdem, and what a 10⁶-particle run would need.
 fn native_section(bench: &Bench) -> String {
     let mut s = String::new();
     if bench.native.is_empty() {
         return s;
     }
-    s += "\n## Beyond one machine without magdem: LAMMPS' own dipoles\n\n`magdem run --engine lammps --native --mpi N` (or `magdem deck --engine lammps --native`, then `mpirun -np N lmp -in in.scene`) writes case 1 in LAMMPS' own pair styles: `pair_style hybrid/overlay granular lj/cut/dipole/cut` with ε = 0 and the 15-diameter cut-off, the moments magdem's at t = 0 as electric dipoles (`atom_style hybrid sphere dipole`, p = m √(1e-7/k_e)), `fix viscous`, `fix gravity`, `fix wall/gran`, `fix nve/sphere` without `update dipole` (the moments stay along the field). No magdem process is in the loop, so it runs unchanged on a cluster. It holds fixed moments only: mutual induction stays magdem's, and without it the sensitivity study of `reports/paper/README.md` moves the 2.25 mg/ml mean length by −16 ± 34 % (3 seeds, paired). LAMMPS also applies the torque p × E to its fixed dipoles, which magdem's induced moments do not feel; the comparison scene has friction 0, so that the spin this gives cannot reach the contacts. Scene: `case1-c2.25` with induction \"none\", Stokes drag without shielding or rotational drag, friction 0, 2 ms (`verify::magnetic::case1_fixed_moments`). Statistics of the last frame (gap tolerance 1e-3 of the radius); cost = loop time per particle-step (magdem's one-thread step loop; LAMMPS' `Loop time`).\n\n| engine | moments | processes | aggregates | mean length (µm) | std (µm) | largest (particles) | max position difference to magdem (m) | ns per particle-step |\n|---|---|---|---|---|---|---|---|---|\n";
+    s += &format!(
+        "\n## Beyond one machine without magdem: LAMMPS' own dipoles\n\n`magdem run --engine lammps --native --mpi N` (or `magdem deck --engine lammps --native`, then `mpirun -np N lmp -in in.scene`) writes case 1 in LAMMPS' own pair styles: `pair_style hybrid/overlay granular lj/cut/dipole/cut` with ε = 0 and the 15-diameter cut-off, the moments magdem's at t = 0 as electric dipoles (`atom_style hybrid sphere dipole`, p = m √(1e-7/k_e)), `fix viscous`, `fix gravity`, `fix wall/gran`, `fix nve/sphere` without `update dipole` (the moments stay along the field). No magdem process is in the loop, so it runs unchanged on a cluster. It holds fixed moments only: mutual induction stays magdem's, and without it {}. LAMMPS also applies the torque p × E to its fixed dipoles, which magdem's induced moments do not feel; the comparison scene has friction 0, so that the spin this gives cannot reach the contacts. Scene: `case1-c2.25` with induction \"none\", Stokes drag without shielding or rotational drag, friction 0, 2 ms (`verify::magnetic::case1_fixed_moments`). Statistics of the last frame (gap tolerance 1e-3 of the radius); cost = loop time per particle-step (magdem's one-thread step loop; LAMMPS' `Loop time`).\n\n| engine | moments | processes | aggregates | mean length (µm) | std (µm) | largest (particles) | max position difference to magdem (m) | ns per particle-step |\n|---|---|---|---|---|---|---|---|---|\n",
+        induction_effect()
+    );
     for r in &bench.native {
         let m = &r.stats;
         let _ = writeln!(
@@ -1318,6 +1344,25 @@ fn markdown(bench: &Bench, agreement: &[(String, f64)]) -> String {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
+    /// The induction effect is the 2.25 mg/ml `induction` row of the ranking table, and a
+    /// missing table gives a pointer instead of a number.
+    #[test]
+    fn the_induction_effect_comes_from_the_ranking_table() {
+        let dir = tempfile::tempdir().unwrap();
+        let table = dir.path().join("explanations.csv");
+        std::fs::write(
+            &table,
+            "concentration_mg_per_ml,explanation,what,change_percent,ci95_percent,runs_or_pairs\n\
+             1.125,induction,x,-22.1,19.9,3.0\n2.25,shielding,y,-12.8,7.2,10.0\n2.25,induction,z,-13.07,13.47,10.0\n",
+        )
+        .unwrap();
+        let text = induction_effect_in(&table);
+        assert!(text.contains("-13.1 ± 13.5 % (10 seeds, paired)"), "{text}");
+        assert!(induction_effect_in(&dir.path().join("none.csv")).contains("`no-induction`"));
+    }
+
     /// The figure is redrawn from the bench's own table, its ceiling rows skipped, and a table
     /// that is not the bench's is refused with the file and line named.
     #[test]

@@ -59,10 +59,58 @@ impl Estimate {
     }
 }
 
+/// Why magdem's answer, the paper's and the experiment's may differ: what the ranking weighs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Explanation {
+    Box,
+    StoppingTime,
+    Magnetisation,
+    Measurement,
+    Induction,
+    Shielding,
+    Restitution,
+    Integration,
+    PaperPipeline,
+    /// Not a cause: the statistical uncertainty of magdem's mean, which the others must clear.
+    Seeds,
+}
+
+impl Explanation {
+    /// Every explanation; each concentration's block names those it has no measurement of.
+    pub const ALL: [Explanation; 10] = [
+        Explanation::Box,
+        Explanation::StoppingTime,
+        Explanation::Magnetisation,
+        Explanation::Measurement,
+        Explanation::Induction,
+        Explanation::Shielding,
+        Explanation::Restitution,
+        Explanation::Integration,
+        Explanation::PaperPipeline,
+        Explanation::Seeds,
+    ];
+
+    /// The name the report and the `explanations` table give it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Explanation::Box => "box",
+            Explanation::StoppingTime => "stopping time",
+            Explanation::Magnetisation => "magnetisation",
+            Explanation::Measurement => "measurement",
+            Explanation::Induction => "induction",
+            Explanation::Shielding => "shielding",
+            Explanation::Restitution => "restitution",
+            Explanation::Integration => "integration",
+            Explanation::PaperPipeline => "the paper's pipeline",
+            Explanation::Seeds => "seeds",
+        }
+    }
+}
+
 /// One explanation's effect on the mean length at one concentration (%).
 pub struct Effect {
     pub concentration: f64,
-    pub explanation: &'static str,
+    pub explanation: Explanation,
     pub what: String,
     pub change: Estimate,
 }
@@ -190,14 +238,14 @@ pub fn seeds_section(runs: &[Run], t: &Targets, tables: &Path, effects: &mut Vec
         bias_n.push(b.n as f64);
         effects.push(Effect {
             concentration: c,
-            explanation: "seeds",
+            explanation: Explanation::Seeds,
             what: format!("CI95 of the {}-seed mean", l.len()),
             change: Estimate { n: l.len(), mean: 0.0, ci95: 100.0 * e.ci95 / e.mean },
         });
         if b.n > 0 {
             effects.push(Effect {
                 concentration: c,
-                explanation: "integration",
+                explanation: Explanation::Integration,
                 what: format!("r-RESPA K = 10 against velocity Verlet, paired over {} seeds", b.n),
                 change: b,
             });
@@ -407,8 +455,9 @@ fn held_drag_at_scale(runs: &[Run]) -> Option<String> {
         format!(
             "The 2.25 mg/ml 100× box with the shielded drag's coefficients renewed once per outer step \
              (`forces.drag.refactor_every = 10`, `x100-c2.25-drag-held.toml`) against the every-step run of the same seed: {}. \
-             One seed of a chaotic system: the paired change at the paper's size over ten seeds is the sensitivity study's \
-             `drag-held` row.",
+             Wall times as run are summed over resumed pieces, with the machine shared at times; the held scene run again \
+             alone, start to end, is timed in `reports/performance-history.md`. One seed of a chaotic system: the paired change \
+             at the paper's size over ten seeds is the sensitivity study's `drag-held` row.",
             lines.join("; ")
         )
     })
@@ -489,7 +538,7 @@ fn box_findings(runs: &[Run], c: f64, by_factor: &BTreeMap<u64, Vec<&Run>>, effe
             let (f_big, big) = sizes.iter().rev().find(|(_, g)| g.len() >= 2).copied().unwrap_or((fb, b));
             effects.push(Effect {
                 concentration: c,
-                explanation: "box",
+                explanation: Explanation::Box,
                 what: format!(
                     "periodic {f_big}× the particles ({} seeds) against the paper's box with walls",
                     big.len()
@@ -626,7 +675,7 @@ pub fn growth_section(
         if end > 5.5e-3 {
             effects.push(Effect {
                 concentration: c,
-                explanation: "stopping time",
+                explanation: Explanation::StoppingTime,
                 what: format!("{:.0} ms against 5 ms, paired over {} seeds", end * 1e3, paired.n),
                 change: paired,
             });
@@ -805,7 +854,7 @@ pub fn magnetisation_section(
             let b = select(runs, &["paper-magnetisation"], &bulk.0, c);
             effects.push(Effect {
                 concentration: c,
-                explanation: "magnetisation",
+                explanation: Explanation::Magnetisation,
                 what: "Ms = 4.8e5 A/m (bulk magnetite) against the linear 7.5e5, paired".into(),
                 change: paired(&a, &b, |r| r.mean_length_um()),
             });
@@ -964,7 +1013,7 @@ pub fn measurement_section(
         let change = Estimate::of(&per_run.iter().map(|m| 100.0 * (m[2] / m[0] - 1.0)).collect::<Vec<_>>());
         effects.push(Effect {
             concentration: c,
-            explanation: "measurement",
+            explanation: Explanation::Measurement,
             what: "each run's mean projected MajorAxisLength against its mean 3-D length, mean over runs".into(),
             change,
         });
@@ -1041,21 +1090,6 @@ fn measures(r: &Run) -> [f64; 6] {
     ]
 }
 
-/// The explanations the ranking weighs at each concentration; each block names those without a
-/// measurement at its concentration.
-const EXPLANATIONS: [&str; 10] = [
-    "box",
-    "stopping time",
-    "magnetisation",
-    "measurement",
-    "induction",
-    "shielding",
-    "restitution",
-    "integration",
-    "the paper's pipeline",
-    "seeds",
-];
-
 /// Every explanation ranked by the size of its effect at each concentration.
 pub fn ranking_section(effects: &[Effect], t: &Targets, runs: &[Run], tables: &Path) -> Result<String, Error> {
     let mut md = String::from("## Why the numbers differ\n\n");
@@ -1075,13 +1109,9 @@ pub fn ranking_section(effects: &[Effect], t: &Targets, runs: &[Run], tables: &P
         if here.is_empty() {
             continue;
         }
-        here.sort_by(|a, b| {
-            b.change
-                .mean
-                .abs()
-                .max(b.change.ci95 * (b.explanation == "seeds") as u8 as f64)
-                .total_cmp(&a.change.mean.abs().max(a.change.ci95 * (a.explanation == "seeds") as u8 as f64))
-        });
+        // The seeds rank by their CI95, every other explanation by its mean change.
+        let size = |e: &Effect| if e.explanation == Explanation::Seeds { e.change.ci95 } else { e.change.mean.abs() };
+        here.sort_by(|a, b| size(b).total_cmp(&size(a)));
         let table3 = Estimate::of(&lengths(&table3_runs(runs, c)));
         let _ = writeln!(
             md,
@@ -1092,17 +1122,22 @@ pub fn ranking_section(effects: &[Effect], t: &Targets, runs: &[Run], tables: &P
             100.0 * (table3.mean / paper - 1.0)
         );
         for (rank, e) in here.iter().enumerate() {
-            let effect = if e.explanation == "seeds" { "±".to_string() } else { format!("{:+.1}", e.change.mean) };
-            let _ = writeln!(md, "| {} | {} | {effect} | {:.1} | {} |", rank + 1, e.explanation, e.change.ci95, e.what);
+            let effect =
+                if e.explanation == Explanation::Seeds { "±".to_string() } else { format!("{:+.1}", e.change.mean) };
+            let name = e.explanation.name();
+            let _ = writeln!(md, "| {} | {name} | {effect} | {:.1} | {} |", rank + 1, e.change.ci95, e.what);
             c_col.push(c);
-            e_col.push(e.explanation.to_string());
+            e_col.push(name.to_string());
             w_col.push(e.what.clone());
             m_col.push(e.change.mean);
             ci_col.push(e.change.ci95);
             n_col.push(e.change.n as f64);
         }
-        let missing: Vec<&str> =
-            EXPLANATIONS.iter().copied().filter(|x| !here.iter().any(|e| e.explanation == *x)).collect();
+        let missing: Vec<&str> = Explanation::ALL
+            .into_iter()
+            .filter(|x| !here.iter().any(|e| e.explanation == *x))
+            .map(Explanation::name)
+            .collect();
         if !missing.is_empty() {
             let _ = writeln!(md, "\nNot measured at {c} mg/ml: {}.", missing.join(", "));
         }
@@ -1138,7 +1173,7 @@ fn closest_combination(runs: &[Run], t: &Targets, effects: &[Effect]) -> String 
     let measurement = |c: f64| {
         effects
             .iter()
-            .find(|e| same(e.concentration, c) && e.explanation == "measurement")
+            .find(|e| same(e.concentration, c) && e.explanation == Explanation::Measurement)
             .map_or(0.0, |e| e.change.mean)
     };
     let mut best: Option<(f64, String, bool, Vec<f64>)> = None;

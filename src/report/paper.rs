@@ -2,7 +2,7 @@
 //! runs of `experiments/paper/*.toml` (and `opt-in/*.toml` when run), beside the paper's tables
 //! in `reference/paper/`. Every number in the report comes from the runs and those CSV files.
 
-use super::convergence::{self, Effect, Targets};
+use super::convergence::{self, Effect, Explanation, Targets};
 use super::figures;
 use super::runs::{experiment_files, load_runs_digested, Run};
 use super::tables::{col, floats, frame, markdown, read_csv, same, scol, ucol, write};
@@ -945,13 +945,14 @@ fn variant_outcome(group: &[&Run], completed: usize) -> String {
     }
 }
 
-/// The explanation of the "why the numbers differ" ranking a sensitivity variant measures.
-fn sensitivity_explanation(variant: &str) -> Option<&'static str> {
+/// The explanation of the "why the numbers differ" ranking a sensitivity variant (named in the
+/// experiment file) measures.
+fn sensitivity_explanation(variant: &str) -> Option<Explanation> {
     match variant {
-        "no-induction" => Some("induction"),
-        "no-shielding" => Some("shielding"),
-        "restitution-0.2" | "restitution-0.9" => Some("restitution"),
-        "paper-pipeline" => Some("the paper's pipeline"),
+        "no-induction" => Some(Explanation::Induction),
+        "no-shielding" => Some(Explanation::Shielding),
+        "restitution-0.2" | "restitution-0.9" => Some(Explanation::Restitution),
+        "paper-pipeline" => Some(Explanation::PaperPipeline),
         _ => None,
     }
 }
