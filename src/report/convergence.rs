@@ -429,12 +429,15 @@ fn thread_counts(group: &[&Run]) -> String {
     cells.join(", ")
 }
 
+/// The experiment of the 100× runs with the shielded drag held over each outer step: a change of
+/// the numerics, not of the box, set against its every-step seed here and nowhere else.
+pub const HELD_DRAG_X100: &str = "paper-box-c2.25-x100-drag-held";
+
 /// The 100× runs with the shielded drag held over each outer step
 /// (`x100-c2.25-drag-held.toml`) against the every-step 100× run of the same seed: mean length
 /// and wall time.
 fn held_drag_at_scale(runs: &[Run]) -> Option<String> {
-    let held: Vec<&Run> =
-        runs.iter().filter(|r| r.completed() && r.experiment == "paper-box-c2.25-x100-drag-held").collect();
+    let held: Vec<&Run> = runs.iter().filter(|r| r.completed() && r.experiment == HELD_DRAG_X100).collect();
     let lines: Vec<String> = held
         .iter()
         .filter_map(|h| {

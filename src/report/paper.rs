@@ -982,7 +982,8 @@ fn sensitivity_panel(bars: &[(String, convergence::Estimate)], concentration: f6
 const PAPER_BOX: &str = "walls, paper's box";
 
 fn box_effect_section(runs: &[Run], paper: &Paper, out: &Path, tables: &Path) -> Result<String, Error> {
-    let box_runs: Vec<&Run> = runs.iter().filter(|r| r.experiment.starts_with("paper-box") && r.completed()).collect();
+    let in_box_study = |r: &Run| r.experiment.starts_with("paper-box") && r.experiment != convergence::HELD_DRAG_X100;
+    let box_runs: Vec<&Run> = runs.iter().filter(|r| in_box_study(r) && r.completed()).collect();
     let mut md = String::from("## Where the walls are, and how many particles\n\n");
     if box_runs.is_empty() {
         md += "Not run: the opt-in experiments `experiments/paper/opt-in/box-*.toml` (periodic faces; 10× the particles in a larger \
