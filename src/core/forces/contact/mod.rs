@@ -323,20 +323,18 @@ impl Contact {
             }
             *slot = share;
         });
-        // The shares' pieces in order, each slot given a spare for the next step; the first
-        // largest overlap, as the serial pass finds it.
-        let mut spares = std::mem::take(&mut self.spare_pairs);
+        // The shares' pieces in order, swapped for those of the history before last (the slots'
+        // buffers for the next step); the first largest overlap, as the serial pass finds it.
+        let mut pieces = std::mem::take(&mut self.spare_pairs);
+        pieces.resize_with(shares, Vec::new);
         *diag = ContactDiagnostics::default();
-        let pieces = slots[..shares]
-            .iter_mut()
-            .map(|slot| {
-                let (piece, share_diag) = slot.get_mut().expect("the shares are done");
-                if share_diag.max_overlap_ratio > diag.max_overlap_ratio {
-                    *diag = *share_diag;
-                }
-                std::mem::replace(piece, spares.pop().unwrap_or_default())
-            })
-            .collect();
+        for (slot, piece) in slots[..shares].iter_mut().zip(&mut pieces) {
+            let (fresh, share_diag) = slot.get_mut().expect("the shares are done");
+            if share_diag.max_overlap_ratio > diag.max_overlap_ratio {
+                *diag = *share_diag;
+            }
+            std::mem::swap(fresh, piece);
+        }
         out.contacts.pairs = PairSprings::from_pieces(pieces);
         self.spare_pairs = history.into_pieces();
         self.shares = slots;
