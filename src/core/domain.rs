@@ -36,8 +36,9 @@ impl Domain {
     pub fn wrap(&self, p: &mut Vec3) {
         for k in 0..3 {
             if self.periodic[k] {
-                let l = self.hi[k] - self.lo[k];
-                p[k] = self.lo[k] + (p[k] - self.lo[k]).rem_euclid(l);
+                let (l, a) = (self.hi[k] - self.lo[k], p[k] - self.lo[k]);
+                // Inside the box rem_euclid returns a itself: skip its fmod.
+                p[k] = self.lo[k] + if (0.0..l).contains(&a) { a } else { a.rem_euclid(l) };
             }
         }
     }
@@ -45,5 +46,41 @@ impl Domain {
     /// Wall faces present (x-lo, x-hi, y-lo, ...), as (face index, axis, is_upper).
     pub fn walls(&self) -> impl Iterator<Item = (u8, usize, bool)> + '_ {
         (0..3usize).filter(|&k| !self.periodic[k]).flat_map(|k| [(2 * k as u8, k, false), (2 * k as u8 + 1, k, true)])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Wrapping gives the bits of lo + (x − lo).rem_euclid(L) everywhere: inside the box (where
+    /// it skips the remainder), on its faces, and one or several lengths outside either side.
+    #[test]
+    fn wrap_gives_the_bits_of_the_euclidean_remainder() {
+        let domain =
+            Domain { lo: Vec3::new(-1.3e-4, 0.0, 2.0e-5), hi: Vec3::new(7.1e-4, 3.3e-4, 1.0e-3), periodic: [true; 3] };
+        let l = domain.hi - domain.lo;
+        for k in 0..3 {
+            let (lo, hi) = (domain.lo[k], domain.hi[k]);
+            let xs = [
+                lo,
+                hi,
+                lo + 0.37 * l[k],
+                hi - 1e-19,
+                lo - 1e-19,
+                lo - 0.0,
+                hi + 0.25 * l[k],
+                lo - 2.6 * l[k],
+                hi + 3.9 * l[k],
+            ];
+            for x in xs {
+                let mut p = domain.lo;
+                p[k] = x;
+                domain.wrap(&mut p);
+                let expected = lo + (x - lo).rem_euclid(l[k]);
+                assert_eq!(p[k].to_bits(), expected.to_bits(), "axis {k}, x = {x:e}");
+                assert!((lo..=hi).contains(&p[k]), "axis {k}, x = {x:e} wrapped to {:e}", p[k]);
+            }
+        }
     }
 }
