@@ -904,12 +904,14 @@ fn induction_effect() -> String {
 
 fn induction_effect_in(explanations: &Path) -> String {
     let measured = || -> Option<String> {
+        use crate::report::convergence::Explanation;
         let table = crate::report::tables::read_csv(explanations).ok()?;
         let text = |name: &str| table.column(name).ok()?.str().ok().cloned();
         let number = |name: &str| crate::report::tables::floats(&table, name).ok();
         let (explanation, c) = (text("explanation")?, number("concentration_mg_per_ml")?);
         let (change, ci95, n) = (number("change_percent")?, number("ci95_percent")?, number("runs_or_pairs")?);
-        let k = (0..c.len()).find(|&k| explanation.get(k) == Some("induction") && (c[k] - 2.25).abs() < 1e-9)?;
+        let k = (0..c.len())
+            .find(|&k| explanation.get(k) == Some(Explanation::Induction.name()) && (c[k] - 2.25).abs() < 1e-9)?;
         Some(format!(
             "the sensitivity study of `reports/paper/README.md` moves the 2.25 mg/ml mean length by {:+.1} ± {:.1} % ({} seeds, paired)",
             change[k], ci95[k], n[k]

@@ -599,9 +599,6 @@ mod tests {
         }
     }
 
-    /// A skin of a whole range narrows to its floor while the particles drift slowly (rebuilds
-    /// rare) and widens again while they drift fast (rebuilds frequent); the pairs are the
-    /// brute-force ones throughout.
     /// The row bound a share of particles from `lo` starts its earlier rows at: no candidate of a
     /// row before it reaches `lo` or beyond, and one of its own row does (unless it is `lo`).
     #[test]
@@ -620,6 +617,9 @@ mod tests {
         }
     }
 
+    /// A skin of a whole range narrows to its floor while the particles drift slowly (rebuilds
+    /// rare) and widens again while they drift fast (rebuilds frequent); the pairs are the
+    /// brute-force ones throughout.
     #[test]
     fn a_wide_skin_narrows_when_rebuilds_are_rare_and_widens_when_they_are_frequent() {
         let (mut rng, domain, mut pos) = random_box(3, [true; 3]);
