@@ -183,18 +183,35 @@ impl ContactLaw {
         let normal = self.normal;
         let normal_law = move |e, b, sq, m| normal.stiffness_and_damping(e, b, sq, m);
         match self.tangential {
-            Tangential::Mindlin => lanes::<true>(c, dt, normal_law),
-            Tangential::None => lanes::<false>(c, dt, normal_law),
+            // First as if every contact sticks, which leaves out the sliding side's four divisions
+            // per lane; if one of them slides after all, the batch again from its stored springs
+            // with both sides (the same bits as taking both sides at once).
+            Tangential::Mindlin => {
+                let shear = c.shear;
+                if lanes::<true, false>(c, dt, normal_law) {
+                    c.shear = shear;
+                    lanes::<true, true>(c, dt, normal_law);
+                }
+            }
+            Tangential::None => {
+                lanes::<false, false>(c, dt, normal_law);
+            }
         }
     }
 }
 
-/// The law lane by lane, branch-free (both sides of the Coulomb test are computed and one is
-/// kept), written component by component in nalgebra's order of operations: the bits are those
-/// of the vector expressions in the module's doc. Eight independent contacts in one loop keep
-/// the core's pipelines full (a contact alone is one long chain of dependent √ and ÷).
+/// The law lane by lane, branch-free (with `SLIDING`, both sides of the Coulomb test are
+/// computed and one is kept; without, every lane takes the sticking side), written component by
+/// component in nalgebra's order of operations: the bits are those of the vector expressions in
+/// the module's doc. Eight independent contacts in one loop keep the core's pipelines full (a
+/// contact alone is one long chain of dependent √ and ÷). Returns whether a lane slides.
 #[inline(always)]
-fn lanes<const MINDLIN: bool>(c: &mut Lanes, dt: f64, normal_law: impl Fn(f64, f64, f64, f64) -> (f64, f64)) {
+fn lanes<const MINDLIN: bool, const SLIDING: bool>(
+    c: &mut Lanes,
+    dt: f64,
+    normal_law: impl Fn(f64, f64, f64, f64) -> (f64, f64),
+) -> bool {
+    let mut any_sliding = false;
     for l in 0..LANES {
         let [nx, ny, nz] = [c.normal[0][l], c.normal[1][l], c.normal[2][l]];
         let [rx, ry, rz] = [c.rel_velocity[0][l], c.rel_velocity[1][l], c.rel_velocity[2][l]];
@@ -221,11 +238,16 @@ fn lanes<const MINDLIN: bool>(c: &mut Lanes, dt: f64, normal_law: impl Fn(f64, f
             let ft_norm = ft_norm2.sqrt();
             // Sliding: Ft scaled to the limit, the spring to −Ft/kt; sticking: Ft damped.
             let sliding = ft_norm2 > limit * limit * (1.0 - 1e-12) && ft_norm > limit;
-            let scale = if ft_norm > 0.0 { limit / ft_norm } else { 0.0 };
-            let slide = (tx * scale, ty * scale, tz * scale);
+            any_sliding |= sliding;
             let stick = (tx - gamma_t * vtx, ty - gamma_t * vty, tz - gamma_t * vtz);
-            let (tx, ty, tz) = if sliding { slide } else { stick };
-            let spring = if sliding { (-tx / kt, -ty / kt, -tz / kt) } else { (sx, sy, sz) };
+            let (tx, ty, tz, spring) = if SLIDING {
+                let scale = if ft_norm > 0.0 { limit / ft_norm } else { 0.0 };
+                let slide = (tx * scale, ty * scale, tz * scale);
+                let (tx, ty, tz) = if sliding { slide } else { stick };
+                (tx, ty, tz, if sliding { (-tx / kt, -ty / kt, -tz / kt) } else { (sx, sy, sz) })
+            } else {
+                (stick.0, stick.1, stick.2, (sx, sy, sz))
+            };
             (c.shear[0][l], c.shear[1][l], c.shear[2][l]) = spring;
             (fx, fy, fz) = (fx + tx, fy + ty, fz + tz);
         }
@@ -238,6 +260,7 @@ fn lanes<const MINDLIN: bool>(c: &mut Lanes, dt: f64, normal_law: impl Fn(f64, f
         (c.torque_i[0][l], c.torque_i[1][l], c.torque_i[2][l]) = (ai * qx, ai * qy, ai * qz);
         (c.torque_j[0][l], c.torque_j[1][l], c.torque_j[2][l]) = (aj * qx, aj * qy, aj * qz);
     }
+    any_sliding
 }
 
 #[cfg(test)]
@@ -275,13 +298,15 @@ mod tests {
     }
 
     /// Every lane of the law gives the bits of the vector expressions, for both normal models,
-    /// with and without Mindlin, over contacts that stick and contacts that slide.
+    /// with and without Mindlin, over contacts that stick and contacts that slide, in batches
+    /// where all stick (taken once) and batches where some slide (taken again with both sides).
     #[test]
     fn lanes_give_the_bits_of_the_vector_law() {
         let value = |k: usize| (k as f64 * 0.618_033_988_749_895).fract() - 0.5;
         let species = crate::core::state::test_sphere(5.5e-6);
         let m = PairMaterial::new(&species, &species);
         let (mut sliding, mut sticking) = (0, 0);
+        let (mut batches_sticking, mut batches_sliding) = (0, 0);
         for law in [
             ContactLaw::default(),
             ContactLaw { normal: Normal::Hertz, tangential: Tangential::None },
@@ -301,6 +326,15 @@ mod tests {
                 }
                 let input = c.clone();
                 law.apply(&mut c, 1e-8);
+                let mut sticks = input.clone();
+                if law.tangential == Tangential::Mindlin {
+                    match lanes::<true, false>(&mut sticks, 1e-8, |e, b, sq, m| {
+                        law.normal.stiffness_and_damping(e, b, sq, m)
+                    }) {
+                        true => batches_sliding += 1,
+                        false => batches_sticking += 1,
+                    }
+                }
                 for l in 0..LANES {
                     let (force, shear, n_x_ft) = reference(&law, &input, l, 1e-8);
                     assert_eq!(c.force(l), force, "{law:?} lane {l}: force");
@@ -319,5 +353,9 @@ mod tests {
             }
         }
         assert!(sliding > 50 && sticking > 50, "{sliding} sliding and {sticking} sticking contacts");
+        assert!(
+            batches_sticking > 5 && batches_sliding > 5,
+            "{batches_sticking} batches all sticking, {batches_sliding} not"
+        );
     }
 }
