@@ -416,29 +416,27 @@ struct RowAdder<'a> {
     lo: usize,
     diag: &'a mut ContactDiagnostics,
     next: &'a mut Vec<PairSpring>,
-    /// The row's particle (share index) and its force and torque so far.
-    row: Option<(usize, Vec3, Vec3)>,
+    /// The row's particle (share index; `usize::MAX` before the first) and its force and
+    /// torque so far.
+    row: usize,
+    force_i: Vec3,
+    torque_i: Vec3,
 }
 
 impl<'a> RowAdder<'a> {
     fn new(lo: usize, diag: &'a mut ContactDiagnostics, next: &'a mut Vec<PairSpring>) -> Self {
-        RowAdder { lo, diag, next, row: None }
+        RowAdder { lo, diag, next, row: usize::MAX, force_i: Vec3::zeros(), torque_i: Vec3::zeros() }
     }
 
     #[inline(always)]
     fn add(&mut self, force: &mut [Vec3], torque: &mut [Vec3], pair: &Pair, o: &ContactOutcome) {
         let i = pair.i as usize - self.lo;
-        let (_, force_i, torque_i) = match &mut self.row {
-            Some(row) if row.0 == i => row,
-            row => {
-                if let Some((k, f, t)) = row.take() {
-                    (force[k], torque[k]) = (f, t);
-                }
-                row.insert((i, force[i], torque[i]))
-            }
-        };
-        *force_i += o.force;
-        *torque_i += o.torque_i;
+        if i != self.row {
+            self.store(force, torque);
+            (self.row, self.force_i, self.torque_i) = (i, force[i], torque[i]);
+        }
+        self.force_i += o.force;
+        self.torque_i += o.torque_i;
         if let Some(j) = (pair.j as usize).checked_sub(self.lo).filter(|&j| j < force.len()) {
             force[j] -= o.force;
             torque[j] += o.torque_j;
@@ -449,11 +447,17 @@ impl<'a> RowAdder<'a> {
         }
     }
 
+    /// Stores the row's sums (none before the first row).
+    #[inline(always)]
+    fn store(&self, force: &mut [Vec3], torque: &mut [Vec3]) {
+        if self.row != usize::MAX {
+            (force[self.row], torque[self.row]) = (self.force_i, self.torque_i);
+        }
+    }
+
     /// Stores the last row.
     fn finish(self, force: &mut [Vec3], torque: &mut [Vec3]) {
-        if let Some((k, f, t)) = self.row {
-            (force[k], torque[k]) = (f, t);
-        }
+        self.store(force, torque);
     }
 }
 
