@@ -19,6 +19,12 @@ fn parse_rows(text: &str, columns: usize) -> Vec<Vec<f64>> {
         .collect()
 }
 
+/// The lines after the last `header` line of a dump (`None` without one).
+fn section<'a>(text: &'a str, header: &str) -> Option<&'a str> {
+    let (_, rest) = text.rsplit_once(header)?;
+    Some(rest.split_once('\n').map_or("", |(_, body)| body))
+}
+
 /// How the carried moments' first line names the timestep they were computed at.
 const MOMENTS_STAMP: &str = ", timestep ";
 
@@ -32,15 +38,11 @@ pub fn magnetic_forces(scene: &Scene, positions: &Path, prefix: &Path) -> Result
     let mut state = scene.initial_state();
     let n = state.particles.len();
     let text = std::fs::read_to_string(positions)?;
-    let step: u64 = text
-        .rsplit("ITEM: TIMESTEP")
-        .next()
-        .filter(|_| text.contains("ITEM: TIMESTEP"))
-        .and_then(|rest| rest.lines().nth(1))
-        .and_then(|line| line.trim().parse().ok())
+    let step: u64 = section(&text, "ITEM: TIMESTEP")
+        .and_then(|body| body.lines().next()?.trim().parse().ok())
         .ok_or_else(|| fail("no TIMESTEP section".into()))?;
-    let atoms = text.rsplit("ITEM: ATOMS").next().ok_or_else(|| fail("no ATOMS section".into()))?;
-    let rows = parse_rows(atoms.split_once('\n').map_or("", |(_, rest)| rest), 4);
+    let atoms = section(&text, "ITEM: ATOMS").ok_or_else(|| fail("no ATOMS section".into()))?;
+    let rows = parse_rows(atoms, 4);
     if rows.len() != n {
         return Err(fail(format!("{} atoms in the dump, {n} in the scene", rows.len())));
     }
