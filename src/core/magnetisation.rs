@@ -17,7 +17,7 @@
 
 pub use super::forces::InductionError;
 use super::forces::{Context, ForceTerm, Forces};
-use super::neighbours::{Pair, PairForm, PairNeed, PairRange, Skins};
+use super::neighbours::{Pair, PairForm, PairNeed, PairRange, RangePairs, Skins};
 use super::parallel;
 use super::state::{sphere_volume, Particles, Saturation, Species, State, Vec3};
 use nalgebra::Matrix3;
@@ -111,14 +111,13 @@ impl Magnetisation {
     }
 
     /// Local fields from the applied field and the moments `moment` over `pairs`.
-    fn sweep_fields(&mut self, p: &Particles, moment: &[Vec3], pairs: &[Pair]) {
+    fn sweep_fields(&mut self, p: &Particles, moment: &[Vec3], pairs: &RangePairs) {
         let mut field = std::mem::take(&mut self.field);
         field.clear();
         field.extend(p.position.iter().map(|x| self.external_field(x)));
-        parallel::add_pairs_in_order(
+        pairs.add_in_order(
+            &p.position,
             &mut field,
-            pairs,
-            |q| (q.i as usize, q.j as usize),
             |q| pair_dipole_fields(&moment[q.i as usize], &moment[q.j as usize], q),
             |q| pair_dipole_field(&moment[q.i as usize], q),
         );
@@ -127,7 +126,7 @@ impl Magnetisation {
 
     /// Computes the moments for the current positions into `self.moments`; `previous` are the
     /// last evaluation's (the paper's lagged sweep reads them, the iteration starts from them).
-    fn update(&mut self, p: &Particles, previous: &[Vec3], pairs: &[Pair]) -> Result<(), InductionError> {
+    fn update(&mut self, p: &Particles, previous: &[Vec3], pairs: &RangePairs) -> Result<(), InductionError> {
         match self.induction {
             Induction::None => {
                 let mut field = std::mem::take(&mut self.field);
@@ -142,7 +141,7 @@ impl Magnetisation {
             }
             Induction::Exact { tolerance, max_iterations, dense_max } => {
                 if p.len() <= dense_max && self.saturation.iter().all(Option::is_none) {
-                    self.solve_dense(p, pairs);
+                    self.solve_dense(p, pairs.listed.expect("all pairs are listed"));
                     self.last_iterations = 1;
                 } else {
                     self.moments.clear();
@@ -158,7 +157,7 @@ impl Magnetisation {
     fn iterate(
         &mut self,
         p: &Particles,
-        pairs: &[Pair],
+        pairs: &RangePairs,
         tolerance: f64,
         max_iterations: usize,
     ) -> Result<(), InductionError> {
@@ -222,12 +221,15 @@ impl ForceTerm for Magnetisation {
     fn is_slow(&self) -> bool {
         true
     }
+    /// Listed: the exact induction sweeps the pairs again and again, and the paper's sweep and
+    /// the dipole forces read its neighbourhood twice per evaluation.
     fn pairs(&self) -> Option<PairNeed> {
         self.range.map(|range| PairNeed { range, form: PairForm::Listed })
     }
     fn prepare(&mut self, ctx: &Context, state: &State) -> Result<(), InductionError> {
-        let pairs = self.range.map_or(&[][..], |r| ctx.neighbours.pairs(r));
-        self.update(&state.particles, &state.fields.moment, pairs)
+        // Without induction no pairs are read (and none declared).
+        let pairs = ctx.neighbours.range_pairs(self.range.unwrap_or(PairRange::All), ctx.domain);
+        self.update(&state.particles, &state.fields.moment, &pairs)
     }
     fn apply(&mut self, _ctx: &Context, _p: &Particles, out: &mut Forces) {
         out.moment.copy_from_slice(&self.moments);

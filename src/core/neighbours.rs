@@ -328,14 +328,15 @@ pub enum PairRange {
 /// How a term reads its pairs.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum PairForm {
-    /// A list of [`Pair`]s written once per evaluation: for terms that sweep the pairs many
-    /// times (the induction's iterations, then the dipole forces), or whose pairs another term
-    /// of the range reads too (the shielding's touching pairs, which the contact then reads).
+    /// A list of [`Pair`]s written once per evaluation: for terms that sweep the pairs more than
+    /// once (the exact induction's iterations; the paper's sweep and then the dipole forces,
+    /// whose branchy filtering of the candidates in each pass cost more than writing the list),
+    /// or whose pairs another term of the range reads too (the shielding's touching pairs,
+    /// which the contact then reads).
     Listed,
-    /// The Verlet candidates, each filtered by the term in its own pass ([`Candidates`]): for a
-    /// term that reads each pair once, which so never writes the list (contact alone); it reads
-    /// the listed pairs instead where another term lists the range
-    /// ([`Neighbours::listed`]). Only for [`PairRange::Within`].
+    /// The Verlet candidates, each filtered by the term as it reads them ([`RangePairs`]): for
+    /// a term that reads each pair once per evaluation (the contact), which so never writes the
+    /// list. Only for [`PairRange::Within`].
     Candidates,
 }
 
@@ -358,7 +359,12 @@ pub struct Candidates<'a> {
     periodic: bool,
 }
 
-impl Candidates<'_> {
+impl<'a> Candidates<'a> {
+    /// No candidates.
+    pub fn none(domain: &'a Domain) -> Self {
+        Candidates { list: &[], verlet: None, range2: 0.0, domain, periodic: false }
+    }
+
     /// The candidate (i, j) as a [`Pair`] if it is closer than the range now.
     #[inline(always)]
     pub fn pair(&self, positions: &[Vec3], (i, j): (u32, u32)) -> Option<Pair> {
@@ -374,6 +380,94 @@ impl Candidates<'_> {
     pub fn first_row_reaching(&self, lo: usize) -> usize {
         self.verlet.map_or(0, |v| v.first_row_reaching(lo))
     }
+}
+
+/// Pairs of a range in (i, j) order as a term reads them: the candidates, each filtered as it is
+/// read, or the pairs some term listed. Both give the same pairs and separations, bit for bit.
+pub trait PairSource: Sync {
+    type Item: Sync;
+    fn items(&self) -> &[Self::Item];
+    fn ij(item: &Self::Item) -> (u32, u32);
+    /// The item as a pair if it is within the range now.
+    fn pair(&self, positions: &[Vec3], item: &Self::Item) -> Option<Pair>;
+}
+
+impl PairSource for Candidates<'_> {
+    type Item = (u32, u32);
+    fn items(&self) -> &[(u32, u32)] {
+        self.list
+    }
+    #[inline(always)]
+    fn ij(item: &(u32, u32)) -> (u32, u32) {
+        *item
+    }
+    #[inline(always)]
+    fn pair(&self, positions: &[Vec3], item: &(u32, u32)) -> Option<Pair> {
+        Candidates::pair(self, positions, *item)
+    }
+}
+
+impl PairSource for &[Pair] {
+    type Item = Pair;
+    fn items(&self) -> &[Pair] {
+        self
+    }
+    #[inline(always)]
+    fn ij(item: &Pair) -> (u32, u32) {
+        (item.i, item.j)
+    }
+    #[inline(always)]
+    fn pair(&self, _: &[Vec3], item: &Pair) -> Option<Pair> {
+        Some(*item)
+    }
+}
+
+/// The pairs of one range as the layer holds them: listed, if some term lists the range, and
+/// always its candidates (whose [`Candidates::first_row_reaching`] bounds the listed pairs too).
+#[derive(Debug, Clone, Copy)]
+pub struct RangePairs<'a> {
+    pub listed: Option<&'a [Pair]>,
+    pub candidates: Candidates<'a>,
+}
+
+impl RangePairs<'_> {
+    /// Σ over the pairs of `both(pair).0` into `out[i]` and `both(pair).1` into `out[j]`, each
+    /// particle's terms in pair order, the same bits on any thread count and from either source
+    /// ([`parallel::add_pairs_in_order`]); `second(pair)` is `both(pair).1` alone.
+    pub fn add_in_order<T: Copy + Send + std::ops::AddAssign>(
+        &self,
+        positions: &[Vec3],
+        out: &mut [T],
+        both: impl Fn(&Pair) -> (T, T) + Sync + Send,
+        second: impl Fn(&Pair) -> T + Sync + Send,
+    ) {
+        match self.listed {
+            Some(pairs) => add_in_order_from(&pairs, positions, &self.candidates, out, both, second),
+            None => add_in_order_from(&self.candidates, positions, &self.candidates, out, both, second),
+        }
+    }
+}
+
+fn add_in_order_from<S: PairSource, T: Copy + Send + std::ops::AddAssign>(
+    source: &S,
+    positions: &[Vec3],
+    bound: &Candidates,
+    out: &mut [T],
+    both: impl Fn(&Pair) -> (T, T) + Sync + Send,
+    second: impl Fn(&Pair) -> T + Sync + Send,
+) {
+    let ij = |q: &S::Item| {
+        let (i, j) = S::ij(q);
+        (i as usize, j as usize)
+    };
+    parallel::add_pairs_in_order(
+        out,
+        source.items(),
+        ij,
+        |lo| bound.first_row_reaching(lo),
+        |q| source.pair(positions, q).map(|pair| both(&pair)),
+        |q| source.pair(positions, q).map(|pair| second(&pair)),
+    );
 }
 
 /// Verlet skins, as fractions of the range they pad: the one numerical setting of the neighbour
@@ -532,15 +626,31 @@ impl Neighbours {
         Candidates { list, verlet, range2, domain, periodic: domain.periodic != [false; 3] }
     }
 
-    /// The listed pairs within `range` (`None`: all pairs) when some term lists that range, with
-    /// any skin: a term that can sum over listed pairs reuses them instead of searching again.
-    pub fn listed(&self, range: Option<f64>) -> Option<&[Pair]> {
-        let same = |r: &PairRange| match (r, range) {
+    /// The pairs of `range` in `domain` (the one the layer was updated for): the pairs listed
+    /// within its distance by any term, with any skin (a term reuses them instead of filtering
+    /// again), and its candidates. Every pair of [`PairRange::All`] is listed.
+    pub fn range_pairs<'a>(&'a self, range: PairRange, domain: &'a Domain) -> RangePairs<'a> {
+        let distance = match range {
+            PairRange::Within { range, .. } => Some(range),
+            PairRange::All => None,
+        };
+        let same = |r: &PairRange| match (r, distance) {
             (PairRange::Within { range: a, .. }, Some(b)) => *a == b,
             (PairRange::All, None) => true,
             _ => false,
         };
-        self.lists.iter().find(|l| l.listed && same(&l.range)).map(|l| l.pairs.as_slice())
+        let listed = self.lists.iter().find(|l| l.listed && same(&l.range)).map(|l| l.pairs.as_slice());
+        RangePairs { listed, candidates: self.candidates(range, domain) }
+    }
+
+    /// The range some term declared within `distance` (`None`: all pairs), with its skin: a term
+    /// that can sum over another's pairs finds them here instead of searching again.
+    pub fn declared(&self, distance: Option<f64>) -> Option<PairRange> {
+        self.lists.iter().map(|l| l.range).find(|r| match (r, distance) {
+            (PairRange::Within { range, .. }, Some(d)) => *range == d,
+            (PairRange::All, None) => true,
+            _ => false,
+        })
     }
 
     /// `Some(skin)` when the candidates of `range` were rebuilt in the last update, with the skin

@@ -211,16 +211,19 @@ pub fn any_share<S: Split>(parts: S, test: impl Fn(S) -> bool + Sync + Send) -> 
 
 /// Σ over the pairs k (sorted by i, with i < j) of `both(k).0` into `out[i]` and `both(k).1`
 /// into `out[j]`, each particle's terms added in pair order, as the loop
-/// `for k { out[i] += a; out[j] += b }` adds them, bit for bit. In shares of particles when worth
-/// it: a share first adds, in order, the pairs of earlier rows that reach it (`second(k)`, the
-/// part for j alone: those pairs come first in its particles' serial sums), then walks its own
-/// rows, leaving the j beyond it to the shares after. Nothing is buffered and no thread waits.
+/// `for k { if let Some((a, b)) = both(k) { out[i] += a; out[j] += b } }` adds them, bit for bit
+/// (`None`: an item that is no pair now, a candidate out of range). In shares of particles when
+/// worth it: a share first adds, in order, the pairs of earlier rows that reach it (`second(k)`,
+/// the part for j alone: those pairs come first in its particles' serial sums), from row
+/// `reach(lo)` on (no row before it has a j from `lo` on), then walks its own rows, leaving the
+/// j beyond it to the shares after. Nothing is buffered and no thread waits.
 pub fn add_pairs_in_order<P: Sync, T: Copy + Send + std::ops::AddAssign>(
     out: &mut [T],
     pairs: &[P],
     ij: impl Fn(&P) -> (usize, usize) + Sync + Send,
-    both: impl Fn(&P) -> (T, T) + Sync + Send,
-    second: impl Fn(&P) -> T + Sync + Send,
+    reach: impl Fn(usize) -> usize + Sync + Send,
+    both: impl Fn(&P) -> Option<(T, T)> + Sync + Send,
+    second: impl Fn(&P) -> Option<T> + Sync + Send,
 ) {
     debug_assert!(
         pairs.windows(2).all(|w| ij(&w[0]).0 <= ij(&w[1]).0) && pairs.iter().all(|q| ij(q).0 < ij(q).1),
@@ -229,19 +232,22 @@ pub fn add_pairs_in_order<P: Sync, T: Copy + Send + std::ops::AddAssign>(
     for_each_share(out, |lo, share| {
         let hi = lo + share.len();
         let row_below = |bound: usize| pairs.partition_point(|q| ij(q).0 < bound);
-        let (start, end) = (row_below(lo), row_below(hi));
-        for q in &pairs[..start] {
+        let (first, start, end) = (row_below(reach(lo).min(lo)), row_below(lo), row_below(hi));
+        for q in &pairs[first..start] {
             let j = ij(q).1;
             if (lo..hi).contains(&j) {
-                share[j - lo] += second(q);
+                if let Some(b) = second(q) {
+                    share[j - lo] += b;
+                }
             }
         }
         for q in &pairs[start..end] {
             let (i, j) = ij(q);
-            let (a, b) = both(q);
-            share[i - lo] += a;
-            if j < hi {
-                share[j - lo] += b;
+            if let Some((a, b)) = both(q) {
+                share[i - lo] += a;
+                if j < hi {
+                    share[j - lo] += b;
+                }
             }
         }
     });
@@ -324,19 +330,36 @@ mod tests {
         let mut pairs: Vec<(usize, usize)> =
             (0..40 * n as u64).map(|k| (particle(2 * k), particle(2 * k + 1))).filter(|(i, j)| i < j).collect();
         pairs.sort_unstable();
-        let both = |&(i, j): &(usize, usize)| (1.0 / (1.0 + (i * 7 + j) as f64), -3.0e5 / (1.0 + (j * 3 + i) as f64));
-        let second = |q: &(usize, usize)| both(q).1;
+        // Every fifth item is no pair (a candidate out of range), and the rows reaching a share
+        // are bounded as a Verlet list bounds them: the lowest i of a pair with j at or beyond it.
+        let both = |&(i, j): &(usize, usize)| {
+            ((i + j) % 5 != 0).then(|| (1.0 / (1.0 + (i * 7 + j) as f64), -3.0e5 / (1.0 + (j * 3 + i) as f64)))
+        };
+        let second = |q: &(usize, usize)| both(q).map(|(_, b)| b);
+        let mut reaching = vec![usize::MAX; n + 1];
+        for &(i, j) in &pairs {
+            reaching[j] = reaching[j].min(i);
+        }
+        for j in (0..n).rev() {
+            reaching[j] = reaching[j].min(reaching[j + 1]);
+        }
+        let reach = |lo: usize| reaching[lo];
         let mut serial = vec![0.1; n];
         for q in &pairs {
-            let (a, b) = both(q);
-            serial[q.0] += a;
-            serial[q.1] += b;
+            if let Some((a, b)) = both(q) {
+                serial[q.0] += a;
+                serial[q.1] += b;
+            }
         }
         for threads in [1, 2, 3] {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            let mut out = vec![0.1; n];
-            pool.install(|| with_warm_pool(n, || add_pairs_in_order(&mut out, &pairs, |q| *q, both, second)));
-            assert!(out == serial, "{threads} threads");
+            for bound in [&reach as &(dyn Fn(usize) -> usize + Sync + Send), &|_| 0] {
+                let mut out = vec![0.1; n];
+                pool.install(|| {
+                    with_warm_pool(n, || add_pairs_in_order(&mut out, &pairs, |q| *q, bound, both, second))
+                });
+                assert!(out == serial, "{threads} threads");
+            }
         }
     }
 }

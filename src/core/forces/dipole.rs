@@ -11,13 +11,13 @@
 //! rows are split into bands summed apart (in parallel) and then added in band order, the same
 //! order for any thread count (see [`BANDS`]). A row visits its partners in blocks of four
 //! consecutive particles, one SIMD vector each, and sums in eight lanes by partner index, a
-//! fixed order. Walled boxes skip the minimum-image arithmetic. When the moments phase has
-//! already listed the pairs (the paper's induction), the term sums over that list instead.
+//! fixed order. Walled boxes skip the minimum-image arithmetic. Where the neighbour layer holds
+//! the cut-off's range (the paper's induction declares it), the term sums over its pairs instead.
 
 use super::{Context, ForceTerm, Forces};
 use crate::core::domain::Domain;
-use crate::core::magnetisation::{pair_dipole_fields, MU0};
-use crate::core::neighbours::{CellList, Pair, Skins, VerletList};
+use crate::core::magnetisation::{pair_dipole_field, pair_dipole_fields, MU0};
+use crate::core::neighbours::{Candidates, CellList, Pair, RangePairs, Skins, VerletList};
 use crate::core::parallel;
 use crate::core::state::{Particles, Vec3};
 use nalgebra::Matrix3;
@@ -323,14 +323,13 @@ fn add_row_sums_in<const PERIODIC: bool>(
     }
 }
 
-/// Adds F_ij to i and −F_ij to j for each listed pair, each particle's in list order.
-fn add_listed_pairs(pairs: &[Pair], moment: &[Vec3], force: &mut [Vec3]) {
+/// Adds F_ij to i and −F_ij to j for each pair of the range, each particle's in pair order.
+fn add_range_pairs(pairs: &RangePairs, position: &[Vec3], moment: &[Vec3], force: &mut [Vec3]) {
     let pair_force = |q: &Pair| dipole_pair_force(&moment[q.i as usize], &moment[q.j as usize], &q.r, q.dist);
     // −F_ij added is F_ij subtracted, bit for bit.
-    parallel::add_pairs_in_order(
+    pairs.add_in_order(
+        position,
         force,
-        pairs,
-        |q| (q.i as usize, q.j as usize),
         |q| {
             let f = pair_force(q);
             (f, -f)
@@ -377,13 +376,14 @@ impl ForceTerm for DipoleForce {
     fn is_slow(&self) -> bool {
         true
     }
-    /// Sums over the pairs the neighbour layer already lists within the cut-off (the paper's
-    /// induction lists the same neighbourhood), otherwise over rows of particle blocks.
+    /// Sums over the pairs of the neighbour layer's range at the cut-off where a term declared
+    /// one (the paper's induction reads the same neighbourhood), otherwise over rows of particle
+    /// blocks.
     fn apply(&mut self, ctx: &Context, p: &Particles, out: &mut Forces) {
         let n = p.len();
-        let listed = ctx.neighbours.listed(self.cutoff);
-        match (listed, self.cutoff) {
-            (Some(pairs), _) => add_listed_pairs(pairs, out.moment, out.force),
+        let shared = ctx.neighbours.declared(self.cutoff).map(|range| ctx.neighbours.range_pairs(range, ctx.domain));
+        match (&shared, self.cutoff) {
+            (Some(pairs), _) => add_range_pairs(pairs, &p.position, out.moment, out.force),
             (None, Some(c)) => {
                 if self.verlet.update(&p.position, ctx.domain, c, c * self.skin).is_some() {
                     self.rows.build(n, self.verlet.candidates());
@@ -412,25 +412,29 @@ impl ForceTerm for DipoleForce {
         }
         if p.has_permanent_moments {
             // B_loc = B_ext + μ0 Σ_j H_dip,j over the pairs of the force sum.
-            let pairs: &[Pair] = match (listed, self.cutoff) {
-                (Some(pairs), _) => pairs,
-                (None, cutoff) => {
-                    match cutoff {
+            let pairs = match shared {
+                Some(pairs) => pairs,
+                None => {
+                    match self.cutoff {
                         Some(c) => {
                             self.verlet.pairs_within(&p.position, ctx.domain, c, c * self.skin, &mut self.pairs);
                         }
                         None => CellList::default().pairs_within(&p.position, ctx.domain, None, &mut self.pairs),
                     }
-                    &self.pairs
+                    RangePairs { listed: Some(&self.pairs), candidates: Candidates::none(ctx.domain) }
                 }
             };
             let mut b_loc: Vec<Vec3> = p.position.iter().map(|x| self.b0 + self.gradient * x).collect();
-            for pair in pairs {
-                let (i, j) = (pair.i as usize, pair.j as usize);
-                let (on_i, on_j) = pair_dipole_fields(&out.moment[i], &out.moment[j], pair);
-                b_loc[i] += MU0 * on_i;
-                b_loc[j] += MU0 * on_j;
-            }
+            let moment = &*out.moment;
+            pairs.add_in_order(
+                &p.position,
+                &mut b_loc,
+                |q| {
+                    let (on_i, on_j) = pair_dipole_fields(&moment[q.i as usize], &moment[q.j as usize], q);
+                    (MU0 * on_i, MU0 * on_j)
+                },
+                |q| MU0 * pair_dipole_field(&moment[q.i as usize], q),
+            );
             for ((torque, m), b) in out.torque.iter_mut().zip(&p.permanent_moment).zip(&b_loc) {
                 *torque += m.cross(b);
             }

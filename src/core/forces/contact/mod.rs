@@ -7,7 +7,7 @@ pub mod law;
 mod walls;
 
 use super::{Context, ForceTerm, Forces};
-use crate::core::neighbours::{Candidates, Pair, PairForm, PairNeed, PairRange};
+use crate::core::neighbours::{Pair, PairForm, PairNeed, PairRange, PairSource, RangePairs};
 use crate::core::parallel;
 use crate::core::state::{ContactDiagnostics, PairSpring, PairSprings, Particles, Species, Vec3, WallFace};
 pub use law::PairMaterial;
@@ -215,7 +215,7 @@ impl Contact {
     /// merged from `history` (positioned at or before the first), computed [`LANES`] at a time;
     /// `emit(pair, outcome)` receives each in order.
     #[allow(clippy::too_many_arguments)]
-    fn in_lanes<S: NearSource>(
+    fn in_lanes<S: PairSource>(
         &self,
         p: &Particles,
         source: &S,
@@ -262,7 +262,7 @@ impl Contact {
     /// then the share's own rows, whose j beyond the share are left to the shares after. Each
     /// particle's force and torque are so summed in the serial order, on any split.
     #[allow(clippy::too_many_arguments)]
-    fn share_pass<S: NearSource>(
+    fn share_pass<S: PairSource>(
         &self,
         source: &S,
         p: &Particles,
@@ -305,11 +305,7 @@ impl Contact {
         slots.resize_with(shares.max(slots.len()), Default::default);
         // The near pairs as another term lists them, or the candidates filtered as they are read:
         // the same pairs, bit for bit.
-        let listed = match self.near {
-            PairRange::Within { range, .. } => ctx.neighbours.listed(Some(range)),
-            PairRange::All => None,
-        };
-        let candidates = ctx.neighbours.candidates(self.near, ctx.domain);
+        let RangePairs { listed, candidates } = ctx.neighbours.range_pairs(self.near, ctx.domain);
         parallel::for_each_share((&mut *out.force, &mut *out.torque), |lo, parts| {
             let mut slot = slots[lo / size].lock().expect("one share per slot");
             // Filled on this thread's stack, not in the slot: the slots sit side by side, and
@@ -364,46 +360,6 @@ impl Contact {
         }
         out.contacts.walls = next;
         self.outcomes = batches;
-    }
-}
-
-/// Near pairs in (i, j) order as the pair pass reads them: the candidates, each filtered as it
-/// is read, or the pairs another term lists.
-trait NearSource: Sync {
-    type Item: Sync;
-    fn items(&self) -> &[Self::Item];
-    fn ij(item: &Self::Item) -> (u32, u32);
-    /// The item as a pair if it is within the range now.
-    fn pair(&self, positions: &[Vec3], item: &Self::Item) -> Option<Pair>;
-}
-
-impl NearSource for Candidates<'_> {
-    type Item = (u32, u32);
-    fn items(&self) -> &[(u32, u32)] {
-        self.list
-    }
-    #[inline(always)]
-    fn ij(item: &(u32, u32)) -> (u32, u32) {
-        *item
-    }
-    #[inline(always)]
-    fn pair(&self, positions: &[Vec3], item: &(u32, u32)) -> Option<Pair> {
-        Candidates::pair(self, positions, *item)
-    }
-}
-
-impl NearSource for &[Pair] {
-    type Item = Pair;
-    fn items(&self) -> &[Pair] {
-        self
-    }
-    #[inline(always)]
-    fn ij(item: &Pair) -> (u32, u32) {
-        (item.i, item.j)
-    }
-    #[inline(always)]
-    fn pair(&self, _: &[Vec3], item: &Pair) -> Option<Pair> {
-        Some(*item)
     }
 }
 
@@ -557,7 +513,7 @@ mod tests {
                     *v += f * (dt / m);
                 }
             }
-            let listed = |n: &Neighbours| n.listed(Some(2.0 * a)).is_some();
+            let listed = |n: &Neighbours| n.range_pairs(near, &domain).listed.is_some();
             assert!(listed(&reading.0) && !listed(&filtering.0));
             let (x, y) = (&filtering.1, &reading.1);
             assert!(x.fields.force == y.fields.force && x.fields.torque == y.fields.torque, "step {step}");
