@@ -302,11 +302,14 @@ pub type WallFace = u8;
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ContactHistory {
     pub pairs: PairSprings,
-    pub walls: Vec<((u32, WallFace), Vec3)>,
+    pub walls: Vec<WallSpring>,
 }
 
 /// A pair contact's key (i < j) and tangential spring.
 pub type PairSpring = ((u32, u32), Vec3);
+
+/// A wall contact's key (particle, face) and tangential spring.
+pub type WallSpring = ((u32, WallFace), Vec3);
 
 /// The pair contacts' springs, sorted by key, held in consecutive pieces: the contact pass writes
 /// one piece per share of particles, in parallel, and the pieces are never joined (a join would

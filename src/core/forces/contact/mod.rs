@@ -9,7 +9,7 @@ mod walls;
 use super::{Context, ForceTerm, Forces};
 use crate::core::neighbours::{Pair, PairForm, PairNeed, PairRange, PairSource, RangePairs};
 use crate::core::parallel;
-use crate::core::state::{ContactDiagnostics, PairSpring, PairSprings, Particles, Species, Vec3, WallFace};
+use crate::core::state::{ContactDiagnostics, PairSpring, PairSprings, Particles, Species, Vec3, WallFace, WallSpring};
 pub use law::PairMaterial;
 use law::{ContactLaw, Lanes, LANES};
 use std::sync::Mutex;
@@ -74,13 +74,17 @@ impl ReducedCache {
 /// What a share of the pair pass leaves: its part of the next history, its largest overlap.
 type ShareOut = (Vec<PairSpring>, ContactDiagnostics);
 
+/// What a share of the wall pass leaves: its part of the next wall history, its largest overlap.
+type WallShareOut = (Vec<WallSpring>, ContactDiagnostics);
+
 /// Particle–particle and particle–wall contacts.
 ///
 /// Pairs: one pass per particle share over the near candidates in (i, j) order finds the touching
 /// pairs (no pair list is written; where another term lists the range, the pass reads that list)
 /// and their springs (a merge with the sorted history), computes them [`LANES`] at a time and
-/// adds them in order (see [`Contact::share_pass`]). Walls: found and merged the same way,
-/// computed in parallel batches when many, added in order. The same bits for any thread count.
+/// adds them in order (see [`Contact::share_pass`]). Walls: found in particle order, then
+/// computed and added in the same particle shares ([`Contact::apply_walls`]), their springs
+/// merged the same way. The same bits for any thread count.
 pub struct Contact {
     /// Pair constants indexed `[species_i * n_species + species_j]`.
     materials: Vec<PairMaterial>,
@@ -91,13 +95,14 @@ pub struct Contact {
     near: PairRange,
     wall_scan: WallScan,
     wall_found: Vec<WallTouch>,
-    wall_touching: Vec<(WallTouch, Vec3)>,
-    outcomes: Vec<[ContactOutcome; LANES]>,
+    /// Per particle share of the wall pass: its piece of the next wall history and largest
+    /// overlap.
+    wall_shares: Vec<Mutex<WallShareOut>>,
     /// Per particle share of the pair pass: its piece of the next history and largest overlap.
     shares: Vec<Mutex<ShareOut>>,
     /// The pieces of the history before last, reused for the next one.
     spare_pairs: Vec<Vec<PairSpring>>,
-    spare_walls: Vec<((u32, WallFace), Vec3)>,
+    spare_walls: Vec<WallSpring>,
 }
 
 /// A merge cursor over springs sorted by key, held in consecutive pieces (each sorted, every key
@@ -145,8 +150,7 @@ impl Contact {
             near,
             wall_scan: WallScan::default(),
             wall_found: vec![],
-            wall_touching: vec![],
-            outcomes: vec![],
+            wall_shares: vec![],
             shares: vec![],
             spare_pairs: vec![],
             spare_walls: vec![],
@@ -192,23 +196,27 @@ impl Contact {
         2.0 * a
     }
 
-    /// Outcomes of contacts `0..n`, [`LANES`] to a batch, computed in parallel batches when
-    /// worth it (`fill(lanes, l, c)` sets lane l for contact c and returns its diameter).
-    fn outcomes_of(
+    /// The wall contacts `touches` (in particle then face order), their springs merged from
+    /// `springs`, computed [`LANES`] at a time; `emit(touch, outcome)` receives each in order.
+    fn walls_in_lanes(
         &self,
-        n: usize,
+        p: &Particles,
+        touches: &[WallTouch],
+        mut springs: Springs<(u32, WallFace)>,
         dt: f64,
-        fill: impl Fn(&mut Lanes, usize, usize) -> f64 + Sync,
-        batches: &mut Vec<[ContactOutcome; LANES]>,
+        mut emit: impl FnMut(&WallTouch, &ContactOutcome),
     ) {
-        parallel::map_ordered(n.div_ceil(LANES), batches, |b| {
-            let mut lanes = Lanes::default();
-            let first = b * LANES;
-            let diameters: [f64; LANES] =
-                std::array::from_fn(|l| if first + l < n { fill(&mut lanes, l, first + l) } else { 0.0 });
+        let mut lanes = Lanes::default();
+        for batch in touches.chunks(LANES) {
+            let mut diameters = [0.0; LANES];
+            for (l, t) in batch.iter().enumerate() {
+                diameters[l] = self.fill_wall(&mut lanes, l, p, t, springs.get((t.i, t.face)));
+            }
             self.law.apply(&mut lanes, dt);
-            std::array::from_fn(|l| ContactOutcome::of(&lanes, l, diameters[l]))
-        });
+            for (l, t) in batch.iter().enumerate() {
+                emit(t, &ContactOutcome::of(&lanes, l, diameters[l]));
+            }
+        }
     }
 
     /// The touching pairs among the near `items` that `keep(j)` selects, in order, their springs
@@ -336,30 +344,49 @@ impl Contact {
         self.shares = slots;
     }
 
+    /// Wall contacts in the pair pass's particle shares, each share's added to its particles
+    /// after all their pair contacts (as in the serial order), its springs and largest overlap
+    /// then gathered in share order.
     fn apply_walls(&mut self, ctx: &Context, p: &Particles, out: &mut Forces, diag: &mut ContactDiagnostics) {
         let history = std::mem::take(&mut out.contacts.walls);
         let mut found = std::mem::take(&mut self.wall_found);
         self.wall_scan.find(p, ctx.domain, ctx.neighbours.rebuilt(self.near), &mut found);
-        let mut springs = Springs::from(std::slice::from_ref(&history), (0, 0));
-        self.wall_touching.clear();
-        self.wall_touching.extend(found.iter().map(|&t| (t, springs.get((t.i, t.face)))));
-        self.wall_found = found;
-        let (touching, mut batches) = (&self.wall_touching, std::mem::take(&mut self.outcomes));
-        let fill = |lanes: &mut Lanes, l, c: usize| self.fill_wall(lanes, l, p, &touching[c].0, touching[c].1);
-        self.outcomes_of(touching.len(), ctx.dt, fill, &mut batches);
+        let (shares, size) = parallel::split_of(out.force.len());
+        let mut slots = std::mem::take(&mut self.wall_shares);
+        slots.resize_with(shares.max(slots.len()), Default::default);
+        let (pair_diag, dt) = (*diag, ctx.dt);
+        parallel::for_each_share((&mut *out.force, &mut *out.torque), |lo, (force, torque)| {
+            let mut slot = slots[lo / size].lock().expect("one share per slot");
+            let (mut next, mut share_diag) = (std::mem::take(&mut slot.0), pair_diag);
+            next.clear();
+            let in_share = |bound: usize| found.partition_point(|t| (t.i as usize) < bound);
+            let touches = &found[in_share(lo)..in_share(lo + force.len())];
+            let springs = Springs::from(std::slice::from_ref(&history), (lo as u32, 0));
+            self.walls_in_lanes(p, touches, springs, dt, |t, o| {
+                let i = t.i as usize - lo;
+                force[i] += o.force;
+                torque[i] += o.torque_i;
+                next.push(((t.i, t.face), o.shear));
+                if let Some(ratio) = o.overlap_ratio_above(share_diag.max_overlap_ratio) {
+                    share_diag = ContactDiagnostics { max_overlap_ratio: ratio, max_overlap_pair: (t.i, None) };
+                }
+            });
+            *slot = (next, share_diag);
+        });
+        // Each share started from the pairs' largest overlap: the first share above it and
+        // above the shares before is the first largest, as the serial pass finds it.
         let mut next = std::mem::replace(&mut self.spare_walls, history);
         next.clear();
-        for ((t, _), o) in touching.iter().zip(batches.iter().flatten()) {
-            let i = t.i as usize;
-            out.force[i] += o.force;
-            out.torque[i] += o.torque_i;
-            next.push(((t.i, t.face), o.shear));
-            if let Some(ratio) = o.overlap_ratio_above(diag.max_overlap_ratio) {
-                *diag = ContactDiagnostics { max_overlap_ratio: ratio, max_overlap_pair: (t.i, None) };
+        for slot in &mut slots[..shares] {
+            let (piece, share_diag) = slot.get_mut().expect("the shares are done");
+            next.extend_from_slice(piece);
+            if share_diag.max_overlap_ratio > diag.max_overlap_ratio {
+                *diag = *share_diag;
             }
         }
         out.contacts.walls = next;
-        self.outcomes = batches;
+        self.wall_found = found;
+        self.wall_shares = slots;
     }
 }
 
