@@ -1046,7 +1046,7 @@ fn both_cores(bench: &Bench) -> String {
     }
     let _ = write!(
         s,
-        "\nThe integrator's share is pure streaming: velocity Verlet with one mass for all particles makes {INTEGRATE_PASSES} passes over arrays of N three-vectors per step (half kick and drift: x, v, ω read and written, F and T read; closing half kick: v, ω read and written, F and T read), each read and each write counted once: {}. The other phases pass over particle arrays of the same size (the neighbour filter also gathers the partners' positions), and the serial rest of the step comes on top: the wall contacts' scan of the particles near a wall (a list too short to split) and the hand-offs between the parallel loops. The history ([performance-history.md](performance-history.md)) has the measurements behind this.\n",
+        "\nThe integrator's share is pure streaming: velocity Verlet with one mass for all particles makes {INTEGRATE_PASSES} passes over arrays of N three-vectors per step (half kick and drift: x, v, ω read and written, F and T read; closing half kick: v, ω read and written, F and T read), each read and each write counted once: {}. The other phases pass over particle arrays of the same size (the neighbour filter also gathers the partners' positions), and the serial rest of the step comes on top: the hand-offs between the parallel loops, and the gathering of the shares' contact springs. The history ([performance-history.md](performance-history.md)) has the measurements behind this.\n",
         integrate_bandwidth.join("; ")
     );
     s
