@@ -21,7 +21,7 @@ pub struct CellList {
     cell_start: Vec<u32>,
     cell_particles: Vec<u32>,
     particle_cell: Vec<u32>,
-    /// Chunk buffers of the parallel pair collection (the Verlet filter's too).
+    /// Chunk buffers of the Verlet filter's parallel pair collection.
     pieces: Pieces<Pair>,
     /// Chunk buffers of the parallel candidate collection.
     candidate_pieces: Pieces<(u32, u32)>,
@@ -42,33 +42,19 @@ impl CellList {
             }
             return;
         };
-        let dims = self.bin(positions, domain, range);
-        // Row by row, each particle with its partners of higher index in the cells around it
-        // (rows in parallel when worth it): the pairs come out in (i, j) order.
-        let range2 = range * range;
-        let Self { cell_start, cell_particles, particle_cell, pieces, .. } = self;
-        parallel::collect_ordered(n, out, pieces, |i, out| {
-            let row = out.len();
-            let (cells, count) = neighbour_cells(particle_cell[i], dims, domain);
-            for &c2 in &cells[..count] {
-                let members = cell_start[c2 as usize] as usize..cell_start[c2 as usize + 1] as usize;
-                for &j in &cell_particles[members] {
-                    if (j as usize) > i {
-                        let r = domain.displacement(&positions[i], &positions[j as usize]);
-                        let d2 = r.norm_squared();
-                        if d2 < range2 {
-                            out.push(Pair { i: i as u32, j, r, dist: d2.sqrt() });
-                        }
-                    }
-                }
-            }
-            out[row..].sort_unstable_by_key(|p| p.j);
-        });
+        // The candidates at `range` are exactly these pairs; their separations are taken as
+        // the Verlet filter takes them (the same bits).
+        let mut candidates = vec![];
+        self.candidates_within(positions, domain, range, &mut candidates);
+        out.extend(candidates.into_iter().map(|(i, j)| {
+            let r = domain.displacement(&positions[i as usize], &positions[j as usize]);
+            Pair { i, j, r, dist: r.norm_squared().sqrt() }
+        }));
     }
 
     /// Fills `out` with every (i, j), i < j, closer than `range`, in (i, j) order: the pairs of
-    /// [`Self::pairs_within`] without their separations (a fifth of the bytes), for a Verlet
-    /// list's candidates. A cell's members are in ascending order, and in particles kept in
+    /// [`Self::pairs_within`] without their separations (a fifth of the bytes: a Verlet list's
+    /// candidates). A cell's members are in ascending order, and in particles kept in
     /// spatial order most cells lie wholly above or below a row, so a row's partners j > i in a
     /// cell are all, none, or a tail found by a binary search; the distance test then picks
     /// without a branch.
@@ -371,6 +357,16 @@ pub enum PairRange {
     Within { range: f64, skin: f64 },
     /// Every pair, rebuilt at each evaluation.
     All,
+}
+
+impl PairRange {
+    /// The pair distance (`None`: all pairs), whatever the skin.
+    pub fn distance(&self) -> Option<f64> {
+        match *self {
+            PairRange::Within { range, .. } => Some(range),
+            PairRange::All => None,
+        }
+    }
 }
 
 /// How a term reads its pairs.
@@ -678,27 +674,14 @@ impl Neighbours {
     /// within its distance by any term, with any skin (a term reuses them instead of filtering
     /// again), and its candidates. Every pair of [`PairRange::All`] is listed.
     pub fn range_pairs<'a>(&'a self, range: PairRange, domain: &'a Domain) -> RangePairs<'a> {
-        let distance = match range {
-            PairRange::Within { range, .. } => Some(range),
-            PairRange::All => None,
-        };
-        let same = |r: &PairRange| match (r, distance) {
-            (PairRange::Within { range: a, .. }, Some(b)) => *a == b,
-            (PairRange::All, None) => true,
-            _ => false,
-        };
-        let listed = self.lists.iter().find(|l| l.listed && same(&l.range)).map(|l| l.pairs.as_slice());
-        RangePairs { listed, candidates: self.candidates(range, domain) }
+        let listed = self.lists.iter().find(|l| l.listed && l.range.distance() == range.distance());
+        RangePairs { listed: listed.map(|l| l.pairs.as_slice()), candidates: self.candidates(range, domain) }
     }
 
     /// The range some term declared within `distance` (`None`: all pairs), with its skin: a term
     /// that can sum over another's pairs finds them here instead of searching again.
     pub fn declared(&self, distance: Option<f64>) -> Option<PairRange> {
-        self.lists.iter().map(|l| l.range).find(|r| match (r, distance) {
-            (PairRange::Within { range, .. }, Some(d)) => *range == d,
-            (PairRange::All, None) => true,
-            _ => false,
-        })
+        self.lists.iter().map(|l| l.range).find(|r| r.distance() == distance)
     }
 
     /// `Some(skin)` when the candidates of `range` were rebuilt in the last update, with the skin
