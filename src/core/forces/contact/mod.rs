@@ -221,7 +221,8 @@ impl Contact {
 
     /// The touching pairs among the near `items` that `keep(j)` selects, in order, their springs
     /// merged from `history` (positioned at or before the first), computed [`LANES`] at a time;
-    /// `emit(pair, outcome)` receives each in order.
+    /// `emit(batch, lanes)` receives each batch of pairs (with their smaller diameters) and its
+    /// computed lanes, in order.
     #[allow(clippy::too_many_arguments)]
     fn in_lanes<S: PairSource>(
         &self,
@@ -231,15 +232,13 @@ impl Contact {
         mut history: Springs<(u32, u32)>,
         dt: f64,
         keep: impl Fn(u32) -> bool,
-        mut emit: impl FnMut(&Pair, &ContactOutcome),
+        mut emit: impl FnMut(&[(Pair, f64)], &Lanes),
     ) {
         let (mut lanes, mut batch) = (Lanes::default(), [(Pair::default(), 0.0); LANES]);
         let (mut cache, mut used) = (ReducedCache::default(), 0);
         let mut flush = |lanes: &mut Lanes, batch: &[(Pair, f64)]| {
             self.law.apply(lanes, dt);
-            for (l, (pair, diameter)) in batch.iter().enumerate() {
-                emit(pair, &ContactOutcome::of(lanes, l, *diameter));
-            }
+            emit(batch, lanes);
         };
         let touching = |item: &S::Item| {
             let (i, j) = S::ij(item);
@@ -292,16 +291,18 @@ impl Contact {
             history_from(first_row),
             dt,
             |j| (lo..hi).contains(&(j as usize)),
-            |q, o| {
-                let j = q.j as usize - lo;
-                force[j] -= o.force;
-                torque[j] += o.torque_j;
+            |batch, lanes| {
+                for (l, (q, _)) in batch.iter().enumerate() {
+                    let j = q.j as usize - lo;
+                    force[j] -= lanes.force(l);
+                    torque[j] += lanes.torque_j(l);
+                }
             },
         );
         next.clear();
         *diag = ContactDiagnostics::default();
         let mut adder = RowAdder::new(lo, diag, next);
-        let add = |q: &Pair, o: &ContactOutcome| adder.add(force, torque, q, o);
+        let add = |batch: &[(Pair, f64)], lanes: &Lanes| adder.add(force, torque, batch, lanes);
         self.in_lanes(p, source, &near[rows..rest], history_from(lo), dt, |_| true, add);
         adder.finish(force, torque);
     }
@@ -411,23 +412,32 @@ impl<'a> RowAdder<'a> {
         RowAdder { lo, diag, next, row: usize::MAX, force_i: Vec3::zeros(), torque_i: Vec3::zeros() }
     }
 
+    /// Adds a computed batch. The row's particle and sums are held in locals over the batch
+    /// (in registers, not read back from memory contact after contact).
     #[inline(always)]
-    fn add(&mut self, force: &mut [Vec3], torque: &mut [Vec3], pair: &Pair, o: &ContactOutcome) {
-        let i = pair.i as usize - self.lo;
-        if i != self.row {
-            self.store(force, torque);
-            (self.row, self.force_i, self.torque_i) = (i, force[i], torque[i]);
+    fn add(&mut self, force: &mut [Vec3], torque: &mut [Vec3], batch: &[(Pair, f64)], lanes: &Lanes) {
+        let (mut row, mut force_i, mut torque_i) = (self.row, self.force_i, self.torque_i);
+        for (l, &(ref pair, diameter)) in batch.iter().enumerate() {
+            let o = ContactOutcome::of(lanes, l, diameter);
+            let i = pair.i as usize - self.lo;
+            if i != row {
+                if row != usize::MAX {
+                    (force[row], torque[row]) = (force_i, torque_i);
+                }
+                (row, force_i, torque_i) = (i, force[i], torque[i]);
+            }
+            force_i += o.force;
+            torque_i += o.torque_i;
+            if let Some(j) = (pair.j as usize).checked_sub(self.lo).filter(|&j| j < force.len()) {
+                force[j] -= o.force;
+                torque[j] += o.torque_j;
+            }
+            self.next.push(((pair.i, pair.j), o.shear));
+            if let Some(ratio) = o.overlap_ratio_above(self.diag.max_overlap_ratio) {
+                *self.diag = ContactDiagnostics { max_overlap_ratio: ratio, max_overlap_pair: (pair.i, Some(pair.j)) };
+            }
         }
-        self.force_i += o.force;
-        self.torque_i += o.torque_i;
-        if let Some(j) = (pair.j as usize).checked_sub(self.lo).filter(|&j| j < force.len()) {
-            force[j] -= o.force;
-            torque[j] += o.torque_j;
-        }
-        self.next.push(((pair.i, pair.j), o.shear));
-        if let Some(ratio) = o.overlap_ratio_above(self.diag.max_overlap_ratio) {
-            *self.diag = ContactDiagnostics { max_overlap_ratio: ratio, max_overlap_pair: (pair.i, Some(pair.j)) };
-        }
+        (self.row, self.force_i, self.torque_i) = (row, force_i, torque_i);
     }
 
     /// Stores the row's sums (none before the first row).
