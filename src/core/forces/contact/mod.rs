@@ -232,11 +232,11 @@ impl Contact {
         mut history: Springs<(u32, u32)>,
         dt: f64,
         keep: impl Fn(u32) -> bool,
-        mut emit: impl FnMut(&[(Pair, f64)], &Lanes),
+        mut emit: impl FnMut(&[((u32, u32), f64)], &Lanes),
     ) {
-        let (mut lanes, mut batch) = (Lanes::default(), [(Pair::default(), 0.0); LANES]);
+        let (mut lanes, mut batch) = (Lanes::default(), [((0, 0), 0.0); LANES]);
         let (mut cache, mut used) = (ReducedCache::default(), 0);
-        let mut flush = |lanes: &mut Lanes, batch: &[(Pair, f64)]| {
+        let mut flush = |lanes: &mut Lanes, batch: &[((u32, u32), f64)]| {
             self.law.apply(lanes, dt);
             emit(batch, lanes);
         };
@@ -252,7 +252,7 @@ impl Contact {
             let (i, j) = (pair.i as usize, pair.j as usize);
             let s = history.get((pair.i, pair.j));
             let reduced = cache.get((p.radius[i], p.radius[j], p.mass[i], p.mass[j]));
-            batch[used] = (pair, self.fill_pair(&mut lanes, used, p, &pair, reduced, s));
+            batch[used] = ((pair.i, pair.j), self.fill_pair(&mut lanes, used, p, &pair, reduced, s));
             used += 1;
             if used == LANES {
                 flush(&mut lanes, &batch);
@@ -292,8 +292,8 @@ impl Contact {
             dt,
             |j| (lo..hi).contains(&(j as usize)),
             |batch, lanes| {
-                for (l, (q, _)) in batch.iter().enumerate() {
-                    let j = q.j as usize - lo;
+                for (l, &((_, j), _)) in batch.iter().enumerate() {
+                    let j = j as usize - lo;
                     force[j] -= lanes.force(l);
                     torque[j] += lanes.torque_j(l);
                 }
@@ -302,7 +302,7 @@ impl Contact {
         next.clear();
         *diag = ContactDiagnostics::default();
         let mut adder = RowAdder::new(lo, diag, next);
-        let add = |batch: &[(Pair, f64)], lanes: &Lanes| adder.add(force, torque, batch, lanes);
+        let add = |batch: &[((u32, u32), f64)], lanes: &Lanes| adder.add(force, torque, batch, lanes);
         self.in_lanes(p, source, &near[rows..rest], history_from(lo), dt, |_| true, add);
         adder.finish(force, torque);
     }
@@ -415,11 +415,11 @@ impl<'a> RowAdder<'a> {
     /// Adds a computed batch. The row's particle and sums are held in locals over the batch
     /// (in registers, not read back from memory contact after contact).
     #[inline(always)]
-    fn add(&mut self, force: &mut [Vec3], torque: &mut [Vec3], batch: &[(Pair, f64)], lanes: &Lanes) {
+    fn add(&mut self, force: &mut [Vec3], torque: &mut [Vec3], batch: &[((u32, u32), f64)], lanes: &Lanes) {
         let (mut row, mut force_i, mut torque_i) = (self.row, self.force_i, self.torque_i);
-        for (l, &(ref pair, diameter)) in batch.iter().enumerate() {
+        for (l, &((pi, pj), diameter)) in batch.iter().enumerate() {
             let o = ContactOutcome::of(lanes, l, diameter);
-            let i = pair.i as usize - self.lo;
+            let i = pi as usize - self.lo;
             if i != row {
                 if row != usize::MAX {
                     (force[row], torque[row]) = (force_i, torque_i);
@@ -428,13 +428,13 @@ impl<'a> RowAdder<'a> {
             }
             force_i += o.force;
             torque_i += o.torque_i;
-            if let Some(j) = (pair.j as usize).checked_sub(self.lo).filter(|&j| j < force.len()) {
+            if let Some(j) = (pj as usize).checked_sub(self.lo).filter(|&j| j < force.len()) {
                 force[j] -= o.force;
                 torque[j] += o.torque_j;
             }
-            self.next.push(((pair.i, pair.j), o.shear));
+            self.next.push(((pi, pj), o.shear));
             if let Some(ratio) = o.overlap_ratio_above(self.diag.max_overlap_ratio) {
-                *self.diag = ContactDiagnostics { max_overlap_ratio: ratio, max_overlap_pair: (pair.i, Some(pair.j)) };
+                *self.diag = ContactDiagnostics { max_overlap_ratio: ratio, max_overlap_pair: (pi, Some(pj)) };
             }
         }
         (self.row, self.force_i, self.torque_i) = (row, force_i, torque_i);
