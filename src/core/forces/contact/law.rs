@@ -116,7 +116,8 @@ pub struct Lanes {
 }
 
 impl Lanes {
-    /// Fills lane `l` from a contact's geometry and kinematics and its pair constants.
+    /// Fills lane `l` from a contact's geometry and kinematics and its pair constants (`None`:
+    /// those already in the lane).
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     pub fn set(
@@ -128,18 +129,26 @@ impl Lanes {
         rel_velocity: Vec3,
         spin: Vec3,
         (lever_i, lever_j): (f64, f64),
-        m: &PairMaterial,
+        material: Option<&PairMaterial>,
         shear: Vec3,
     ) {
         self.overlap[l] = overlap;
         (self.r_eff[l], self.m_eff[l], self.lever_i[l], self.lever_j[l]) = (r_eff, m_eff, lever_i, lever_j);
-        (self.e_star[l], self.g_star[l], self.beta[l], self.friction[l]) = (m.e_star, m.g_star, m.beta, m.friction);
+        if let Some(m) = material {
+            self.set_material(l, m);
+        }
         for c in 0..3 {
             self.normal[c][l] = normal[c];
             self.rel_velocity[c][l] = rel_velocity[c];
             self.spin[c][l] = spin[c];
             self.shear[c][l] = shear[c];
         }
+    }
+
+    /// The pair constants of lane `l`.
+    #[inline(always)]
+    pub fn set_material(&mut self, l: usize, m: &PairMaterial) {
+        (self.e_star[l], self.g_star[l], self.beta[l], self.friction[l]) = (m.e_star, m.g_star, m.beta, m.friction);
     }
 
     fn get(v: &[Lane; 3], l: usize) -> Vec3 {
@@ -322,7 +331,7 @@ mod tests {
                     // Springs from none to well past the Coulomb limit.
                     let shear = 1e-9 * (batch as f64 / 10.0) * Vec3::new(value(k + 9), value(k + 10), value(k + 11));
                     let overlap = 1e-9 * (1.0 + value(k + 12));
-                    c.set(l, overlap, normal, (2.75e-6, 3.8e-13), v, spin, (5.5e-6, 5.5e-6), &m, shear);
+                    c.set(l, overlap, normal, (2.75e-6, 3.8e-13), v, spin, (5.5e-6, 5.5e-6), Some(&m), shear);
                 }
                 let input = c.clone();
                 law.apply(&mut c, 1e-8);

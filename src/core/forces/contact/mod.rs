@@ -157,8 +157,20 @@ impl Contact {
         }
     }
 
-    fn material(&self, si: u16, sj: u16) -> &PairMaterial {
-        &self.materials[si as usize * self.n_species + sj as usize]
+    /// Lanes for a batch; with one species, its pair constants already in every lane.
+    fn fresh_lanes(&self) -> Lanes {
+        let mut lanes = Lanes::default();
+        if let [material] = self.materials[..] {
+            (0..LANES).for_each(|l| lanes.set_material(l, &material));
+        }
+        lanes
+    }
+
+    /// The pair constants for species `si` and `sj` to put in a lane of [`Self::fresh_lanes`]
+    /// (`None`, with one species: already there).
+    #[inline(always)]
+    fn lane_material(&self, si: u16, sj: u16) -> Option<&PairMaterial> {
+        (self.n_species > 1).then(|| &self.materials[si as usize * self.n_species + sj as usize])
     }
 
     /// Lane `l` for the touching `pair`, its R* and m* given as `reduced`; returns the smaller
@@ -178,7 +190,7 @@ impl Contact {
         let overlap = ai + aj - pair.dist;
         let (cr_i, cr_j) = (ai - 0.5 * overlap, aj - 0.5 * overlap);
         let spin = cr_i * p.angular_velocity[i] + cr_j * p.angular_velocity[j];
-        let material = self.material(p.species[i], p.species[j]);
+        let material = self.lane_material(p.species[i], p.species[j]);
         let relative = p.velocity[i] - p.velocity[j];
         lanes.set(l, overlap, pair.r / pair.dist, reduced, relative, spin, (cr_i, cr_j), material, shear);
         2.0 * ai.min(aj)
@@ -190,7 +202,7 @@ impl Contact {
         let i = touch.i as usize;
         let a = p.radius[i];
         let cr = a - 0.5 * touch.overlap;
-        let material = self.material(p.species[i], p.species[i]);
+        let material = self.lane_material(p.species[i], p.species[i]);
         let spin = cr * p.angular_velocity[i];
         lanes.set(l, touch.overlap, touch.normal(), (a, p.mass[i]), p.velocity[i], spin, (cr, 0.0), material, shear);
         2.0 * a
@@ -206,7 +218,7 @@ impl Contact {
         dt: f64,
         mut emit: impl FnMut(&WallTouch, &ContactOutcome),
     ) {
-        let mut lanes = Lanes::default();
+        let mut lanes = self.fresh_lanes();
         for batch in touches.chunks(LANES) {
             let mut diameters = [0.0; LANES];
             for (l, t) in batch.iter().enumerate() {
@@ -234,7 +246,7 @@ impl Contact {
         keep: impl Fn(u32) -> bool,
         mut emit: impl FnMut(&[((u32, u32), f64)], &Lanes),
     ) {
-        let (mut lanes, mut batch) = (Lanes::default(), [((0, 0), 0.0); LANES]);
+        let (mut lanes, mut batch) = (self.fresh_lanes(), [((0, 0), 0.0); LANES]);
         let (mut cache, mut used) = (ReducedCache::default(), 0);
         let mut flush = |lanes: &mut Lanes, batch: &[((u32, u32), f64)]| {
             self.law.apply(lanes, dt);
@@ -558,6 +570,60 @@ mod tests {
             touching += x.contacts.pairs.len();
         }
         assert!(touching > 1000, "{touching} pair contacts over the run");
+    }
+
+    /// Two species of different stiffness: each lane of a batch takes its own pair's constants.
+    /// Pairs at rest overlapping by δ (A–A, A–B, B–B, B–A, in one batch with two wall contacts)
+    /// push with Hertz's 4/3 E* √(R*δ) δ for their own E* (the wall's: the particle's species
+    /// with itself), to round-off.
+    #[test]
+    fn each_lane_takes_its_own_pair_constants() {
+        let a = 5e-6;
+        let soft = crate::core::state::test_sphere(a);
+        let stiff = Species { youngs_modulus: 7e9, poisson_ratio: 0.2, ..soft.clone() };
+        let species = [soft, stiff];
+        let edge = 200e-6;
+        let domain = Domain { lo: Vec3::zeros(), hi: Vec3::repeat(edge), periodic: [false; 3] };
+        let delta = 1e-8;
+        let mut state = State::default();
+        let kinds = [(0, 0), (0, 1), (1, 1), (1, 0)];
+        for (k, &(si, sj)) in kinds.iter().enumerate() {
+            let x = Vec3::new(30e-6 + 40e-6 * k as f64, 100e-6, 100e-6);
+            let r = Vec3::new(0.0, 2.0 * a - delta, 0.0);
+            state.particles.push(si, &species[si as usize], x, Vec3::zeros());
+            state.particles.push(sj, &species[sj as usize], x + r, Vec3::zeros());
+        }
+        // Two wall contacts on the floor, one of each species.
+        for (k, si) in [0u16, 1].into_iter().enumerate() {
+            let x = Vec3::new(40e-6 + 80e-6 * k as f64, 40e-6, a - delta);
+            state.particles.push(si, &species[si as usize], x, Vec3::zeros());
+        }
+        state.fields.fit(state.particles.len());
+        let near = PairRange::Within { range: 2.0 * a, skin: 0.2 * a };
+        let mut contact = Contact::new(&species, ContactLaw::default(), true, near);
+        let mut neighbours = Neighbours::new(contact.pairs());
+        let p = &state.particles;
+        neighbours.update(&p.position, &domain, |_| true, &mut crate::core::timers::PhaseTimers::default());
+        let ctx = Context { domain: &domain, neighbours: &neighbours, dt: 1e-8 };
+        let (p, mut out) = Forces::of(&mut state, ForceGroup::All);
+        contact.apply(&ctx, p, &mut out);
+        assert_eq!((state.contacts.pairs.len(), state.contacts.walls.len()), (4, 2));
+        let hertz = |si: u16, sj: u16, r_eff: f64| {
+            let e_star = PairMaterial::new(&species[si as usize], &species[sj as usize]).e_star;
+            4.0 / 3.0 * e_star * (r_eff * delta).sqrt() * delta
+        };
+        let force = &state.fields.force;
+        for (k, &(si, sj)) in kinds.iter().enumerate() {
+            let (expected, got) = (hertz(si, sj, 0.5 * a), force[2 * k + 1].y);
+            assert!((got / expected - 1.0).abs() < 1e-9, "pair {si}-{sj}: {got:e} N, Hertz {expected:e} N");
+            assert_eq!(force[2 * k].y, -got);
+        }
+        for (k, si) in [0u16, 1].into_iter().enumerate() {
+            let (expected, got) = (hertz(si, si, a), force[8 + k].z);
+            assert!((got / expected - 1.0).abs() < 1e-9, "wall, species {si}: {got:e} N, Hertz {expected:e} N");
+        }
+        let stiff_soft = hertz(1, 1, a) / hertz(0, 0, a);
+        assert!(stiff_soft > 3.0, "the species differ: {stiff_soft}");
     }
 
     /// Particles drifting in a walled box, in and out of the walls' reach: the wall contacts
