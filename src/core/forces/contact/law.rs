@@ -116,8 +116,8 @@ pub struct Lanes {
 }
 
 impl Lanes {
-    /// Fills lane `l` from a contact's geometry and kinematics and its pair constants (`None`:
-    /// those already in the lane).
+    /// Fills lane `l` from a contact's geometry and kinematics, its R* and m* and its pair
+    /// constants (`None`: those already in the lane).
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     pub fn set(
@@ -125,7 +125,7 @@ impl Lanes {
         l: usize,
         overlap: f64,
         normal: Vec3,
-        (r_eff, m_eff): (f64, f64),
+        reduced: Option<(f64, f64)>,
         rel_velocity: Vec3,
         spin: Vec3,
         (lever_i, lever_j): (f64, f64),
@@ -133,7 +133,10 @@ impl Lanes {
         shear: Vec3,
     ) {
         self.overlap[l] = overlap;
-        (self.r_eff[l], self.m_eff[l], self.lever_i[l], self.lever_j[l]) = (r_eff, m_eff, lever_i, lever_j);
+        (self.lever_i[l], self.lever_j[l]) = (lever_i, lever_j);
+        if let Some(reduced) = reduced {
+            self.set_reduced(l, reduced);
+        }
         if let Some(m) = material {
             self.set_material(l, m);
         }
@@ -143,6 +146,12 @@ impl Lanes {
             self.spin[c][l] = spin[c];
             self.shear[c][l] = shear[c];
         }
+    }
+
+    /// R* and m* of lane `l`.
+    #[inline(always)]
+    pub fn set_reduced(&mut self, l: usize, (r_eff, m_eff): (f64, f64)) {
+        (self.r_eff[l], self.m_eff[l]) = (r_eff, m_eff);
     }
 
     /// The pair constants of lane `l`.
@@ -331,7 +340,7 @@ mod tests {
                     // Springs from none to well past the Coulomb limit.
                     let shear = 1e-9 * (batch as f64 / 10.0) * Vec3::new(value(k + 9), value(k + 10), value(k + 11));
                     let overlap = 1e-9 * (1.0 + value(k + 12));
-                    c.set(l, overlap, normal, (2.75e-6, 3.8e-13), v, spin, (5.5e-6, 5.5e-6), Some(&m), shear);
+                    c.set(l, overlap, normal, Some((2.75e-6, 3.8e-13)), v, spin, (5.5e-6, 5.5e-6), Some(&m), shear);
                 }
                 let input = c.clone();
                 law.apply(&mut c, 1e-8);

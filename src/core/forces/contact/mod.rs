@@ -71,6 +71,14 @@ impl ReducedCache {
     }
 }
 
+/// R* = a a/(a + a) and m* = m m/(m + m) if every particle has radius a and mass m: the bits
+/// [`ReducedCache`] gives every pair then.
+fn alike(p: &Particles) -> Option<(f64, f64)> {
+    let (&a, &m) = (p.radius.first()?, p.mass.first()?);
+    let alike = p.radius.iter().all(|&r| r == a) && p.mass.iter().all(|&x| x == m);
+    alike.then(|| (a * a / (a + a), m * m / (m + m)))
+}
+
 /// What a share of the pair pass leaves: its part of the next history, its largest overlap.
 type ShareOut = (Vec<PairSpring>, ContactDiagnostics);
 
@@ -102,6 +110,9 @@ pub struct Contact {
     shares: Vec<Mutex<ShareOut>>,
     /// The pieces of the history before last, reused for the next one.
     spare_pairs: Vec<Vec<PairSpring>>,
+    /// R* and m* of every pair while all particles have one radius and one mass (see
+    /// [`alike`]), set once in the lanes instead of per contact.
+    alike: Option<(f64, f64)>,
     spare_walls: Vec<WallSpring>,
 }
 
@@ -154,14 +165,21 @@ impl Contact {
             shares: vec![],
             spare_pairs: vec![],
             spare_walls: vec![],
+            alike: None,
         }
     }
 
-    /// Lanes for a batch; with one species, its pair constants already in every lane.
-    fn fresh_lanes(&self) -> Lanes {
+    /// Lanes for a batch; with one species, its pair constants already in every lane, and
+    /// `reduced` R* and m*, if given, too.
+    fn fresh_lanes(&self, reduced: Option<(f64, f64)>) -> Lanes {
         let mut lanes = Lanes::default();
-        if let [material] = self.materials[..] {
-            (0..LANES).for_each(|l| lanes.set_material(l, &material));
+        for l in 0..LANES {
+            if let [material] = self.materials[..] {
+                lanes.set_material(l, &material);
+            }
+            if let Some(reduced) = reduced {
+                lanes.set_reduced(l, reduced);
+            }
         }
         lanes
     }
@@ -173,8 +191,8 @@ impl Contact {
         (self.n_species > 1).then(|| &self.materials[si as usize * self.n_species + sj as usize])
     }
 
-    /// Lane `l` for the touching `pair`, its R* and m* given as `reduced`; returns the smaller
-    /// diameter.
+    /// Lane `l` for the touching `pair`, its R* and m* given as `reduced` (`None`: already in
+    /// the lane); returns the smaller diameter.
     #[inline(always)]
     fn fill_pair(
         &self,
@@ -182,7 +200,7 @@ impl Contact {
         l: usize,
         p: &Particles,
         pair: &Pair,
-        reduced: (f64, f64),
+        reduced: Option<(f64, f64)>,
         shear: Vec3,
     ) -> f64 {
         let (i, j) = (pair.i as usize, pair.j as usize);
@@ -204,7 +222,17 @@ impl Contact {
         let cr = a - 0.5 * touch.overlap;
         let material = self.lane_material(p.species[i], p.species[i]);
         let spin = cr * p.angular_velocity[i];
-        lanes.set(l, touch.overlap, touch.normal(), (a, p.mass[i]), p.velocity[i], spin, (cr, 0.0), material, shear);
+        lanes.set(
+            l,
+            touch.overlap,
+            touch.normal(),
+            Some((a, p.mass[i])),
+            p.velocity[i],
+            spin,
+            (cr, 0.0),
+            material,
+            shear,
+        );
         2.0 * a
     }
 
@@ -218,7 +246,7 @@ impl Contact {
         dt: f64,
         mut emit: impl FnMut(&WallTouch, &ContactOutcome),
     ) {
-        let mut lanes = self.fresh_lanes();
+        let mut lanes = self.fresh_lanes(None);
         for batch in touches.chunks(LANES) {
             let mut diameters = [0.0; LANES];
             for (l, t) in batch.iter().enumerate() {
@@ -246,7 +274,7 @@ impl Contact {
         keep: impl Fn(u32) -> bool,
         mut emit: impl FnMut(&[((u32, u32), f64)], &Lanes),
     ) {
-        let (mut lanes, mut batch) = (self.fresh_lanes(), [((0, 0), 0.0); LANES]);
+        let (mut lanes, mut batch) = (self.fresh_lanes(self.alike), [((0, 0), 0.0); LANES]);
         let (mut cache, mut used) = (ReducedCache::default(), 0);
         let mut flush = |lanes: &mut Lanes, batch: &[((u32, u32), f64)]| {
             self.law.apply(lanes, dt);
@@ -263,7 +291,10 @@ impl Contact {
         for pair in items.iter().filter_map(touching) {
             let (i, j) = (pair.i as usize, pair.j as usize);
             let s = history.get((pair.i, pair.j));
-            let reduced = cache.get((p.radius[i], p.radius[j], p.mass[i], p.mass[j]));
+            let reduced = match self.alike {
+                Some(_) => None,
+                None => Some(cache.get((p.radius[i], p.radius[j], p.mass[i], p.mass[j]))),
+            };
             batch[used] = ((pair.i, pair.j), self.fill_pair(&mut lanes, used, p, &pair, reduced, s));
             used += 1;
             if used == LANES {
@@ -321,6 +352,7 @@ impl Contact {
 
     fn apply_pairs(&mut self, ctx: &Context, p: &Particles, out: &mut Forces, diag: &mut ContactDiagnostics) {
         let history = std::mem::take(&mut out.contacts.pairs);
+        self.alike = alike(p);
         let (shares, size) = parallel::split_of(out.force.len());
         let mut slots = std::mem::take(&mut self.shares);
         slots.resize_with(shares.max(slots.len()), Default::default);
@@ -572,58 +604,63 @@ mod tests {
         assert!(touching > 1000, "{touching} pair contacts over the run");
     }
 
-    /// Two species of different stiffness: each lane of a batch takes its own pair's constants.
-    /// Pairs at rest overlapping by δ (A–A, A–B, B–B, B–A, in one batch with two wall contacts)
-    /// push with Hertz's 4/3 E* √(R*δ) δ for their own E* (the wall's: the particle's species
-    /// with itself), to round-off.
+    /// Two species of different stiffness: each lane of a batch takes its own pair's constants
+    /// and its own R* and m*. Pairs at rest overlapping by δ (A–A, A–B, B–B, B–A, in one batch
+    /// with two wall contacts) push with Hertz's 4/3 E* √(R*δ) δ for their own E* and R* (the
+    /// wall's: the particle's species with itself, R* = a), to round-off; with the species of
+    /// one size (R* and m* set once for all lanes) and of two.
     #[test]
     fn each_lane_takes_its_own_pair_constants() {
         let a = 5e-6;
-        let soft = crate::core::state::test_sphere(a);
-        let stiff = Species { youngs_modulus: 7e9, poisson_ratio: 0.2, ..soft.clone() };
-        let species = [soft, stiff];
-        let edge = 200e-6;
-        let domain = Domain { lo: Vec3::zeros(), hi: Vec3::repeat(edge), periodic: [false; 3] };
-        let delta = 1e-8;
-        let mut state = State::default();
-        let kinds = [(0, 0), (0, 1), (1, 1), (1, 0)];
-        for (k, &(si, sj)) in kinds.iter().enumerate() {
-            let x = Vec3::new(30e-6 + 40e-6 * k as f64, 100e-6, 100e-6);
-            let r = Vec3::new(0.0, 2.0 * a - delta, 0.0);
-            state.particles.push(si, &species[si as usize], x, Vec3::zeros());
-            state.particles.push(sj, &species[sj as usize], x + r, Vec3::zeros());
+        for b in [a, 0.6 * a] {
+            let soft = crate::core::state::test_sphere(a);
+            let stiff = Species { youngs_modulus: 7e9, poisson_ratio: 0.2, radius: b, ..soft.clone() };
+            let species = [soft, stiff];
+            let radius = |s: u16| species[s as usize].radius;
+            let domain = Domain { lo: Vec3::zeros(), hi: Vec3::repeat(200e-6), periodic: [false; 3] };
+            let delta = 1e-8;
+            let mut state = State::default();
+            let kinds = [(0, 0), (0, 1), (1, 1), (1, 0)];
+            for (k, &(si, sj)) in kinds.iter().enumerate() {
+                let x = Vec3::new(30e-6 + 40e-6 * k as f64, 100e-6, 100e-6);
+                let r = Vec3::new(0.0, radius(si) + radius(sj) - delta, 0.0);
+                state.particles.push(si, &species[si as usize], x, Vec3::zeros());
+                state.particles.push(sj, &species[sj as usize], x + r, Vec3::zeros());
+            }
+            // Two wall contacts on the floor, one of each species.
+            for (k, si) in [0u16, 1].into_iter().enumerate() {
+                let x = Vec3::new(40e-6 + 80e-6 * k as f64, 40e-6, radius(si) - delta);
+                state.particles.push(si, &species[si as usize], x, Vec3::zeros());
+            }
+            state.fields.fit(state.particles.len());
+            let near = PairRange::Within { range: 2.0 * a, skin: 0.2 * a };
+            let mut contact = Contact::new(&species, ContactLaw::default(), true, near);
+            let mut neighbours = Neighbours::new(contact.pairs());
+            let p = &state.particles;
+            neighbours.update(&p.position, &domain, |_| true, &mut crate::core::timers::PhaseTimers::default());
+            let ctx = Context { domain: &domain, neighbours: &neighbours, dt: 1e-8 };
+            let (p, mut out) = Forces::of(&mut state, ForceGroup::All);
+            contact.apply(&ctx, p, &mut out);
+            assert_eq!(contact.alike.is_some(), b == a, "one size: R* and m* set once");
+            assert_eq!((state.contacts.pairs.len(), state.contacts.walls.len()), (4, 2));
+            let hertz = |si: u16, sj: u16, r_eff: f64| {
+                let e_star = PairMaterial::new(&species[si as usize], &species[sj as usize]).e_star;
+                4.0 / 3.0 * e_star * (r_eff * delta).sqrt() * delta
+            };
+            let force = &state.fields.force;
+            for (k, &(si, sj)) in kinds.iter().enumerate() {
+                let r_eff = radius(si) * radius(sj) / (radius(si) + radius(sj));
+                let (expected, got) = (hertz(si, sj, r_eff), force[2 * k + 1].y);
+                assert!((got / expected - 1.0).abs() < 1e-9, "pair {si}-{sj}: {got:e} N, Hertz {expected:e} N");
+                assert_eq!(force[2 * k].y, -got);
+            }
+            for (k, si) in [0u16, 1].into_iter().enumerate() {
+                let (expected, got) = (hertz(si, si, radius(si)), force[8 + k].z);
+                assert!((got / expected - 1.0).abs() < 1e-9, "wall, species {si}: {got:e} N, Hertz {expected:e} N");
+            }
+            let stiff_soft = hertz(1, 1, b) / hertz(0, 0, a);
+            assert!(stiff_soft > 2.0, "the species differ: {stiff_soft}");
         }
-        // Two wall contacts on the floor, one of each species.
-        for (k, si) in [0u16, 1].into_iter().enumerate() {
-            let x = Vec3::new(40e-6 + 80e-6 * k as f64, 40e-6, a - delta);
-            state.particles.push(si, &species[si as usize], x, Vec3::zeros());
-        }
-        state.fields.fit(state.particles.len());
-        let near = PairRange::Within { range: 2.0 * a, skin: 0.2 * a };
-        let mut contact = Contact::new(&species, ContactLaw::default(), true, near);
-        let mut neighbours = Neighbours::new(contact.pairs());
-        let p = &state.particles;
-        neighbours.update(&p.position, &domain, |_| true, &mut crate::core::timers::PhaseTimers::default());
-        let ctx = Context { domain: &domain, neighbours: &neighbours, dt: 1e-8 };
-        let (p, mut out) = Forces::of(&mut state, ForceGroup::All);
-        contact.apply(&ctx, p, &mut out);
-        assert_eq!((state.contacts.pairs.len(), state.contacts.walls.len()), (4, 2));
-        let hertz = |si: u16, sj: u16, r_eff: f64| {
-            let e_star = PairMaterial::new(&species[si as usize], &species[sj as usize]).e_star;
-            4.0 / 3.0 * e_star * (r_eff * delta).sqrt() * delta
-        };
-        let force = &state.fields.force;
-        for (k, &(si, sj)) in kinds.iter().enumerate() {
-            let (expected, got) = (hertz(si, sj, 0.5 * a), force[2 * k + 1].y);
-            assert!((got / expected - 1.0).abs() < 1e-9, "pair {si}-{sj}: {got:e} N, Hertz {expected:e} N");
-            assert_eq!(force[2 * k].y, -got);
-        }
-        for (k, si) in [0u16, 1].into_iter().enumerate() {
-            let (expected, got) = (hertz(si, si, a), force[8 + k].z);
-            assert!((got / expected - 1.0).abs() < 1e-9, "wall, species {si}: {got:e} N, Hertz {expected:e} N");
-        }
-        let stiff_soft = hertz(1, 1, a) / hertz(0, 0, a);
-        assert!(stiff_soft > 3.0, "the species differ: {stiff_soft}");
     }
 
     /// Particles drifting in a walled box, in and out of the walls' reach: the wall contacts
