@@ -113,7 +113,6 @@ pub struct Contact {
     /// R* and m* of every pair while all particles have one radius and one mass (see
     /// [`alike`]), set once in the lanes instead of per contact.
     alike: Option<(f64, f64)>,
-    spare_walls: Vec<WallSpring>,
 }
 
 /// A merge cursor over springs sorted by key, held in consecutive pieces (each sorted, every key
@@ -164,7 +163,6 @@ impl Contact {
             wall_shares: vec![],
             shares: vec![],
             spare_pairs: vec![],
-            spare_walls: vec![],
             alike: None,
         }
     }
@@ -420,11 +418,17 @@ impl Contact {
         });
         // Each share started from the pairs' largest overlap: the first share above it and
         // above the shares before is the first largest, as the serial pass finds it.
-        let mut next = std::mem::replace(&mut self.spare_walls, history);
-        next.clear();
-        for slot in &mut slots[..shares] {
+        // The next history is the first share's piece with the others appended; that share's
+        // slot keeps the spent history's buffer for the next step.
+        let mut spent = history;
+        spent.clear();
+        let mut next = vec![];
+        for (k, slot) in slots[..shares].iter_mut().enumerate() {
             let (piece, share_diag) = slot.get_mut().expect("the shares are done");
-            next.extend_from_slice(piece);
+            match k {
+                0 => next = std::mem::replace(piece, std::mem::take(&mut spent)),
+                _ => next.extend_from_slice(piece),
+            }
             if share_diag.max_overlap_ratio > diag.max_overlap_ratio {
                 *diag = *share_diag;
             }
