@@ -223,6 +223,30 @@ impl InverseMasses {
     }
 }
 
+/// Whether every particle has one radius and one mass: kept beside the arrays by
+/// [`Particles::push`] and [`Particles::set_masses`], so that the contact law may set its
+/// reduced radius and mass once for all pairs instead of per contact.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Sizes {
+    #[default]
+    NoParticles,
+    One {
+        radius: f64,
+        mass: f64,
+    },
+    Several,
+}
+
+impl Sizes {
+    fn push(&mut self, radius: f64, mass: f64) {
+        *self = match *self {
+            Sizes::NoParticles => Sizes::One { radius, mass },
+            Sizes::One { radius: a, mass: m } if (a, m) == (radius, mass) => Sizes::One { radius, mass },
+            _ => Sizes::Several,
+        };
+    }
+}
+
 /// Per-particle arrays (struct of arrays). Index i is the particle id.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Particles {
@@ -233,6 +257,9 @@ pub struct Particles {
     /// 1/m and 1/I, kept beside `mass` and `inertia` by [`Particles::push`] and
     /// [`Particles::set_masses`] (a kick multiplies rather than divides).
     pub inverse_masses: InverseMasses,
+    /// One radius and mass for all, or several (kept by [`Particles::push`] and
+    /// [`Particles::set_masses`]).
+    pub sizes: Sizes,
     pub position: Vec<Vec3>,
     pub velocity: Vec<Vec3>,
     pub angular_velocity: Vec<Vec3>,
@@ -265,6 +292,7 @@ impl Particles {
         self.mass.push(mass);
         self.inertia.push(inertia);
         self.inverse_masses.push(self.species.len() - 1, 1.0 / mass, 1.0 / inertia);
+        self.sizes.push(radius, mass);
         self.position.push(position);
         self.velocity.push(velocity);
         self.angular_velocity.push(Vec3::zeros());
@@ -276,9 +304,10 @@ impl Particles {
     /// Sets the masses, and from them and the radii the inertias (solid spheres) and inverses.
     pub fn set_masses(&mut self, mass: Vec<f64>) {
         self.inertia = mass.iter().zip(&self.radius).map(|(&m, &a)| sphere_inertia(m, a)).collect();
-        self.inverse_masses = InverseMasses::default();
+        (self.inverse_masses, self.sizes) = Default::default();
         for (k, (m, i)) in mass.iter().zip(&self.inertia).enumerate() {
             self.inverse_masses.push(k, 1.0 / m, 1.0 / i);
+            self.sizes.push(self.radius[k], *m);
         }
         self.mass = mass;
     }
@@ -440,6 +469,7 @@ macro_rules! state_vectors {
             mass: _,
             inertia: _,
             inverse_masses: _,
+            sizes: _,
             has_permanent_moments: _,
         } = particles;
         let Fields { force, torque, slow_force, slow_torque, moment } = fields;
@@ -532,5 +562,14 @@ mod tests {
         let mut restored = Particles { radius: p.radius.clone(), ..Particles::default() };
         restored.set_masses(p.mass.clone());
         assert_eq!(restored.inverse_masses, p.inverse_masses);
+        assert_eq!((p.sizes, restored.sizes), (Sizes::Several, Sizes::Several));
+        let mut alike = Particles::default();
+        assert_eq!(alike.sizes, Sizes::NoParticles);
+        alike.push(0, &small, Vec3::zeros(), Vec3::zeros());
+        alike.push(0, &small, Vec3::zeros(), Vec3::zeros());
+        assert_eq!(alike.sizes, Sizes::One { radius: small.radius, mass: small.mass() });
+        let mut restored = Particles { radius: alike.radius.clone(), ..Particles::default() };
+        restored.set_masses(alike.mass.clone());
+        assert_eq!(restored.sizes, alike.sizes);
     }
 }

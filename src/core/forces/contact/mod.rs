@@ -9,7 +9,9 @@ mod walls;
 use super::{Context, ForceTerm, Forces};
 use crate::core::neighbours::{Pair, PairForm, PairNeed, PairRange, PairSource, RangePairs};
 use crate::core::parallel;
-use crate::core::state::{ContactDiagnostics, PairSpring, PairSprings, Particles, Species, Vec3, WallFace, WallSpring};
+use crate::core::state::{
+    ContactDiagnostics, PairSpring, PairSprings, Particles, Sizes, Species, Vec3, WallFace, WallSpring,
+};
 pub use law::PairMaterial;
 use law::{ContactLaw, Lanes, LANES};
 use std::sync::Mutex;
@@ -74,9 +76,10 @@ impl ReducedCache {
 /// R* = a a/(a + a) and m* = m m/(m + m) if every particle has radius a and mass m: the bits
 /// [`ReducedCache`] gives every pair then.
 fn alike(p: &Particles) -> Option<(f64, f64)> {
-    let (&a, &m) = (p.radius.first()?, p.mass.first()?);
-    let alike = p.radius.iter().all(|&r| r == a) && p.mass.iter().all(|&x| x == m);
-    alike.then(|| (a * a / (a + a), m * m / (m + m)))
+    match p.sizes {
+        Sizes::One { radius: a, mass: m } => Some((a * a / (a + a), m * m / (m + m))),
+        Sizes::NoParticles | Sizes::Several => None,
+    }
 }
 
 /// What a share of the pair pass leaves: its part of the next history, its largest overlap.
