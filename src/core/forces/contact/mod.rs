@@ -55,7 +55,8 @@ impl ContactOutcome {
 }
 
 /// R* = a_i a_j/(a_i + a_j) and m* = m_i m_j/(m_i + m_j) of the last pair, reused while the
-/// radii and masses repeat (always, for one species): the same operands give the same bits.
+/// radii and masses repeat, where the particles have several sizes: the same operands give the
+/// same bits.
 #[derive(Default)]
 struct ReducedCache {
     key: [f64; 4],
@@ -113,9 +114,6 @@ pub struct Contact {
     shares: Vec<Mutex<ShareOut>>,
     /// The pieces of the history before last, reused for the next one.
     spare_pairs: Vec<Vec<PairSpring>>,
-    /// R* and m* of every pair while all particles have one radius and one mass (see
-    /// [`alike`]), set once in the lanes instead of per contact.
-    alike: Option<(f64, f64)>,
 }
 
 /// A merge cursor over springs sorted by key, held in consecutive pieces (each sorted, every key
@@ -166,7 +164,6 @@ impl Contact {
             wall_shares: vec![],
             shares: vec![],
             spare_pairs: vec![],
-            alike: None,
         }
     }
 
@@ -275,7 +272,9 @@ impl Contact {
         keep: impl Fn(u32) -> bool,
         mut emit: impl FnMut(&[((u32, u32), f64)], &Lanes),
     ) {
-        let (mut lanes, mut batch) = (self.fresh_lanes(self.alike), [((0, 0), 0.0); LANES]);
+        // With one size, R* and m* are set once in the lanes instead of per contact.
+        let alike = alike(p);
+        let (mut lanes, mut batch) = (self.fresh_lanes(alike), [((0, 0), 0.0); LANES]);
         let (mut cache, mut used) = (ReducedCache::default(), 0);
         let mut flush = |lanes: &mut Lanes, batch: &[((u32, u32), f64)]| {
             self.law.apply(lanes, dt);
@@ -292,7 +291,7 @@ impl Contact {
         for pair in items.iter().filter_map(touching) {
             let (i, j) = (pair.i as usize, pair.j as usize);
             let s = history.get((pair.i, pair.j));
-            let reduced = match self.alike {
+            let reduced = match alike {
                 Some(_) => None,
                 None => Some(cache.get((p.radius[i], p.radius[j], p.mass[i], p.mass[j]))),
             };
@@ -353,7 +352,6 @@ impl Contact {
 
     fn apply_pairs(&mut self, ctx: &Context, p: &Particles, out: &mut Forces, diag: &mut ContactDiagnostics) {
         let history = std::mem::take(&mut out.contacts.pairs);
-        self.alike = alike(p);
         let (shares, size) = parallel::split_of(out.force.len());
         let mut slots = std::mem::take(&mut self.shares);
         slots.resize_with(shares.max(slots.len()), Default::default);
@@ -491,17 +489,11 @@ impl<'a> RowAdder<'a> {
         (self.row, self.force_i, self.torque_i) = (row, force_i, torque_i);
     }
 
-    /// Stores the row's sums (none before the first row).
-    #[inline(always)]
-    fn store(&self, force: &mut [Vec3], torque: &mut [Vec3]) {
+    /// Stores the last row's sums (none if there was no row).
+    fn finish(self, force: &mut [Vec3], torque: &mut [Vec3]) {
         if self.row != usize::MAX {
             (force[self.row], torque[self.row]) = (self.force_i, self.torque_i);
         }
-    }
-
-    /// Stores the last row.
-    fn finish(self, force: &mut [Vec3], torque: &mut [Vec3]) {
-        self.store(force, torque);
     }
 }
 
@@ -648,7 +640,7 @@ mod tests {
             let ctx = Context { domain: &domain, neighbours: &neighbours, dt: 1e-8 };
             let (p, mut out) = Forces::of(&mut state, ForceGroup::All);
             contact.apply(&ctx, p, &mut out);
-            assert_eq!(contact.alike.is_some(), b == a, "one size: R* and m* set once");
+            assert_eq!(alike(&state.particles).is_some(), b == a, "one size: R* and m* set once");
             assert_eq!((state.contacts.pairs.len(), state.contacts.walls.len()), (4, 2));
             let hertz = |si: u16, sj: u16, r_eff: f64| {
                 let e_star = PairMaterial::new(&species[si as usize], &species[sj as usize]).e_star;
