@@ -167,13 +167,19 @@ impl Contact {
         }
     }
 
+    /// The pair constants of every pair, with one species.
+    fn shared_material(&self) -> Option<&PairMaterial> {
+        (self.n_species == 1).then(|| &self.materials[0])
+    }
+
     /// Lanes for a batch; with one species, its pair constants already in every lane, and
     /// `reduced` R* and m*, if given, too.
     fn fresh_lanes(&self, reduced: Option<(f64, f64)>) -> Lanes {
         let mut lanes = Lanes::default();
+        let material = self.shared_material();
         for l in 0..LANES {
-            if let [material] = self.materials[..] {
-                lanes.set_material(l, &material);
+            if let Some(material) = material {
+                lanes.set_material(l, material);
             }
             if let Some(reduced) = reduced {
                 lanes.set_reduced(l, reduced);
@@ -186,7 +192,10 @@ impl Contact {
     /// (`None`, with one species: already there).
     #[inline(always)]
     fn lane_material(&self, si: u16, sj: u16) -> Option<&PairMaterial> {
-        (self.n_species > 1).then(|| &self.materials[si as usize * self.n_species + sj as usize])
+        match self.shared_material() {
+            Some(_) => None,
+            None => Some(&self.materials[si as usize * self.n_species + sj as usize]),
+        }
     }
 
     /// Lane `l` for the touching `pair`, its R* and m* given as `reduced` (`None`: already in
