@@ -3,6 +3,7 @@
 
 use plotters::prelude::*;
 pub use plotters::prelude::{RGBColor, SeriesLabelPosition};
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::path::Path;
 use std::sync::OnceLock;
 
@@ -362,7 +363,8 @@ pub enum Mark {
 }
 
 /// Category panels on a grid of `columns`, written to `path` (PNG): per category one bar or dot
-/// per group, side by side, as `mark` says. Category labels are thinned to at most 20 per axis.
+/// per group, side by side, as `mark` says. Category labels are thinned to at most 20 per axis,
+/// and set on two alternating rows where they would run into each other.
 pub fn category_panels(
     path: &Path,
     title: &str,
@@ -397,13 +399,20 @@ pub fn category_panels(
                 lo - 0.08 * span..hi + span * if labelled { 0.35 } else { 0.08 }
             }
         };
+        // Labels wider than the room between two shown ones are set on two alternating rows, so
+        // that neighbours do not run into each other.
+        let step = n.div_ceil(20).max(1);
+        let label_style = TextStyle::from(("sans-serif", 14).into_font());
+        let widest = panel.categories.iter().step_by(step).map(|c| area.estimate_text_size(c, &label_style));
+        let widest = widest.map(|size| size.map_or(0, |(w, _)| w)).max().unwrap_or(0);
+        let longest = panel.categories.iter().map(|c| c.chars().count()).max().unwrap_or(0);
+        let staggered = widest as f64 > (panel_size.0 as f64 - 110.0) / n.max(1) as f64 * step as f64;
         let mut chart = ChartBuilder::on(&area)
             .caption(&panel.title, ("sans-serif", 20))
             .margin(15)
-            .x_label_area_size(if panel.categories.iter().any(|c| c.len() > 6) { 70 } else { 40 })
+            .x_label_area_size(if staggered || longest > 6 { 70 } else { 40 })
             .y_label_area_size(80)
-            .build_cartesian_2d(-0.5..n as f64 - 0.5, y_range)?;
-        let step = n.div_ceil(20).max(1);
+            .build_cartesian_2d(-0.5..n as f64 - 0.5, y_range.clone())?;
         let names = panel.categories.clone();
         chart
             .configure_mesh()
@@ -412,7 +421,8 @@ pub fn category_panels(
             .x_labels(n.min(40))
             .x_label_formatter(&|x| {
                 let k = x.round();
-                if (x - k).abs() < 1e-6 && k >= 0.0 && (k as usize) < names.len() && (k as usize).is_multiple_of(step) {
+                let own = (x - k).abs() < 1e-6 && k >= 0.0 && (k as usize) < names.len();
+                if own && !staggered && (k as usize).is_multiple_of(step) {
                     names[k as usize].clone()
                 } else {
                     String::new()
@@ -422,6 +432,13 @@ pub fn category_panels(
             .label_style(("sans-serif", 14))
             .axis_desc_style(("sans-serif", 16))
             .draw()?;
+        if staggered {
+            let style = label_style.pos(Pos::new(HPos::Center, VPos::Top));
+            for (k, name) in names.iter().enumerate().step_by(step) {
+                let (x, y) = chart.backend_coord(&(k as f64, y_range.start));
+                root.draw(&Text::new(name.as_str(), (x, y + 8 + 18 * (k / step % 2) as i32), style.clone()))?;
+            }
+        }
         if mark == Mark::Dots {
             chart.draw_series([PathElement::new(vec![(-0.5, 0.0), (n as f64 - 0.5, 0.0)], BLACK.stroke_width(1))])?;
         }

@@ -915,7 +915,10 @@ fn sensitivity_section(runs: &[Run], out: &Path, tables: &Path, effects: &mut Ve
            under way included) shows whether that pumped energy into the particles; compare it across the variants. `drag-held` \
            is a numerical choice, not a modelling one: the shielded drag's coefficients renewed once per outer step \
            instead of every step (a 100× step 28 % shorter, `reports/performance-history.md`); it is not an explanation \
-           and stays out of the ranking below.\n";
+           and stays out of the ranking below. Nor are `respa-20` and `respa-50`: r-RESPA with the magnetic forces held over \
+           20 and 50 steps of 1e-8 s instead of 10, the outer step whose length sets the cost of the 100× runs (the moments, \
+           the 15-diameter pairs and the dipole forces are computed once per outer step). Their rows show where between \
+           1e-7 s and the paper's 1e-6 s the held attraction starts to pump energy and shorten the chains.\n";
     category_panels(
         &out.join("sensitivity.png"),
         "Case 1: which choices move the mean length (each variant against r-RESPA, paired seed by seed)",
