@@ -399,20 +399,22 @@ pub fn category_panels(
                 lo - 0.08 * span..hi + span * if labelled { 0.35 } else { 0.08 }
             }
         };
+        let mut chart = ChartBuilder::on(&area)
+            .caption(&panel.title, ("sans-serif", 20))
+            .margin(15)
+            .x_label_area_size(if panel.categories.iter().any(|c| c.len() > 6) { 70 } else { 40 })
+            .y_label_area_size(80)
+            .build_cartesian_2d(-0.5..n as f64 - 0.5, y_range.clone())?;
         // Labels wider than the room between two shown ones are set on two alternating rows, so
         // that neighbours do not run into each other.
         let step = n.div_ceil(20).max(1);
         let label_style = TextStyle::from(("sans-serif", 14).into_font());
-        let widest = panel.categories.iter().step_by(step).map(|c| area.estimate_text_size(c, &label_style));
-        let widest = widest.map(|size| size.map_or(0, |(w, _)| w)).max().unwrap_or(0);
-        let longest = panel.categories.iter().map(|c| c.chars().count()).max().unwrap_or(0);
-        let staggered = widest as f64 > (panel_size.0 as f64 - 110.0) / n.max(1) as f64 * step as f64;
-        let mut chart = ChartBuilder::on(&area)
-            .caption(&panel.title, ("sans-serif", 20))
-            .margin(15)
-            .x_label_area_size(if staggered || longest > 6 { 70 } else { 40 })
-            .y_label_area_size(80)
-            .build_cartesian_2d(-0.5..n as f64 - 0.5, y_range.clone())?;
+        let room = chart.plotting_area().dim_in_pixel().0 as usize * step / n.max(1);
+        let staggered = panel
+            .categories
+            .iter()
+            .step_by(step)
+            .any(|c| area.estimate_text_size(c, &label_style).is_ok_and(|(width, _)| width as usize > room));
         let names = panel.categories.clone();
         chart
             .configure_mesh()
