@@ -16,7 +16,7 @@
 //!   sweeps warm-started from the previous moments until max|Δm| ≤ tolerance · max|m|.
 
 pub use super::forces::InductionError;
-use super::forces::{Context, ForceTerm, Forces};
+use super::forces::{Context, ForceTerm, Forces, Renumbering};
 use super::neighbours::{Pair, PairForm, PairNeed, PairRange, RangePairs, Skins};
 use super::parallel;
 use super::state::{sphere_volume, Particles, Saturation, Species, State, Vec3};
@@ -233,5 +233,11 @@ impl ForceTerm for Magnetisation {
     }
     fn apply(&mut self, _ctx: &Context, _p: &Particles, out: &mut Forces) {
         out.moment.copy_from_slice(&self.moments);
+    }
+    /// The previous moments are the state's; the local fields and moments held here follow
+    /// their particles.
+    fn renumber(&mut self, r: &Renumbering) {
+        r.permute(&mut self.field);
+        r.permute(&mut self.moments);
     }
 }

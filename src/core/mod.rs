@@ -7,6 +7,7 @@ pub mod integrators;
 pub mod magnetisation;
 pub mod neighbours;
 pub mod parallel;
+pub mod renumber;
 pub mod simulation;
 pub mod stability;
 pub mod state;

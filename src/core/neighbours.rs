@@ -3,6 +3,7 @@
 
 use super::domain::Domain;
 use super::parallel::{self, Pieces};
+use super::renumber::Renumbering;
 use super::state::Vec3;
 use super::timers::PhaseTimers;
 
@@ -242,8 +243,19 @@ impl VerletList {
         }
         self.in_use = self.adapt(range, skin);
         self.cells.candidates_within(positions, domain, range + self.in_use, &mut self.candidates);
+        self.find_reach(positions.len());
+        self.reference.clear();
+        self.reference.extend_from_slice(positions);
+        self.built_for = Some((range, skin));
+        self.since_build = 0;
+        self.rebuilds += 1;
+        Some(self.in_use)
+    }
+
+    /// `reach` of the candidates, for `n` particles.
+    fn find_reach(&mut self, n: usize) {
         self.reach.clear();
-        self.reach.resize(positions.len(), u32::MAX);
+        self.reach.resize(n, u32::MAX);
         for &(i, j) in &self.candidates {
             let lowest = &mut self.reach[j as usize];
             *lowest = (*lowest).min(i);
@@ -251,12 +263,24 @@ impl VerletList {
         for j in (1..self.reach.len()).rev() {
             self.reach[j - 1] = self.reach[j - 1].min(self.reach[j]);
         }
-        self.reference.clear();
-        self.reference.extend_from_slice(positions);
-        self.built_for = Some((range, skin));
-        self.since_build = 0;
-        self.rebuilds += 1;
-        Some(self.in_use)
+    }
+
+    /// Renames the candidates and moves the reference positions to the particles' new slots:
+    /// the same candidates as a build at those positions with the skin in use, so the rebuilds
+    /// (and the adaptive skin) go on as without the renumbering. Returns whether there were
+    /// candidates to rename (none before a build or for another particle set: rebuilt at the
+    /// next update).
+    pub fn renumber(&mut self, r: &Renumbering) -> bool {
+        if self.reference.len() != r.len() {
+            self.reference.clear();
+            return false;
+        }
+        use rayon::prelude::*;
+        self.candidates.par_iter_mut().for_each(|c| *c = r.pair(*c).0);
+        self.candidates.par_sort_unstable();
+        self.find_reach(r.len());
+        r.permute(&mut self.reference);
+        true
     }
 
     /// Candidate pairs (i < j) within range + skin of the last build, sorted by (i, j).
@@ -628,6 +652,16 @@ impl Neighbours {
                     None
                 }
             };
+        }
+    }
+
+    /// Follows a renumbering of the particles: candidates renamed ([`VerletList::renumber`]);
+    /// the listed pairs are filtered again at the next update that wants them.
+    pub fn renumber(&mut self, r: &Renumbering) {
+        for list in &mut self.lists {
+            list.verlet.renumber(r);
+            list.pairs.clear();
+            list.rebuilt = None;
         }
     }
 

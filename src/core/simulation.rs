@@ -1,5 +1,5 @@
 //! One simulation: state, force pipeline, integrator and monitor. A step runs the named phases
-//! neighbours (candidate upkeep) → pair-list (the listed ranges filtered) → seed (forces start
+//! renumber (on its schedule) → neighbours (candidate upkeep) → pair-list (the listed ranges filtered) → seed (forces start
 //! from the constant term's, torques from zero) → one phase per force term, the moments first
 //! (inside the integrator's force evaluation), then integrate and monitor; each is timed.
 
@@ -9,6 +9,7 @@ use super::integrators::Integrator;
 use super::magnetisation::InductionError;
 use super::neighbours::{Neighbours, RangeUsage};
 use super::parallel;
+use super::renumber::Renumbering;
 use super::stability::{Instability, Monitor, StepEstimate};
 use super::state::{State, Vec3};
 use super::timers::PhaseTimers;
@@ -42,6 +43,12 @@ impl ForceField {
             evaluation_time: Duration::ZERO,
             induction_error: None,
         }
+    }
+
+    /// Follows a renumbering of the particles: the neighbour lists and every term.
+    fn renumber(&mut self, r: &Renumbering) {
+        self.neighbours.renumber(r);
+        self.terms.iter_mut().for_each(|t| t.renumber(r));
     }
 
     /// The first induction failure since the last call, if any.
@@ -131,6 +138,17 @@ pub struct RunError {
     pub dt: f64,
 }
 
+/// When the particles are renumbered along a Morton curve (as LAMMPS sorts its atoms): at the
+/// start of every step call that begins on a multiple of `every` steps, through cells of edge
+/// `cell`. A function of the step count and the state only, so a resumed run renumbers where the
+/// uninterrupted one did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RenumberSchedule {
+    pub every: u64,
+    /// Cell edge of the curve (m): the smallest particle diameter.
+    pub cell: f64,
+}
+
 pub struct Simulation {
     pub state: State,
     pub field: ForceField,
@@ -138,6 +156,8 @@ pub struct Simulation {
     pub dt: f64,
     pub monitor: Monitor,
     pub estimate: StepEstimate,
+    /// Renumbering during the run, or none.
+    pub renumber: Option<RenumberSchedule>,
 }
 
 impl Simulation {
@@ -155,10 +175,24 @@ impl Simulation {
         self.check()
     }
 
+    /// Renumbers the particles along the Morton curve of their current positions: the state,
+    /// the neighbour lists, the terms and the integrator follow.
+    pub fn renumber(&mut self, cell: f64) {
+        let r = Renumbering::morton(&self.state.particles.position, cell, &self.field.domain);
+        self.state.renumber(&r);
+        self.field.renumber(&r);
+        self.integrator.renumber(&r);
+    }
+
     /// Advances one step and checks it.
     pub fn step(&mut self) -> Result<(), RunError> {
         let n = self.state.particles.len();
         parallel::with_warm_pool(n, || {
+            if let Some(s) = self.renumber.filter(|s| self.state.step.is_multiple_of(s.every)) {
+                let t0 = self.field.timers.start();
+                self.renumber(s.cell);
+                self.field.timers.stop("renumber", t0);
+            }
             let started = self.field.timers.start();
             let eval_before = self.field.evaluation_time;
             let (field, dt) = (&mut self.field, self.dt);

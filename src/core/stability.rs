@@ -251,9 +251,9 @@ impl Monitor {
         let p: &Particles = &state.particles;
         let d = state.diagnostics;
         if d.max_overlap_ratio > self.max_overlap {
-            let j = d.max_overlap_pair.1.map_or("the wall".to_string(), |j| j.to_string());
+            let j = d.max_overlap_pair.1.map_or("the wall".to_string(), |j| state.id(j as usize).to_string());
             return Err(Instability::Overlap {
-                i: d.max_overlap_pair.0,
+                i: state.id(d.max_overlap_pair.0 as usize) as u32,
                 j,
                 ratio: d.max_overlap_ratio,
                 limit: self.max_overlap,
@@ -286,14 +286,14 @@ impl Monitor {
         let force = state.fields.force.get(i).copied().unwrap_or_else(Vec3::zeros);
         for (q, v) in [("position", &p.position[i]), ("velocity", &p.velocity[i]), ("force", &force)] {
             if !v.iter().all(|c| c.is_finite()) {
-                return Instability::NotFinite { quantity: q, particle: i };
+                return Instability::NotFinite { quantity: q, particle: state.id(i) };
             }
         }
         let limit = self.max_step_fraction / dt * p.radius[i];
         if p.velocity[i].norm_squared() > limit * limit {
             let speed = p.velocity[i].norm();
             return Instability::Runaway {
-                particle: i,
+                particle: state.id(i),
                 speed,
                 fraction: speed * dt / p.radius[i],
                 limit: self.max_step_fraction,
@@ -314,6 +314,6 @@ impl Monitor {
             )
             .expect("a particle that failed the check is outside a wall");
         let face = format!("{}-{}", ["x", "y", "z"][k], if upper { "hi" } else { "lo" });
-        Instability::Escaped { particle: i, face, position: [x.x, x.y, x.z] }
+        Instability::Escaped { particle: state.id(i), face, position: [x.x, x.y, x.z] }
     }
 }

@@ -2,6 +2,8 @@
 //!
 //! Everything a run needs to continue bit for bit lives here, so a checkpoint is this struct.
 
+use super::renumber::Renumbering;
+
 /// Three-vector of f64 used throughout the core (SI units).
 pub type Vec3 = nalgebra::Vector3<f64>;
 
@@ -247,7 +249,8 @@ impl Sizes {
     }
 }
 
-/// Per-particle arrays (struct of arrays). Index i is the particle id.
+/// Per-particle arrays (struct of arrays), one slot per particle. Slot k holds the particle whose
+/// id is [`State::ids`]`[k]`: its id until the particles are renumbered.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Particles {
     pub species: Vec<u16>,
@@ -451,13 +454,18 @@ pub struct State {
     /// The substep an adaptive integrator proposes to try next (its controller's memory, kept
     /// here so that a checkpoint carries it and a resumed run repeats the uninterrupted one).
     pub next_substep: Option<f64>,
+    /// `ids[k]`: the id of the particle in slot k, its index in the scene's particles (and in the
+    /// trajectory's frames, which are written in id order); 0, 1, … until a renumbering.
+    pub ids: Vec<u32>,
 }
 
 /// The per-particle vectors of a state by name (see [`State::vectors`]); one body for the shared
 /// and the mutable listing (match ergonomics give `&` or `&mut` bindings).
 macro_rules! state_vectors {
     ($state:expr) => {{
-        let State { particles, fields, contacts: _, diagnostics: _, step: _, time: _, next_substep: _ } = $state;
+        // `ids` are stored as the checkpoint's `id` (and index the fixed properties).
+        let State { particles, fields, contacts: _, diagnostics: _, step: _, time: _, next_substep: _, ids: _ } =
+            $state;
         let Particles {
             position,
             velocity,
@@ -512,7 +520,80 @@ impl State {
     pub fn new(particles: Particles) -> Self {
         let mut fields = Fields::default();
         fields.fit(particles.len());
-        State { particles, fields, ..State::default() }
+        let ids = (0..particles.len() as u32).collect();
+        State { particles, fields, ids, ..State::default() }
+    }
+
+    /// The id of the particle in slot `k` (what messages name).
+    pub fn id(&self, k: usize) -> usize {
+        self.ids.get(k).map_or(k, |&id| id as usize)
+    }
+
+    /// `v` (one value per slot) in id order: what an output writes.
+    pub fn in_id_order<T: Copy + Default>(&self, v: &[T]) -> Vec<T> {
+        let mut out = vec![T::default(); v.len()];
+        for (&id, x) in self.ids.iter().zip(v) {
+            out[id as usize] = *x;
+        }
+        out
+    }
+
+    /// Moves every particle to its slot under `r`: the per-particle arrays, fixed properties,
+    /// fields and ids are permuted and the contact history renamed. Every field is named (none
+    /// skipped with `..`), so a field added to [`State`], [`Particles`] or [`Fields`] does not
+    /// compile until it says what a renumbering does to it.
+    pub fn renumber(&mut self, r: &Renumbering) {
+        let State { particles, fields, contacts, diagnostics, step: _, time: _, next_substep: _, ids } = self;
+        let Particles {
+            species,
+            radius,
+            mass,
+            inertia,
+            inverse_masses,
+            sizes: _,
+            position,
+            velocity,
+            angular_velocity,
+            permanent_moment,
+            has_permanent_moments: _,
+        } = particles;
+        r.permute(species);
+        r.permute(ids);
+        for v in [radius, mass, inertia] {
+            r.permute(v);
+        }
+        if let InverseMasses::PerParticle { mass, inertia } = inverse_masses {
+            r.permute(mass);
+            r.permute(inertia);
+        }
+        let Fields { force, torque, slow_force, slow_torque, moment } = fields;
+        for v in
+            [position, velocity, angular_velocity, permanent_moment, force, torque, slow_force, slow_torque, moment]
+        {
+            r.permute(v);
+        }
+        contacts.renumber(r);
+        // The diagnostics name the pair of the last evaluation.
+        if !r.is_empty() {
+            let (i, j) = diagnostics.max_overlap_pair;
+            diagnostics.max_overlap_pair = (r.to(i), j.map(|j| r.to(j)));
+        }
+    }
+}
+
+impl ContactHistory {
+    /// The history with old slot i renamed `r.to(i)`, sorted again. A pair whose ends swap
+    /// stores the spring of j against i: the relative tangential displacement, negated.
+    pub fn renumber(&mut self, r: &Renumbering) {
+        let renamed = |&(key, spring): &PairSpring| {
+            let (key, swapped) = r.pair(key);
+            (key, if swapped { -spring } else { spring })
+        };
+        self.pairs = self.pairs.iter().map(renamed).collect::<Vec<_>>().into();
+        for ((i, _), _) in &mut self.walls {
+            *i = r.to(*i);
+        }
+        self.walls.sort_unstable_by_key(|(key, _)| *key);
     }
 }
 
@@ -537,6 +618,42 @@ pub(crate) fn test_sphere(radius: f64) -> Species {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A renumbering followed by its inverse gives the state back bit for bit; in between, each
+    /// particle's values moved with it, the springs of swapped pairs are negated and the history
+    /// stays sorted.
+    #[test]
+    fn a_renumbering_moves_every_value_with_its_particle_and_its_inverse_undoes_it() {
+        let (small, large) = (test_sphere(1e-6), test_sphere(2e-6));
+        let mut p = Particles::default();
+        for k in 0..5 {
+            let x = Vec3::new(k as f64, 0.0, 0.0);
+            p.push(k as u16 % 2, if k % 2 == 0 { &small } else { &large }, x, Vec3::new(0.0, k as f64, 0.0));
+        }
+        let mut state = State::new(p);
+        state.fields.moment.iter_mut().enumerate().for_each(|(k, m)| m.z = k as f64);
+        let spring = Vec3::new(1.0, 2.0, 3.0);
+        state.contacts.pairs = vec![((0, 3), spring), ((1, 2), -spring)].into();
+        state.contacts.walls = vec![((4, 0), spring)];
+        let original = state.clone();
+        let r = Renumbering::new(vec![3, 4, 0, 2, 1]);
+        state.renumber(&r);
+        assert_eq!(state.ids, [3, 4, 0, 2, 1]);
+        for (k, &id) in state.ids.iter().enumerate() {
+            let i = id as usize;
+            assert_eq!(state.particles.position[k], original.particles.position[i]);
+            assert_eq!(state.particles.radius[k], original.particles.radius[i]);
+            assert_eq!(state.fields.moment[k], original.fields.moment[i]);
+        }
+        // (0, 3) → (2, 0) and (1, 2) → (4, 3): both swapped, so stored as (0, 2) and (3, 4) with
+        // their springs negated.
+        assert_eq!(state.contacts.pairs.iter().copied().collect::<Vec<_>>(), [((0, 2), -spring), ((3, 4), spring)]);
+        assert_eq!(state.contacts.walls, [((1, 0), spring)]);
+        assert_eq!(state.in_id_order(&state.particles.position), original.particles.position);
+        let inverse = Renumbering::new((0..5).map(|i| r.to(i)).collect());
+        state.renumber(&inverse);
+        assert_eq!(state, original);
+    }
 
     /// Alike particles share one 1/m, 1/I; the first unlike one spreads the shared pair over
     /// the particles before it; a checkpoint's masses rebuild the same inverses.

@@ -112,6 +112,11 @@ fn rows_vec3(a: &Array2<f64>) -> Vec<Vec3> {
     a.rows().into_iter().map(|r| Vec3::new(r[0], r[1], r[2])).collect()
 }
 
+/// Values stored by particle id (`by_id`) in the order of the slots `ids`.
+fn by_slot<T: Copy>(ids: &[u32], by_id: Vec<T>) -> Vec<T> {
+    ids.iter().map(|&id| by_id[id as usize]).collect()
+}
+
 /// Per-frame datasets: (name, units).
 const FRAME_VECTORS: [(&str, &str); 4] =
     [("position", "m"), ("velocity", "m/s"), ("angular_velocity", "rad/s"), ("moment", "A m^2")];
@@ -190,6 +195,7 @@ impl TrajectoryWriter {
             for name in State::vector_names() {
                 ck.new_dataset::<f64>().shape((n, 3)).create(name)?;
             }
+            ck.new_dataset::<u32>().shape(n).create("id")?;
             extendible::<u32>(&ck, "pair_keys", &[2], "particle index", Rows::Appended)?;
             extendible::<f64>(&ck, "pair_shear", &[3], "m", Rows::Appended)?;
             extendible::<u32>(&ck, "wall_keys", &[2], "particle index, wall face", Rows::Appended)?;
@@ -268,16 +274,18 @@ impl TrajectoryWriter {
         step.write_slice(&[state.step], s![f..f + 1])?;
         let vectors = FRAME_VECTORS.iter().chain(if self.forces { &FORCE_VECTORS[..] } else { &[] });
         let (vectors_now, p) = (state.vectors(), &state.fields);
+        let total = |fast: &[Vec3], slow: &[Vec3]| fast.iter().zip(slow).map(|(a, b)| a + b).collect::<Vec<_>>();
         for (name, _) in vectors {
             let ds = g.dataset(name)?;
             ds.resize((f + 1, self.n, 3))?;
-            // Frames hold total force and torque (fast plus slow under multiple time stepping).
-            let data = match *name {
-                "force" => Array2::from_shape_fn((self.n, 3), |(i, k)| p.force[i][k] + p.slow_force[i][k]),
-                "torque" => Array2::from_shape_fn((self.n, 3), |(i, k)| p.torque[i][k] + p.slow_torque[i][k]),
-                _ => vec3_rows(vectors_now.iter().find(|(n, _)| n == name).expect("a state vector").1),
+            // Frames hold total force and torque (fast plus slow under multiple time stepping),
+            // every vector in particle id order.
+            let slots = match *name {
+                "force" => total(&p.force, &p.slow_force),
+                "torque" => total(&p.torque, &p.slow_torque),
+                _ => vectors_now.iter().find(|(n, _)| n == name).expect("a state vector").1.clone(),
             };
-            ds.write_slice(&data, s![f, .., ..])?;
+            ds.write_slice(&vec3_rows(&state.in_id_order(&slots)), s![f, .., ..])?;
         }
         if self.contacts {
             let c = self.file.group("contacts")?;
@@ -287,15 +295,19 @@ impl TrajectoryWriter {
             starts.resize(f + 1)?;
             starts.write_slice(&[start as u64], s![f..f + 1])?;
             let p = &state.particles;
-            let active: Vec<(u32, u32, f64)> = state
+            // By particle id, in id order.
+            let mut active: Vec<(u32, u32, f64)> = state
                 .contacts
                 .pairs
                 .iter()
                 .map(|&((i, j), _)| {
                     let (a, b) = (i as usize, j as usize);
-                    (i, j, p.radius[a] + p.radius[b] - (p.position[a] - p.position[b]).norm())
+                    let (id_a, id_b) = (state.ids[a], state.ids[b]);
+                    let overlap = p.radius[a] + p.radius[b] - (p.position[a] - p.position[b]).norm();
+                    (id_a.min(id_b), id_a.max(id_b), overlap)
                 })
                 .collect();
+            active.sort_unstable_by_key(|&(i, j, _)| (i, j));
             let k = active.len();
             pairs.resize((start + k, 2))?;
             c.dataset("overlap")?.resize(start + k)?;
@@ -316,6 +328,13 @@ impl TrajectoryWriter {
             for (name, vector) in state.vectors() {
                 ck.dataset(name)?.write(&vec3_rows(vector))?;
             }
+            // The checkpoint keeps the particles' slots; `id` names the particle of each (files
+            // written before renumbering existed have none: 0, 1, …).
+            let ids = match ck.dataset("id") {
+                Ok(ds) => ds,
+                Err(_) => ck.new_dataset::<u32>().shape(self.n).create("id")?,
+            };
+            ids.write(&Array1::from(state.ids.clone()))?;
             let (pairs, walls) = (&state.contacts.pairs, &state.contacts.walls);
             let keys =
                 Array2::from_shape_vec((pairs.len(), 2), pairs.iter().flat_map(|((i, j), _)| [*i, *j]).collect())
@@ -419,13 +438,19 @@ impl Trajectory {
     /// The checkpointed state and the number of frames it follows.
     pub fn checkpoint(&self) -> H5Result<(State, usize)> {
         let ck = self.file.group("checkpoint")?;
+        let radius: Vec<f64> = self.file.dataset("particles/radius")?.read_raw()?;
+        // The fixed properties are stored by id, the checkpoint by slot.
+        let ids: Vec<u32> = match ck.dataset("id") {
+            Ok(ds) => ds.read_raw()?,
+            Err(_) => (0..radius.len() as u32).collect(),
+        };
         let mut particles = Particles {
-            radius: self.file.dataset("particles/radius")?.read_raw()?,
-            species: self.file.dataset("particles/species")?.read_raw()?,
+            radius: by_slot(&ids, radius),
+            species: by_slot(&ids, self.file.dataset("particles/species")?.read_raw()?),
             ..Particles::default()
         };
-        particles.set_masses(self.file.dataset("particles/mass")?.read_raw()?);
-        let mut state = State { particles, ..State::default() };
+        particles.set_masses(by_slot(&ids, self.file.dataset("particles/mass")?.read_raw()?));
+        let mut state = State { particles, ids, ..State::default() };
         for (name, vector) in state.vectors_mut() {
             *vector = rows_vec3(&ck.dataset(name)?.read_2d()?);
         }

@@ -19,7 +19,7 @@ use crate::core::forces::ForceTerm;
 use crate::core::integrators;
 use crate::core::magnetisation::{Induction, Magnetisation, MU0};
 use crate::core::neighbours::{PairRange, Skins};
-use crate::core::simulation::{ForceField, Simulation};
+use crate::core::simulation::{ForceField, RenumberSchedule, Simulation};
 use crate::core::stability::{Monitor, StepEstimate, StepEstimateInput};
 use crate::core::state::{
     ContactHistory, Particles, Saturation, SaturationLaw, SizeDistribution, SizeLaw, Species, State, Vec3,
@@ -350,6 +350,10 @@ impl Scene {
                 max_step_fraction: spec.stability.max_step_fraction,
             },
             estimate: self.estimate.clone(),
+            renumber: (spec.integration.renumber_every > 0).then(|| RenumberSchedule {
+                every: spec.integration.renumber_every,
+                cell: 2.0 * self.initial.radius.iter().copied().fold(f64::INFINITY, f64::min),
+            }),
         }
     }
 }
@@ -666,6 +670,16 @@ fn check_integration(spec: &SceneSpec) -> Result<(), SceneError> {
     }
     positive("integration.dt", i.dt)?;
     positive("integration.end_time", i.end_time)?;
+    if i.scheme.multiple_time_stepping() && !i.renumber_every.is_multiple_of(i.slow_every) {
+        return Err(invalid(
+            "integration.renumber_every",
+            i.renumber_every,
+            format!(
+                "must be a multiple of integration.slow_every = {}: particles are renumbered at the start of an outer step",
+                i.slow_every
+            ),
+        ));
+    }
     if i.scheme == integrators::Scheme::AdaptiveVerlet
         && spec.forces.dipole.as_ref().is_some_and(|d| matches!(d.induction, InductionSpec::Paper))
     {
@@ -1064,7 +1078,7 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
             };
         let order: Vec<usize> = match group.order {
             ParticleOrder::Placement => (0..placed.len()).collect(),
-            ParticleOrder::Spatial => placement::morton_order(&placed, 2.0 * s.radius, domain),
+            ParticleOrder::Spatial => crate::core::renumber::morton_order(&placed, 2.0 * s.radius, domain),
         };
         for i in order {
             particles.push_sized(si as u16, s, radii[i], placed[i], Vec3::zeros());

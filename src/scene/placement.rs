@@ -167,20 +167,6 @@ pub fn first_overlap(sites: &[Vec3], radius: f64, existing: &[(Vec3, f64)], doma
     let grid = SphereGrid::new(radius, existing);
     sites.iter().position(|x| grid.overlaps(x, radius, domain))
 }
-/// The order of `positions` (their indices) along a Morton (Z-order) curve through cubic cells of
-/// edge `cell` from the box's low corner (ties keep their order): neighbours in space become
-/// neighbours in memory.
-pub fn morton_order(positions: &[Vec3], cell: f64, domain: &Domain) -> Vec<usize> {
-    // Spreads the low 21 bits of v to every third bit.
-    let spread = |v: u64| (0..21).fold(0u64, |out, b| out | ((v >> b) & 1) << (3 * b));
-    let key = |x: &Vec3| {
-        let c = |k: usize| (((x[k] - domain.lo[k]) / cell).max(0.0) as u64).min((1 << 21) - 1);
-        spread(c(0)) | spread(c(1)) << 1 | spread(c(2)) << 2
-    };
-    let mut order: Vec<usize> = (0..positions.len()).collect();
-    order.sort_by_cached_key(|&i| key(&positions[i]));
-    order
-}
 
 /// The position and its periodic images one box length away along periodic axes.
 fn periodic_images(x: &Vec3, domain: &Domain) -> Vec<Vec3> {

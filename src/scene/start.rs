@@ -1,10 +1,10 @@
 //! `[start]`: a scene's particles and contact history from the state a trajectory ends with.
 
-use super::placement::morton_order;
 use super::spec::ParticleOrder;
 use super::{fmt3, invalid, SceneError, SceneSpec, StartSpec};
 use crate::core::domain::Domain;
-use crate::core::state::{ContactHistory, PairSpring, Particles, Species, Vec3};
+use crate::core::renumber::{morton_order, Renumbering};
+use crate::core::state::{ContactHistory, Particles, Species, Vec3};
 use crate::io::trajectory::Trajectory;
 use sha2::{Digest, Sha256};
 use std::path::Path;
@@ -90,7 +90,7 @@ pub(super) fn load(
 
     let mut contacts = state.contacts;
     if start.order != ParticleOrder::Placement {
-        rename(&mut contacts, &visit);
+        contacts.renumber(&Renumbering::new(visit.iter().map(|&i| i as u32).collect()));
     }
     let same_box = stored.domain.lo == spec.domain.lo
         && stored.domain.hi == spec.domain.hi
@@ -132,22 +132,4 @@ fn wrapped(x: &Vec3, domain: &Domain) -> Vec3 {
     let mut x = *x;
     domain.wrap(&mut x);
     x
-}
-
-/// The contact history with the stored particle `visit[k]` renamed k, sorted again. A pair whose
-/// order flips stores the spring of j against i: the relative tangential displacement, negated.
-fn rename(contacts: &mut ContactHistory, visit: &[usize]) {
-    let mut renamed = vec![0u32; visit.len()];
-    for (k, &i) in visit.iter().enumerate() {
-        renamed[i] = k as u32;
-    }
-    let flipped = |&((i, j), spring): &PairSpring| {
-        let (a, b) = (renamed[i as usize], renamed[j as usize]);
-        ((a.min(b), a.max(b)), if a > b { -spring } else { spring })
-    };
-    contacts.pairs = contacts.pairs.iter().map(flipped).collect::<Vec<_>>().into();
-    for ((i, _), _) in &mut contacts.walls {
-        *i = renamed[*i as usize];
-    }
-    contacts.walls.sort_unstable_by_key(|(key, _)| *key);
 }

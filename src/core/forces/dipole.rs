@@ -14,7 +14,7 @@
 //! fixed order. Walled boxes skip the minimum-image arithmetic. Where the neighbour layer holds
 //! the cut-off's range (the paper's induction declares it), the term sums over its pairs instead.
 
-use super::{Context, ForceTerm, Forces};
+use super::{Context, ForceTerm, Forces, Renumbering};
 use crate::core::domain::Domain;
 use crate::core::magnetisation::{pair_dipole_field, pair_dipole_fields, MU0};
 use crate::core::neighbours::{Candidates, CellList, Pair, RangePairs, Skins, VerletList};
@@ -438,6 +438,13 @@ impl ForceTerm for DipoleForce {
             for ((torque, m), b) in out.torque.iter_mut().zip(&p.permanent_moment).zip(&b_loc) {
                 *torque += m.cross(b);
             }
+        }
+    }
+    /// The own Verlet candidates (without a shared range) are renamed and their rows built
+    /// again; the blocks, bands and pairs are working space of an evaluation.
+    fn renumber(&mut self, r: &Renumbering) {
+        if self.verlet.renumber(r) {
+            self.rows.build(r.len(), self.verlet.candidates());
         }
     }
 }

@@ -11,7 +11,7 @@
 
 use super::shielding::shadow_area;
 use super::wall_drag::WallCorrection;
-use super::{Context, ForceTerm, Forces, Renewal};
+use super::{Context, ForceTerm, Forces, Renewal, Renumbering};
 use crate::core::neighbours::{PairForm, PairNeed, PairRange};
 use crate::core::parallel;
 use crate::core::state::{Particles, State, Vec3};
@@ -210,6 +210,13 @@ impl ForceTerm for Drag {
         parallel::for_each_share((force, torque), |first, (f, t)| {
             f.iter_mut().zip(t).enumerate().for_each(|(k, (f, t))| drag(first + k, f, t));
         });
+    }
+    /// The held coefficients follow their particles (the shadows and flow directions are
+    /// working space of a renewal).
+    fn renumber(&mut self, r: &Renumbering) {
+        r.permute(&mut self.coefficient);
+        self.shadow.clear();
+        self.flow_direction.clear();
     }
 }
 

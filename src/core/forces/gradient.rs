@@ -1,7 +1,7 @@
 //! Force of the applied field gradient on a point dipole, F = (m·∇) B_ext = G m, with
 //! G_ab = ∂B_a/∂x_b (paper eq. 4, written for the moment m = V M).
 
-use super::{Context, ForceTerm, Forces};
+use super::{Context, ForceTerm, Forces, Renumbering};
 use crate::core::state::Particles;
 use nalgebra::Matrix3;
 
@@ -23,4 +23,6 @@ impl ForceTerm for GradientForce {
             *f += self.gradient * m;
         }
     }
+    /// Holds nothing per particle.
+    fn renumber(&mut self, _r: &Renumbering) {}
 }

@@ -1,6 +1,6 @@
 //! Weight minus buoyancy, F = V (ρ_p − ρ_f) g (paper eq. 11).
 
-use super::{ConstantForce, Context, ForceTerm, Forces};
+use super::{ConstantForce, Context, ForceTerm, Forces, Renumbering};
 use crate::core::parallel;
 use crate::core::state::{sphere_volume, Particles, Vec3};
 
@@ -52,5 +52,8 @@ impl ForceTerm for GravityBuoyancy {
         parallel::for_each_share((&mut *out.force, &self.weights[..]), |_, (f, w)| {
             f.iter_mut().zip(w).for_each(|(f, w)| *f += w)
         });
+    }
+    fn renumber(&mut self, r: &Renumbering) {
+        r.permute(&mut self.weights);
     }
 }

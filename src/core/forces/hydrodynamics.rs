@@ -14,7 +14,7 @@
 
 use super::drag::Fluid;
 use super::wall_drag::PlaneWall;
-use super::{Context, ForceTerm, Forces, InductionError, Renewal};
+use super::{Context, ForceTerm, Forces, InductionError, Renewal, Renumbering};
 use crate::core::state::{Particles, State, Vec3};
 use faer::linalg::solvers::DenseSolveCore;
 use nalgebra::Matrix3;
@@ -163,6 +163,11 @@ impl ForceTerm for RpyDrag {
                 *t -= 8.0 * PI * self.fluid.viscosity * a.powi(3) * w;
             }
         }
+    }
+    /// The factorised mobility is dropped and factorised again at the next evaluation, from the
+    /// positions then: with `refactor_every` > 1 a renumbering is a renewal.
+    fn renumber(&mut self, _r: &Renumbering) {
+        self.resistance = None;
     }
 }
 

@@ -14,6 +14,7 @@ pub mod wall_drag;
 
 use super::domain::Domain;
 use super::neighbours::{Neighbours, PairNeed};
+pub use super::renumber::Renumbering;
 use super::state::{ContactDiagnostics, ContactHistory, Particles, State, Vec3};
 
 /// What a term may read besides the particles during one force evaluation.
@@ -90,6 +91,10 @@ pub trait ForceTerm: Send {
     }
     /// Adds this term's contribution into `out`.
     fn apply(&mut self, ctx: &Context, particles: &Particles, out: &mut Forces);
+    /// The particles were renumbered between two step calls: per-particle values the term holds
+    /// follow `r` ([`Renumbering::permute`]), particle indices it holds are renamed or dropped.
+    /// Required, so that a term cannot hold particle data and miss a renumbering.
+    fn renumber(&mut self, r: &Renumbering);
 }
 
 /// When a term that holds work over several steps (a mobility factor, drag coefficients) renews

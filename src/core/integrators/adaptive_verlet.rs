@@ -16,7 +16,7 @@
 //! layer refuses the paper's lagged induction, which advances one sweep per evaluation.
 
 use super::ForceGroup;
-use super::{kick, kick_drift, Evaluate, Integrator};
+use super::{kick, kick_drift, Evaluate, Integrator, Renumbering};
 use crate::core::state::State;
 
 pub struct AdaptiveVerlet {
@@ -97,4 +97,6 @@ impl Integrator for AdaptiveVerlet {
         state.step = start_step + 1;
         state.time = state.step as f64 * dt;
     }
+    /// Holds nothing per particle.
+    fn renumber(&mut self, _r: &Renumbering) {}
 }

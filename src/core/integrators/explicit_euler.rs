@@ -2,7 +2,7 @@
 //! First order; unconditionally unstable for an undamped oscillator.
 
 use super::ForceGroup;
-use super::{drift, kick, tick, Evaluate, Integrator};
+use super::{drift, kick, tick, Evaluate, Integrator, Renumbering};
 use crate::core::state::State;
 
 pub struct ExplicitEuler;
@@ -17,4 +17,6 @@ impl Integrator for ExplicitEuler {
         tick(state, dt);
         evaluate(state, ForceGroup::All, dt);
     }
+    /// Holds nothing per particle.
+    fn renumber(&mut self, _r: &Renumbering) {}
 }

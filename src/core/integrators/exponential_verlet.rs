@@ -9,7 +9,7 @@
 //! (contact still does) — what sub-micron particles need. At γ = 0 it is velocity Verlet.
 
 use super::ForceGroup;
-use super::{advance, drift, tick, Evaluate, Integrator, Kick};
+use super::{advance, drift, tick, Evaluate, Integrator, Kick, Renumbering};
 use crate::core::state::{State, Vec3};
 
 pub struct ExponentialVerlet {
@@ -42,5 +42,9 @@ impl Integrator for ExponentialVerlet {
         tick(state, dt);
         evaluate(state, ForceGroup::All, dt);
         self.half_kick(state, 0.5 * dt);
+    }
+    fn renumber(&mut self, r: &Renumbering) {
+        r.permute(&mut self.gamma);
+        r.permute(&mut self.gamma_rotational);
     }
 }

@@ -20,6 +20,7 @@ pub use velocity_verlet::VelocityVerlet;
 
 pub use super::forces::ForceGroup;
 use super::parallel;
+use super::renumber::Renumbering;
 use super::state::{InverseMasses, Particles, State, Vec3};
 
 /// Re-evaluates one group of forces and torques for the state as it stands, at the end of a
@@ -37,6 +38,9 @@ pub trait Integrator: Send {
         false
     }
     fn step(&mut self, state: &mut State, dt: f64, evaluate: &mut Evaluate);
+    /// The particles were renumbered between two calls: per-particle values the integrator
+    /// holds follow `r`. Required, as for force terms.
+    fn renumber(&mut self, r: &Renumbering);
 }
 
 /// The time-integration schemes, parsed once from the scene; what depends on the scheme is a

@@ -6,7 +6,7 @@
 //! approaches half the period of a fast oscillation, which the stability studies measure.
 
 use super::ForceGroup;
-use super::{kick, kick_drift, slow_kick, tick, Evaluate, Integrator};
+use super::{kick, kick_drift, slow_kick, tick, Evaluate, Integrator, Renumbering};
 use crate::core::state::State;
 
 pub struct Respa {
@@ -36,4 +36,6 @@ impl Integrator for Respa {
         evaluate(state, ForceGroup::Slow, dt);
         slow_kick(state, 0.5 * outer);
     }
+    /// Holds nothing per particle.
+    fn renumber(&mut self, _r: &Renumbering) {}
 }

@@ -2,7 +2,7 @@
 //! stable for an oscillator while ω dt < 2.
 
 use super::ForceGroup;
-use super::{kick_drift, tick, Evaluate, Integrator};
+use super::{kick_drift, tick, Evaluate, Integrator, Renumbering};
 use crate::core::state::State;
 
 pub struct SemiImplicitEuler;
@@ -16,4 +16,6 @@ impl Integrator for SemiImplicitEuler {
         tick(state, dt);
         evaluate(state, ForceGroup::All, dt);
     }
+    /// Holds nothing per particle.
+    fn renumber(&mut self, _r: &Renumbering) {}
 }

@@ -7,7 +7,7 @@
 //! OpenFOAM's colliding clouds do.
 
 use super::ForceGroup;
-use super::{kick, kick_drift, slow_kick, tick, Evaluate, Integrator};
+use super::{kick, kick_drift, slow_kick, tick, Evaluate, Integrator, Renumbering};
 use crate::core::state::State;
 
 pub struct SubcycledEuler {
@@ -36,4 +36,6 @@ impl Integrator for SubcycledEuler {
         }
         evaluate(state, ForceGroup::Slow, dt);
     }
+    /// Holds nothing per particle.
+    fn renumber(&mut self, _r: &Renumbering) {}
 }

@@ -3,7 +3,7 @@
 //! forces; stable for an oscillator while ω dt < 2.
 
 use super::ForceGroup;
-use super::{kick, kick_drift, tick, Evaluate, Integrator};
+use super::{kick, kick_drift, tick, Evaluate, Integrator, Renumbering};
 use crate::core::state::State;
 
 pub struct VelocityVerlet;
@@ -18,4 +18,6 @@ impl Integrator for VelocityVerlet {
         evaluate(state, ForceGroup::All, dt);
         kick(state, 0.5 * dt);
     }
+    /// Holds nothing per particle.
+    fn renumber(&mut self, _r: &Renumbering) {}
 }

@@ -6,7 +6,7 @@
 pub mod law;
 mod walls;
 
-use super::{Context, ForceTerm, Forces};
+use super::{Context, ForceTerm, Forces, Renumbering};
 use crate::core::neighbours::{Pair, PairForm, PairNeed, PairRange, PairSource, RangePairs};
 use crate::core::parallel;
 use crate::core::state::{
@@ -520,6 +520,11 @@ impl ForceTerm for Contact {
             self.apply_walls(ctx, p, out, &mut diag);
         }
         *out.diagnostics = diag;
+    }
+    /// The contact history is the state's; the wall candidates are dropped (every particle is
+    /// tested until the near list is rebuilt: the same contacts).
+    fn renumber(&mut self, _r: &Renumbering) {
+        self.wall_scan.forget();
     }
 }
 

@@ -37,6 +37,11 @@ pub struct WallScan {
 }
 
 impl WallScan {
+    /// Drops the candidates (their particle indices no longer hold).
+    pub fn forget(&mut self) {
+        self.candidates = None;
+    }
+
     /// Every wall contact into `found`, in particle then face order. `rebuilt`: the near
     /// list's skin when it was rebuilt in this evaluation — until the next rebuild no particle
     /// moves more than skin/2, so only particles within a radius plus half the skin of a wall
