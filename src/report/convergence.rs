@@ -482,8 +482,9 @@ fn held_drag_at_scale(runs: &[Run]) -> Option<String> {
         md.push(format!(
             "The 2.25 mg/ml 100× box with the shielded drag's coefficients renewed once per outer step \
              (`forces.drag.refactor_every = 10`, `x100-c2.25-drag-held.toml`) against the every-step run of the same seed: {}. \
-             Wall times as run are summed over resumed pieces, with the machine shared at times; the held scene run again \
-             alone, start to end, is timed in `reports/performance-history.md`. One seed of a chaotic system: the paired change \
+             Wall times as run are summed over resumed pieces, with the machine shared at times, and the two runs were not \
+             always made on the same machine; the held scene run again alone, start to end, is timed in \
+             `reports/performance-history.md`. One seed of a chaotic system: the paired change \
              at the paper's size over ten seeds is the sensitivity study's `drag-held` row.",
             lines.join("; ")
         ));
@@ -491,7 +492,7 @@ fn held_drag_at_scale(runs: &[Run]) -> Option<String> {
     if !renumbered.is_empty() {
         md.push(format!(
             "The same drag-held scene with the particles renumbered along a Morton curve every 1 000 steps \
-             (`integration.renumber_every = 1000`, `x100-c2.25-renumbered.toml`) against the drag-held run of the same seed: {}. \
+             (`integration.renumber_every = 1000`, `x100-c2.25-renumbered.toml`) against the drag-held run of the same seed: {} (both alone on one machine, two threads). \
              Renumbering changes the order of the force sums only (the same run to round-off); the two runs part as any two \
              realisations of a chaotic system do, and the paired change at the paper's size over ten seeds is the \
              sensitivity study's `renumbered` row.",
