@@ -19,6 +19,7 @@ pub use super::forces::InductionError;
 use super::forces::{Context, ForceTerm, Forces, Renumbering};
 use super::neighbours::{Pair, PairForm, PairNeed, PairRange, RangePairs, Skins};
 use super::parallel;
+use super::parallel::Pieced;
 use super::state::{sphere_volume, Particles, Saturation, Species, State, Vec3};
 use nalgebra::Matrix3;
 use std::f64::consts::PI;
@@ -184,7 +185,7 @@ impl Magnetisation {
     }
 
     /// Dense solve of (I − D T) m = m_perm + D H_ext (no saturation).
-    fn solve_dense(&mut self, p: &Particles, pairs: &[Pair]) {
+    fn solve_dense(&mut self, p: &Particles, pairs: Pieced<Pair>) {
         let n = p.len();
         let chi_v = |i: usize| self.susceptibility[p.species[i] as usize] * 4.0 / 3.0 * PI * p.radius[i].powi(3);
         let mut a = faer::Mat::<f64>::identity(3 * n, 3 * n);
@@ -195,7 +196,7 @@ impl Magnetisation {
                 rhs[(3 * i + k, 0)] = chi_v(i) * h[k] + p.permanent_moment[i][k];
             }
         }
-        for pair in pairs {
+        for pair in pairs.iter() {
             let (i, j) = (pair.i as usize, pair.j as usize);
             let rhat = pair.r / pair.dist;
             // T_ij = (3 r̂ r̂ᵀ − I) / (4π r³), symmetric and equal for (i, j) and (j, i).

@@ -2,10 +2,13 @@
 //! or all pairs when no cut-off is set. Periodic axes use the minimum image.
 
 use super::domain::Domain;
-use super::parallel::{self, Pieces};
+use super::parallel::{self, PieceList, Pieced, Pieces};
 use super::renumber::Renumbering;
 use super::state::Vec3;
 use super::timers::PhaseTimers;
+
+/// Pairs in (i, j) order, in the pieces the parallel filter wrote ([`parallel::PieceList`]).
+pub type PairList = PieceList<Pair>;
 
 /// A pair (i < j) closer than the search range; `r = x_i − x_j` (minimum image), `dist = |r|`.
 #[derive(Debug, Clone, Copy, Default)]
@@ -22,8 +25,6 @@ pub struct CellList {
     cell_start: Vec<u32>,
     cell_particles: Vec<u32>,
     particle_cell: Vec<u32>,
-    /// Chunk buffers of the Verlet filter's parallel pair collection.
-    pieces: Pieces<Pair>,
     /// Chunk buffers of the parallel candidate collection.
     candidate_pieces: Pieces<(u32, u32)>,
 }
@@ -304,7 +305,7 @@ impl VerletList {
         domain: &Domain,
         range: f64,
         skin: f64,
-        out: &mut Vec<Pair>,
+        out: &mut PairList,
     ) -> Option<f64> {
         let rebuilt = self.update(positions, domain, range, skin);
         self.filter_into(positions, domain, range, out);
@@ -313,13 +314,11 @@ impl VerletList {
 
     /// Fills `out` with the candidates closer than `range` now, in (i, j) order (the candidates
     /// must be up to date: [`Self::update`]).
-    pub fn filter_into(&mut self, positions: &[Vec3], domain: &Domain, range: f64, out: &mut Vec<Pair>) {
-        // The filter gathers in the cell list's buffers (used only when it rebuilds).
-        let (candidates, pieces) = (&self.candidates, &mut self.cells.pieces);
+    pub fn filter_into(&self, positions: &[Vec3], domain: &Domain, range: f64, out: &mut PairList) {
         if domain.periodic == [false; 3] {
-            filter(candidates, positions, range, out, pieces, |a, b| a - b);
+            filter(&self.candidates, positions, range, out, |a, b| a - b);
         } else {
-            filter(candidates, positions, range, out, pieces, |a, b| domain.displacement(a, b));
+            filter(&self.candidates, positions, range, out, |a, b| domain.displacement(a, b));
         }
     }
 }
@@ -330,12 +329,11 @@ fn filter(
     candidates: &[(u32, u32)],
     positions: &[Vec3],
     range: f64,
-    out: &mut Vec<Pair>,
-    pieces: &mut Pieces<Pair>,
+    out: &mut PairList,
     displacement: impl Fn(&Vec3, &Vec3) -> Vec3 + Sync,
 ) {
     let range2 = range * range;
-    parallel::collect_ordered_ranges(candidates.len(), out, pieces, |ks, out| {
+    out.collect(candidates.len(), |ks, out| {
         // Every candidate is written at the end of the kept ones, which advances by one only if
         // it is in range: no branch on the test, which goes either way from one candidate to the
         // next in a wide list (61 % in range at 15 diameters in the chained 100× state). Slots
@@ -454,7 +452,7 @@ impl<'a> Candidates<'a> {
 /// read, or the pairs some term listed. Both give the same pairs and separations, bit for bit.
 pub trait PairSource: Sync {
     type Item: Sync;
-    fn items(&self) -> &[Self::Item];
+    fn items(&self) -> Pieced<'_, Self::Item>;
     fn ij(item: &Self::Item) -> (u32, u32);
     /// The item as a pair if it is within the range now.
     fn pair(&self, positions: &[Vec3], item: &Self::Item) -> Option<Pair>;
@@ -462,8 +460,8 @@ pub trait PairSource: Sync {
 
 impl PairSource for Candidates<'_> {
     type Item = (u32, u32);
-    fn items(&self) -> &[(u32, u32)] {
-        self.list
+    fn items(&self) -> Pieced<'_, (u32, u32)> {
+        Pieced::Whole(self.list)
     }
     #[inline(always)]
     fn ij(item: &(u32, u32)) -> (u32, u32) {
@@ -475,10 +473,10 @@ impl PairSource for Candidates<'_> {
     }
 }
 
-impl PairSource for &[Pair] {
+impl PairSource for Pieced<'_, Pair> {
     type Item = Pair;
-    fn items(&self) -> &[Pair] {
-        self
+    fn items(&self) -> Pieced<'_, Pair> {
+        *self
     }
     #[inline(always)]
     fn ij(item: &Pair) -> (u32, u32) {
@@ -494,7 +492,7 @@ impl PairSource for &[Pair] {
 /// always its candidates (whose [`Candidates::first_row_reaching`] bounds the listed pairs too).
 #[derive(Debug, Clone, Copy)]
 pub struct RangePairs<'a> {
-    pub listed: Option<&'a [Pair]>,
+    pub listed: Option<Pieced<'a, Pair>>,
     pub candidates: Candidates<'a>,
 }
 
@@ -594,7 +592,9 @@ struct Listed {
     listed: bool,
     verlet: VerletList,
     cells: CellList,
-    pairs: Vec<Pair>,
+    pairs: PairList,
+    /// All pairs' buffer ([`PairRange::All`]), given to `pairs` as one piece.
+    all: Vec<Pair>,
     /// The skin, when the candidates were rebuilt in the last update.
     rebuilt: Option<f64>,
 }
@@ -620,7 +620,8 @@ impl Neighbours {
                     listed,
                     verlet: VerletList::default(),
                     cells: CellList::default(),
-                    pairs: vec![],
+                    pairs: PairList::default(),
+                    all: vec![],
                     rebuilt: None,
                 }),
             }
@@ -648,7 +649,10 @@ impl Neighbours {
                     rebuilt
                 }
                 PairRange::All => {
-                    timers.time("all-pairs", || list.cells.pairs_within(positions, domain, None, &mut list.pairs));
+                    timers.time("all-pairs", || {
+                        list.cells.pairs_within(positions, domain, None, &mut list.all);
+                        list.pairs.set_whole(&mut list.all);
+                    });
                     None
                 }
             };
@@ -686,10 +690,10 @@ impl Neighbours {
 
     /// The listed pairs of `range` (i < j, in (i, j) order); empty for a range no term declared.
     /// Panics for a range declared only as [`PairForm::Candidates`]: its pairs are never written.
-    pub fn pairs(&self, range: PairRange) -> &[Pair] {
-        self.list(range).map_or(&[], |l| {
+    pub fn pairs(&self, range: PairRange) -> Pieced<'_, Pair> {
+        self.list(range).map_or(Pieced::Whole(&[]), |l| {
             assert!(l.listed, "{range:?} is declared as candidates only: read it with Neighbours::candidates");
-            &l.pairs
+            l.pairs.seq()
         })
     }
 
@@ -709,7 +713,7 @@ impl Neighbours {
     /// again), and its candidates. Every pair of [`PairRange::All`] is listed.
     pub fn range_pairs<'a>(&'a self, range: PairRange, domain: &'a Domain) -> RangePairs<'a> {
         let listed = self.lists.iter().find(|l| l.listed && l.range.distance() == range.distance());
-        RangePairs { listed: listed.map(|l| l.pairs.as_slice()), candidates: self.candidates(range, domain) }
+        RangePairs { listed: listed.map(|l| l.pairs.seq()), candidates: self.candidates(range, domain) }
     }
 
     /// The range some term declared within `distance` (`None`: all pairs), with its skin: a term
@@ -767,12 +771,12 @@ mod tests {
         for periodic in [[true, false, true], [false; 3]] {
             let (mut rng, domain, mut pos) = random_box(11, periodic);
             let mut list = VerletList::default();
-            let mut out = vec![];
+            let mut out = PairList::default();
             for _ in 0..40 {
                 list.pairs_within(&pos, &domain, 0.15, 0.03, &mut out);
-                let got: Vec<(u32, u32)> = out.iter().map(|p| (p.i, p.j)).collect();
+                let got: Vec<(u32, u32)> = out.seq().iter().map(|p| (p.i, p.j)).collect();
                 assert_eq!(got, brute(&pos, &domain, 0.15), "periodic {periodic:?}");
-                for p in &out {
+                for p in out.seq().iter() {
                     assert_eq!(
                         p.r,
                         domain.displacement(&pos[p.i as usize], &pos[p.j as usize]),
@@ -811,11 +815,11 @@ mod tests {
         let (mut rng, domain, mut pos) = random_box(3, [true; 3]);
         let (range, skin) = (0.1, 0.1);
         let mut list = VerletList::default();
-        let mut out = vec![];
+        let mut out = PairList::default();
         let mut drift = |list: &mut VerletList, pos: &mut Vec<Vec3>, speed: f64, updates: usize| {
             for _ in 0..updates {
                 list.pairs_within(pos, &domain, range, skin, &mut out);
-                let got: Vec<(u32, u32)> = out.iter().map(|p| (p.i, p.j)).collect();
+                let got: Vec<(u32, u32)> = out.seq().iter().map(|p| (p.i, p.j)).collect();
                 assert_eq!(got, brute(pos, &domain, range));
                 for x in pos.iter_mut() {
                     x.x += speed;
@@ -857,7 +861,7 @@ mod tests {
                 let want = listed.pairs(range);
                 assert_eq!(got.len(), want.len(), "step {step}, periodic {periodic:?}");
                 assert!(want.len() > 100, "{} pairs", want.len());
-                for (g, w) in got.iter().zip(want) {
+                for (g, w) in got.iter().zip(want.iter()) {
                     assert!((g.i, g.j, g.r, g.dist) == (w.i, w.j, w.r, w.dist), "step {step}: {g:?} vs {w:?}");
                 }
                 jiggle(&mut rng, &mut pos, &domain, 0.01);

@@ -17,7 +17,7 @@
 use super::{Context, ForceTerm, Forces, Renumbering};
 use crate::core::domain::Domain;
 use crate::core::magnetisation::{pair_dipole_field, pair_dipole_fields, MU0};
-use crate::core::neighbours::{Candidates, CellList, Pair, RangePairs, Skins, VerletList};
+use crate::core::neighbours::{Candidates, CellList, Pair, PairList, RangePairs, Skins, VerletList};
 use crate::core::parallel;
 use crate::core::state::{Particles, Vec3};
 use nalgebra::Matrix3;
@@ -347,7 +347,7 @@ pub struct DipoleForce {
     pub b0: Vec3,
     pub gradient: Matrix3<f64>,
     verlet: VerletList,
-    pairs: Vec<Pair>,
+    pairs: PairList,
     particle_blocks: Vec<ParticleBlock>,
     rows: Rows,
     bands: Vec<Band>,
@@ -361,7 +361,7 @@ impl DipoleForce {
             b0,
             gradient,
             verlet: VerletList::default(),
-            pairs: vec![],
+            pairs: PairList::default(),
             particle_blocks: vec![],
             rows: Rows::default(),
             bands: vec![],
@@ -419,9 +419,13 @@ impl ForceTerm for DipoleForce {
                         Some(c) => {
                             self.verlet.pairs_within(&p.position, ctx.domain, c, c * self.skin, &mut self.pairs);
                         }
-                        None => CellList::default().pairs_within(&p.position, ctx.domain, None, &mut self.pairs),
+                        None => {
+                            let mut all = vec![];
+                            CellList::default().pairs_within(&p.position, ctx.domain, None, &mut all);
+                            self.pairs.set_whole(&mut all);
+                        }
                     }
-                    RangePairs { listed: Some(&self.pairs), candidates: Candidates::none(ctx.domain) }
+                    RangePairs { listed: Some(self.pairs.seq()), candidates: Candidates::none(ctx.domain) }
                 }
             };
             let mut b_loc: Vec<Vec3> = p.position.iter().map(|x| self.b0 + self.gradient * x).collect();

@@ -121,7 +121,7 @@ impl Drag {
                     }
                 }
             };
-            for pair in &pairs[..rows] {
+            for pair in pairs.range(0, rows) {
                 let (i, j) = (pair.i as usize, pair.j as usize);
                 if i < lo && !(lo..hi).contains(&j) {
                     continue;

@@ -271,11 +271,11 @@ impl Contact {
     /// `emit(batch, lanes)` receives each batch of pairs (with their smaller diameters) and its
     /// computed lanes, in order.
     #[allow(clippy::too_many_arguments)]
-    fn in_lanes<S: PairSource>(
+    fn in_lanes<'s, S: PairSource>(
         &self,
         p: &Particles,
-        source: &S,
-        items: &[S::Item],
+        source: &'s S,
+        items: impl Iterator<Item = &'s S::Item>,
         mut history: Springs<(u32, u32)>,
         dt: f64,
         keep: impl Fn(u32) -> bool,
@@ -297,7 +297,7 @@ impl Contact {
             let pair = source.pair(&p.position, item)?;
             (pair.dist < p.radius[i as usize] + p.radius[j as usize]).then_some(pair)
         };
-        for pair in items.iter().filter_map(touching) {
+        for pair in items.filter_map(touching) {
             let (i, j) = (pair.i as usize, pair.j as usize);
             let s = history.get((pair.i, pair.j));
             let reduced = match alike {
@@ -339,7 +339,7 @@ impl Contact {
         self.in_lanes(
             p,
             source,
-            &near[reaching..rows],
+            near.range(reaching, rows),
             history_from(first_row),
             dt,
             |j| (lo..hi).contains(&(j as usize)),
@@ -355,7 +355,7 @@ impl Contact {
         *diag = ContactDiagnostics::default();
         let mut adder = RowAdder::new(lo, diag, next);
         let add = |batch: &[((u32, u32), f64)], lanes: &Lanes| adder.add(force, torque, batch, lanes);
-        self.in_lanes(p, source, &near[rows..rest], history_from(lo), dt, |_| true, add);
+        self.in_lanes(p, source, near.range(rows, rest), history_from(lo), dt, |_| true, add);
         adder.finish(force, torque);
     }
 
