@@ -103,10 +103,15 @@ fn resume_after_kill_is_bitwise_equal_with_multiple_time_stepping() {
 /// checkpoints fall on renewals, so the resumed run is bitwise equal.
 #[test]
 fn resume_after_kill_is_bitwise_equal_with_the_drag_renewed_every_k_steps() {
-    let text = scene_text()
-        .replace("dt = 1.0e-8", "scheme = \"respa\"\ndt = 1.0e-8\nslow_every = 10")
-        .replace("[forces.drag]", "[forces.drag]\nrefactor_every = 10");
-    resume_after_kill("resume-drag", &text);
+    resume_after_kill("resume-drag", &respa_with_held_drag(""));
+}
+
+/// The test scene under r-RESPA (K = 10) with the drag renewed every outer step, and `extra`
+/// lines in `[integration]`.
+fn respa_with_held_drag(extra: &str) -> String {
+    scene_text()
+        .replace("dt = 1.0e-8", &format!("scheme = \"respa\"\ndt = 1.0e-8\nslow_every = 10{extra}"))
+        .replace("[forces.drag]", "[forces.drag]\nrefactor_every = 10")
 }
 
 /// The adaptive integrator's proposed substep is in the checkpoint.
@@ -124,10 +129,24 @@ fn resume_after_kill_is_bitwise_equal_with_the_adaptive_step() {
 /// checkpoint keeps the slots and their ids, and the resumed run is bitwise equal.
 #[test]
 fn resume_after_kill_is_bitwise_equal_with_renumbering() {
-    let text = scene_text()
-        .replace("dt = 1.0e-8", "scheme = \"respa\"\ndt = 1.0e-8\nslow_every = 10\nrenumber_every = 30")
-        .replace("[forces.drag]", "[forces.drag]\nrefactor_every = 10");
-    resume_after_kill("resume-renumber", &text);
+    resume_after_kill("resume-renumber", &respa_with_held_drag("\nrenumber_every = 30"));
+}
+
+/// Runs `text` as it is and with `renumber_every = every`; the two trajectories (and the
+/// directory that holds them).
+fn plain_and_renumbered(name: &str, text: &str, every: u64) -> (TempDir, Trajectory, Trajectory) {
+    let work = workdir(name);
+    let (plain, renumbered) = (work.path().join("plain.toml"), work.path().join("renumbered.toml"));
+    std::fs::write(&plain, text).unwrap();
+    std::fs::write(&renumbered, text.replace("dt = 1.0e-8", &format!("dt = 1.0e-8\nrenumber_every = {every}")))
+        .unwrap();
+    for scene in [&plain, &renumbered] {
+        let out = magdem(&["run", path(scene), "-q", "-o", path(&scene.with_extension("h5"))]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    }
+    let open = |scene: &Path| Trajectory::open(&scene.with_extension("h5")).unwrap();
+    let (a, b) = (open(&plain), open(&renumbered));
+    (work, a, b)
 }
 
 /// Where no force is a sum over pairs (gravity and the shielded Schiller–Naumann drag renewed
@@ -144,19 +163,7 @@ fn renumbering_changes_no_bit_where_no_force_sums_over_pairs() {
         .replace("[forces.drag]", "[forces.drag]\nrefactor_every = 10")
         .replace("end_time = 3.0e-4", "end_time = 4.0e-5")
         .replace("interval = 2.0e-5", "interval = 1.0e-5");
-    let work = workdir("renumber-exact");
-    let dir = work.path();
-    let (plain, renumbered) = (dir.join("plain.toml"), dir.join("renumbered.toml"));
-    std::fs::write(&plain, &text).unwrap();
-    std::fs::write(&renumbered, text.replace("dt = 1.0e-8", "dt = 1.0e-8\nrenumber_every = 5")).unwrap();
-    for scene in [&plain, &renumbered] {
-        let out = magdem(&["run", path(scene), "-q", "-o", path(&scene.with_extension("h5"))]);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    }
-    let (a, b) = (
-        Trajectory::open(&plain.with_extension("h5")).unwrap(),
-        Trajectory::open(&renumbered.with_extension("h5")).unwrap(),
-    );
+    let (_work, a, b) = plain_and_renumbered("renumber-exact", &text, 5);
     let ids = b.checkpoint().unwrap().0.ids;
     assert!(ids.iter().enumerate().filter(|(k, &id)| *k != id as usize).count() > 30, "renumbered: {ids:?}");
     for name in ["position", "velocity", "angular_velocity", "force"] {
@@ -176,19 +183,7 @@ fn renumbering_changes_a_magnetic_run_by_round_off_only() {
     let text = scene_text()
         .replace("end_time = 3.0e-4", "end_time = 2.0e-5")
         .replace("interval = 2.0e-5", "interval = 1.0e-5");
-    let work = workdir("renumber-roundoff");
-    let dir = work.path();
-    let (plain, renumbered) = (dir.join("plain.toml"), dir.join("renumbered.toml"));
-    std::fs::write(&plain, &text).unwrap();
-    std::fs::write(&renumbered, text.replace("dt = 1.0e-8", "dt = 1.0e-8\nrenumber_every = 100")).unwrap();
-    for scene in [&plain, &renumbered] {
-        let out = magdem(&["run", path(scene), "-q", "-o", path(&scene.with_extension("h5"))]);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    }
-    let (a, b) = (
-        Trajectory::open(&plain.with_extension("h5")).unwrap(),
-        Trajectory::open(&renumbered.with_extension("h5")).unwrap(),
-    );
+    let (_work, a, b) = plain_and_renumbered("renumber-roundoff", &text, 100);
     let (x, y) = (a.frame_vectors("position", 2).unwrap(), b.frame_vectors("position", 2).unwrap());
     let largest = x.iter().zip(&y).map(|(p, q)| (p - q).norm()).fold(0.0, f64::max);
     let different = x.iter().zip(&y).filter(|(p, q)| p != q).count();
