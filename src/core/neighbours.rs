@@ -593,8 +593,6 @@ struct Listed {
     verlet: VerletList,
     cells: CellList,
     pairs: PairList,
-    /// All pairs' buffer ([`PairRange::All`]), given to `pairs` as one piece.
-    all: Vec<Pair>,
     /// The skin, when the candidates were rebuilt in the last update.
     rebuilt: Option<f64>,
 }
@@ -621,7 +619,6 @@ impl Neighbours {
                     verlet: VerletList::default(),
                     cells: CellList::default(),
                     pairs: PairList::default(),
-                    all: vec![],
                     rebuilt: None,
                 }),
             }
@@ -649,10 +646,9 @@ impl Neighbours {
                     rebuilt
                 }
                 PairRange::All => {
-                    timers.time("all-pairs", || {
-                        list.cells.pairs_within(positions, domain, None, &mut list.all);
-                        list.pairs.set_whole(&mut list.all);
-                    });
+                    let (cells, pairs) = (&mut list.cells, &mut list.pairs);
+                    timers
+                        .time("all-pairs", || pairs.fill_whole(|out| cells.pairs_within(positions, domain, None, out)));
                     None
                 }
             };

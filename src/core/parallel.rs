@@ -142,16 +142,15 @@ impl<T: Send + Sync> PieceList<T> {
         }
     }
 
-    /// The list as one piece, `items` (taken; the buffer given back holds the old first piece).
-    pub fn set_whole(&mut self, items: &mut Vec<T>) {
+    /// The list as one piece, which `fill` writes (into a buffer it must clear).
+    pub fn fill_whole(&mut self, fill: impl FnOnce(&mut Vec<T>)) {
         if self.pieces.is_empty() {
             self.pieces.push(Vec::new());
         }
-        std::mem::swap(&mut self.pieces[0], items);
-        let used = usize::from(!self.pieces[0].is_empty());
+        fill(&mut self.pieces[0]);
         self.starts.clear();
         self.starts.push(0);
-        if used == 1 {
+        if !self.pieces[0].is_empty() {
             self.starts.push(self.pieces[0].len());
         }
     }

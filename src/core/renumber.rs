@@ -45,11 +45,6 @@ impl Renumbering {
         self.from.is_empty()
     }
 
-    /// The old slot of new slot `k`.
-    pub fn from(&self) -> &[u32] {
-        &self.from
-    }
-
     /// The new slot of old slot `i`.
     #[inline]
     pub fn to(&self, i: u32) -> u32 {

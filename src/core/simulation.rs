@@ -1,7 +1,8 @@
 //! One simulation: state, force pipeline, integrator and monitor. A step runs the named phases
-//! renumber (on its schedule) → neighbours (candidate upkeep) → pair-list (the listed ranges filtered) → seed (forces start
-//! from the constant term's, torques from zero) → one phase per force term, the moments first
-//! (inside the integrator's force evaluation), then integrate and monitor; each is timed.
+//! renumber (on its schedule) → neighbours (candidate upkeep) → pair-list (the listed ranges
+//! filtered) → seed (forces start from the constant term's, torques from zero) → one phase per
+//! force term, the moments first (inside the integrator's force evaluation), then integrate and
+//! monitor; each is timed.
 
 use super::domain::Domain;
 use super::forces::{ConstantForce, Context, ForceGroup, ForceTerm, Forces};

@@ -419,11 +419,9 @@ impl ForceTerm for DipoleForce {
                         Some(c) => {
                             self.verlet.pairs_within(&p.position, ctx.domain, c, c * self.skin, &mut self.pairs);
                         }
-                        None => {
-                            let mut all = vec![];
-                            CellList::default().pairs_within(&p.position, ctx.domain, None, &mut all);
-                            self.pairs.set_whole(&mut all);
-                        }
+                        None => self
+                            .pairs
+                            .fill_whole(|out| CellList::default().pairs_within(&p.position, ctx.domain, None, out)),
                     }
                     RangePairs { listed: Some(self.pairs.seq()), candidates: Candidates::none(ctx.domain) }
                 }
