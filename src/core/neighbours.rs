@@ -333,44 +333,35 @@ fn filter(
     displacement: impl Fn(&Vec3, &Vec3) -> Vec3 + Sync,
 ) {
     let range2 = range * range;
-    out.collect(candidates.len(), |ks, out| {
+    out.collect(candidates.len(), |ks, slots| {
         // Every candidate is written at the end of the kept ones, which advances by one only if
         // it is in range: no branch on the test, which goes either way from one candidate to the
-        // next in a wide list (61 % in range at 15 diameters in the chained 100× state). Slots
-        // are made in blocks of [`FILTER_BLOCK`] and the unused ones cut off after each.
-        for block in candidates[ks].chunks(FILTER_BLOCK) {
-            let mut kept = out.len();
-            out.resize(kept + block.len(), Pair::default());
-            let slots = &mut out[..];
-            // Four candidates at a time, their square roots taken together (one vector sqrt:
-            // the same correctly rounded bits as four scalar ones, for a quarter of the latency).
-            let mut quads = block.chunks_exact(4);
-            for quad in &mut quads {
-                // Written out: through `array::from_fn` the displacement was called out of line,
-                // its result passed through the stack (a third of the filter's time).
-                let r_of = |(i, j): (u32, u32)| displacement(&positions[i as usize], &positions[j as usize]);
-                let r = [r_of(quad[0]), r_of(quad[1]), r_of(quad[2]), r_of(quad[3])];
-                let d2: [f64; 4] = std::array::from_fn(|k| r[k].norm_squared());
-                let dist = d2.map(f64::sqrt);
-                for k in 0..4 {
-                    slots[kept] = Pair { i: quad[k].0, j: quad[k].1, r: r[k], dist: dist[k] };
-                    kept += (d2[k] < range2) as usize;
-                }
+        // next in a wide list (61 % in range at 15 diameters in the chained 100× state).
+        let mut kept = 0;
+        // Four candidates at a time, their square roots taken together (one vector sqrt: the
+        // same correctly rounded bits as four scalar ones, for a quarter of the latency).
+        let mut quads = candidates[ks].chunks_exact(4);
+        for quad in &mut quads {
+            // Written out: through `array::from_fn` the displacement was called out of line, its
+            // result passed through the stack (a third of the filter's time).
+            let r_of = |(i, j): (u32, u32)| displacement(&positions[i as usize], &positions[j as usize]);
+            let r = [r_of(quad[0]), r_of(quad[1]), r_of(quad[2]), r_of(quad[3])];
+            let d2: [f64; 4] = std::array::from_fn(|k| r[k].norm_squared());
+            let dist = d2.map(f64::sqrt);
+            for k in 0..4 {
+                slots[kept] = Pair { i: quad[k].0, j: quad[k].1, r: r[k], dist: dist[k] };
+                kept += (d2[k] < range2) as usize;
             }
-            for &(i, j) in quads.remainder() {
-                let r = displacement(&positions[i as usize], &positions[j as usize]);
-                let d2 = r.norm_squared();
-                slots[kept] = Pair { i, j, r, dist: d2.sqrt() };
-                kept += (d2 < range2) as usize;
-            }
-            out.truncate(kept);
         }
+        for &(i, j) in quads.remainder() {
+            let r = displacement(&positions[i as usize], &positions[j as usize]);
+            let d2 = r.norm_squared();
+            slots[kept] = Pair { i, j, r, dist: d2.sqrt() };
+            kept += (d2 < range2) as usize;
+        }
+        kept
     });
 }
-
-/// Candidates per block of the branch-free filter: its slots (40 bytes each) stay in the first
-/// level cache between being made and being written.
-const FILTER_BLOCK: usize = 256;
 
 /// The pairs a force term needs from the neighbour layer.
 #[derive(Debug, Clone, Copy, PartialEq)]
