@@ -67,7 +67,10 @@ impl ForceField {
         let started = self.timers.start();
         state.fields.fit(state.particles.len());
         if self.domain.periodic.contains(&true) {
-            state.particles.position.iter_mut().for_each(|x| self.domain.wrap(x));
+            let (domain, position) = (&self.domain, &mut state.particles.position[..]);
+            self.timers.time("wrap", || {
+                parallel::for_each_share(position, |_, xs| xs.iter_mut().for_each(|x| domain.wrap(x)))
+            });
         }
         let terms = &self.terms;
         let wanted = |range| terms.iter().any(|t| group.has(t.as_ref()) && t.pairs().is_some_and(|n| n.range == range));
