@@ -68,7 +68,7 @@ impl Magnetisation {
     pub fn new(induction: Induction, b0: Vec3, gradient: Matrix3<f64>, species: &[Species], skins: Skins) -> Self {
         let range = match induction {
             Induction::None => None,
-            Induction::Paper { radius } => Some(PairRange::Within { range: radius, skin: radius * skins.magnetic }),
+            Induction::Paper { radius } => Some(PairRange::Within { range: radius, skin: radius * skins.induction }),
             Induction::Exact { .. } => Some(PairRange::All),
         };
         Self {

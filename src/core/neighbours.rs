@@ -534,14 +534,20 @@ pub struct Skins {
     /// Contact and shielding lists (range about one diameter): 0.2, as in the reference decks,
     /// or a whole range in dilute scenes ([`Skins::for_density`]).
     pub near: f64,
-    /// Magnetic lists (dipole cut-off, the paper's 15-diameter neighbourhood): 1/15, one diameter
-    /// at 15 diameters.
+    /// The dipole forces' own list (a cut-off without the paper's induction): 1/15, one
+    /// diameter at 15 diameters.
     pub magnetic: f64,
+    /// The paper's induction neighbourhood (15 diameters; the dipole forces of the same cut-off
+    /// sum over it too): 2/15. Early in a run its particles snap together at m/s: in the 100×
+    /// case-1 run at 0.3 ms a skin of 1/15 rebuilt the candidates every 8 outer steps (12 per
+    /// 1 000 steps, 0.33 s of its 2.4 s); 2/15 halves the rebuilds for 15 % more candidates to
+    /// filter (`reports/performance-history.md`, stage 31).
+    pub induction: f64,
 }
 
 impl Default for Skins {
     fn default() -> Self {
-        Skins { near: 0.2, magnetic: 1.0 / 15.0 }
+        Skins { near: 0.2, magnetic: 1.0 / 15.0, induction: 2.0 / 15.0 }
     }
 }
 
