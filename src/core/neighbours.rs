@@ -540,7 +540,7 @@ pub struct Skins {
     /// The paper's induction neighbourhood (15 diameters; the dipole forces of the same cut-off
     /// sum over it too): 2/15. Early in a run its particles snap together at m/s: in the 100×
     /// case-1 run at 0.3 ms a skin of 1/15 rebuilt the candidates every 8 outer steps (12 per
-    /// 1 000 steps, 0.33 s of its 2.4 s); 2/15 halves the rebuilds for 15 % more candidates to
+    /// 1 000 steps, 0.33 s of its 2.4 s); 2/15 rebuilt them 5 times, with 21 % more candidates to
     /// filter (`reports/performance-history.md`, stage 31).
     pub induction: f64,
 }
