@@ -127,10 +127,10 @@ impl<T: Send + Sync + Copy + Default> PieceList<T> {
         let size = n.div_ceil(chunks).max(1);
         let fill = |(c, piece): (usize, &mut Vec<T>)| {
             let ks = c * size..n.min((c + 1) * size);
-            if piece.len() < ks.len() {
-                piece.resize(ks.len(), T::default());
-            }
             let len = ks.len();
+            if piece.len() < len {
+                piece.resize(len, T::default());
+            }
             f(ks, &mut piece[..len])
         };
         if chunks > 1 {

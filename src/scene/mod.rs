@@ -1167,9 +1167,9 @@ fn first_non_finite(value: &toml::Value, key: String) -> Option<(String, f64)> {
 /// Bytes a run of `n` particles of radius `radius` is expected to hold: the particle state
 /// (about 30 vectors and scalars per particle with the checkpoint and output buffers, 600 B),
 /// the contact list (up to 13 neighbours within the skin, 48 B each), and the dipole and
-/// induction neighbourhoods (every pair within the larger cut-off plus a skin of 2/15, 88 B each:
-/// the pair and its two fields; all pairs without a cut-off are summed directly and stored only
-/// by the dense solve of exact induction, (3n)² × 8 B for n ≤ dense_max). An estimate to refuse
+/// induction neighbourhoods (every pair within the larger cut-off plus the wider of their skins,
+/// 88 B each: the pair and its two fields; all pairs without a cut-off are summed directly and
+/// stored only by the dense solve of exact induction, (3n)² × 8 B for n ≤ dense_max). An estimate to refuse
 /// what cannot fit, not an exact account.
 pub fn memory_estimate(spec: &SceneSpec, domain: &Domain, n: usize, radius: f64) -> u64 {
     let n_f = n as f64;
@@ -1180,7 +1180,8 @@ pub fn memory_estimate(spec: &SceneSpec, domain: &Domain, n: usize, radius: f64)
             _ => d.cutoff_diameters.unwrap_or(0.0),
         };
         if diameters > 0.0 {
-            let range = diameters * 2.0 * radius * (1.0 + 2.0 / 15.0);
+            let skins = Skins::default();
+            let range = diameters * 2.0 * radius * (1.0 + skins.induction.max(skins.magnetic));
             let l = domain.length();
             let density = n_f / (l.x * l.y * l.z);
             let neighbours = (density * 4.0 / 3.0 * std::f64::consts::PI * range.powi(3)).min(n_f);
