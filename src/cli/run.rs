@@ -143,7 +143,10 @@ fn print_timings(summary: &RunSummary) {
     }
     println!("neighbour ranges (neighbours: candidate upkeep and rebuilds; pair-list: filtering the listed pairs):");
     for u in summary.simulation.neighbour_usage() {
-        let listed = u.listed.map_or("not listed".into(), |n| format!("{n} listed"));
+        let mut listed = u.listed.map_or("not listed".into(), |n| format!("{n} listed"));
+        if let Some((count, skin, builds)) = u.close {
+            listed = format!("{count} close candidates (skin {skin:.3e} m, taken {builds} times), {listed}");
+        }
         match u.range {
             PairRange::Within { range, skin } => println!(
                 "  within {range:.3e} m, skin up to {skin:.3e} m: {} rebuilds, skin in use {:.3e} m, {} candidates, {listed}",
