@@ -372,17 +372,17 @@ pub fn any_share<S: Split>(parts: S, test: impl Fn(S) -> bool + Sync + Send) -> 
 /// into `out[j]`, each particle's terms added in pair order, as the loop
 /// `for k { if let Some((a, b)) = both(k) { out[i] += a; out[j] += b } }` adds them, bit for bit
 /// (`None`: an item that is no pair now, a candidate out of range). In shares of particles when
-/// worth it: a share first adds, in order, the pairs of earlier rows that reach it (`second(k)`,
-/// the part for j alone: those pairs come first in its particles' serial sums), from row
-/// `reach(lo)` on (no row before it has a j from `lo` on), then walks its own rows, leaving the
-/// j beyond it to the shares after. Nothing is buffered and no thread waits.
+/// worth it: a share from `lo` > 0 first takes `earlier(lo, share)`, which adds, in pair order,
+/// the parts for j alone of the pairs of rows before `lo` whose j is in the share (those come
+/// first in its particles' serial sums; [`add_earlier_rows`] finds them by scanning the rows),
+/// then walks its own rows, leaving the j beyond it to the shares after. Nothing is buffered and
+/// no thread waits.
 pub fn add_pairs_in_order<P: Sync, T: Copy + Send + std::ops::AddAssign>(
     out: &mut [T],
     pairs: Pieced<P>,
     ij: impl Fn(&P) -> (usize, usize) + Sync + Send,
-    reach: impl Fn(usize) -> usize + Sync + Send,
+    earlier: impl Fn(usize, &mut [T]) + Sync + Send,
     both: impl Fn(&P) -> Option<(T, T)> + Sync + Send,
-    second: impl Fn(&P) -> Option<T> + Sync + Send,
 ) {
     debug_assert!(
         pairs.iter().zip(pairs.iter().skip(1)).all(|(a, b)| ij(a).0 <= ij(b).0)
@@ -391,19 +391,11 @@ pub fn add_pairs_in_order<P: Sync, T: Copy + Send + std::ops::AddAssign>(
     );
     for_each_share(out, |lo, share| {
         let hi = lo + share.len();
-        let row_below = |bound: usize| pairs.partition_point(|q| ij(q).0 < bound);
-        let (first, start, end) = (row_below(reach(lo).min(lo)), row_below(lo), row_below(hi));
-        for slice in pairs.slices(first, start) {
-            for q in slice {
-                let j = ij(q).1;
-                if (lo..hi).contains(&j) {
-                    if let Some(b) = second(q) {
-                        share[j - lo] += b;
-                    }
-                }
-            }
+        if lo > 0 {
+            earlier(lo, share);
         }
-        for slice in pairs.slices(start, end) {
+        let row_below = |bound: usize| pairs.partition_point(|q| ij(q).0 < bound);
+        for slice in pairs.slices(row_below(lo), row_below(hi)) {
             for q in slice {
                 let (i, j) = ij(q);
                 if let Some((a, b)) = both(q) {
@@ -415,6 +407,31 @@ pub fn add_pairs_in_order<P: Sync, T: Copy + Send + std::ops::AddAssign>(
             }
         }
     });
+}
+
+/// The `earlier` of [`add_pairs_in_order`] by scanning the pairs of the rows before the share
+/// from `lo` from row `first_row` on (no row before it has a j from `lo` on) and adding
+/// `second(k)`, the part for j alone, of those whose j is in the share.
+pub fn add_earlier_rows<P, T: std::ops::AddAssign>(
+    pairs: Pieced<P>,
+    ij: impl Fn(&P) -> (usize, usize),
+    first_row: usize,
+    second: impl Fn(&P) -> Option<T>,
+    lo: usize,
+    share: &mut [T],
+) {
+    let hi = lo + share.len();
+    let row_below = |bound: usize| pairs.partition_point(|q| ij(q).0 < bound);
+    for slice in pairs.slices(row_below(first_row.min(lo)), row_below(lo)) {
+        for q in slice {
+            let j = ij(q).1;
+            if (lo..hi).contains(&j) {
+                if let Some(b) = second(q) {
+                    share[j - lo] += b;
+                }
+            }
+        }
+    }
 }
 
 /// Runs `f` (one step of a system of `len` particles) while the pool's other threads spin and
@@ -559,17 +576,16 @@ mod tests {
             }
         }
         let mut out = vec![0.1; n];
-        pool.install(|| with_warm_pool(n, || add_pairs_in_order(&mut out, seq, |q| *q, |_| 0, both, second)));
+        let earlier = |lo, share: &mut [f64]| add_earlier_rows(seq, |q| *q, 0, second, lo, share);
+        pool.install(|| with_warm_pool(n, || add_pairs_in_order(&mut out, seq, |q| *q, earlier, both)));
         assert!(out == serial_kept, "sums over pieces");
         for threads in [1, 2, 3] {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             for bound in [&reach as &(dyn Fn(usize) -> usize + Sync + Send), &|_| 0] {
                 let mut out = vec![0.1; n];
-                pool.install(|| {
-                    with_warm_pool(n, || {
-                        add_pairs_in_order(&mut out, Pieced::Whole(&pairs), |q| *q, bound, both, second)
-                    })
-                });
+                let whole = Pieced::Whole(&pairs);
+                let earlier = |lo, share: &mut [f64]| add_earlier_rows(whole, |q| *q, bound(lo), second, lo, share);
+                pool.install(|| with_warm_pool(n, || add_pairs_in_order(&mut out, whole, |q| *q, earlier, both)));
                 assert!(out == serial, "{threads} threads");
             }
         }

@@ -423,7 +423,11 @@ impl ForceTerm for DipoleForce {
                             .pairs
                             .fill_whole(|out| CellList::default().pairs_within(&p.position, ctx.domain, None, out)),
                     }
-                    RangePairs { listed: Some(self.pairs.seq()), candidates: Candidates::none(ctx.domain) }
+                    RangePairs {
+                        listed: Some(self.pairs.seq()),
+                        candidates: Candidates::none(ctx.domain),
+                        crossing: None,
+                    }
                 }
             };
             let mut b_loc: Vec<Vec3> = p.position.iter().map(|x| self.b0 + self.gradient * x).collect();

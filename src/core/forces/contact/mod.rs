@@ -366,7 +366,7 @@ impl Contact {
         slots.resize_with(shares.max(slots.len()), Default::default);
         // The near pairs as another term lists them, or the candidates filtered as they are read:
         // the same pairs, bit for bit.
-        let RangePairs { listed, candidates } = ctx.neighbours.range_pairs(self.near, ctx.domain);
+        let RangePairs { listed, candidates, .. } = ctx.neighbours.range_pairs(self.near, ctx.domain);
         parallel::for_each_share((&mut *out.force, &mut *out.torque), |lo, parts| {
             let mut slot = slots[lo / size].lock().expect("one share per slot");
             // Filled on this thread's stack, not in the slot: the slots sit side by side, and
