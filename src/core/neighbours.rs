@@ -484,6 +484,7 @@ pub struct CrossingPairs {
     candidates: Vec<(u32, u32)>,
     candidate_pieces: Pieces<(u32, u32)>,
     pairs: Vec<Pair>,
+    pair_pieces: Pieces<Pair>,
 }
 
 impl CrossingPairs {
@@ -509,15 +510,17 @@ impl CrossingPairs {
     /// The crossing candidates within `range` now, as the listing filters them.
     fn filter(&mut self, positions: &[Vec3], domain: &Domain, range: f64) {
         let (range2, periodic) = (range * range, domain.periodic != [false; 3]);
-        self.pairs.clear();
-        for &(i, j) in &self.candidates {
-            let (a, b) = (&positions[i as usize], &positions[j as usize]);
-            let r = if periodic { domain.displacement(a, b) } else { a - b };
-            let d2 = r.norm_squared();
-            if d2 < range2 {
-                self.pairs.push(Pair { i, j, r, dist: d2.sqrt() });
+        let candidates = &self.candidates;
+        parallel::collect_ordered_ranges(candidates.len(), &mut self.pairs, &mut self.pair_pieces, |ks, out| {
+            for &(i, j) in &candidates[ks] {
+                let (a, b) = (&positions[i as usize], &positions[j as usize]);
+                let r = if periodic { domain.displacement(a, b) } else { a - b };
+                let d2 = r.norm_squared();
+                if d2 < range2 {
+                    out.push(Pair { i, j, r, dist: d2.sqrt() });
+                }
             }
-        }
+        });
     }
 
     /// The crossing pairs into the share from `lo` of `len` particles (of the split they were
