@@ -229,15 +229,8 @@ impl VerletList {
     /// particle has moved more than half the skin in use since the last build); returns the skin
     /// in use if it rebuilt them.
     pub fn update(&mut self, positions: &[Vec3], domain: &Domain, range: f64, skin: f64) -> Option<f64> {
-        let in_use = self.in_use;
-        let moved = |(x, x0): (&Vec3, &Vec3)| domain.displacement(x, x0).norm_squared() > 0.25 * in_use * in_use;
         let stale = self.reference.len() != positions.len() || self.built_for != Some((range, skin));
-        // Branch-free over a chunk; in parallel, one such loop per chunk: rayon's element-wise
-        // map and reduce took three times as long on two threads (sparse 30 000 particles: 88–99
-        // against 32–34 ms per 1 000 steps), more than on one.
-        let any_moved = |xs: &[Vec3], x0s: &[Vec3]| xs.iter().zip(x0s).fold(false, |any, pair| any | moved(pair));
-        let moved_too_far =
-            stale || parallel::any_share((positions, &self.reference[..]), |(xs, x0s)| any_moved(xs, x0s));
+        let moved_too_far = stale || moved_farther(positions, &self.reference, domain, 0.5 * self.in_use);
         if !moved_too_far {
             self.since_build += 1;
             return None;
@@ -387,11 +380,7 @@ impl CloseCandidates {
         } else if !self.in_use {
             return false;
         } else {
-            let half = 0.5 * self.skin;
-            let moved = |(x, x0): (&Vec3, &Vec3)| domain.displacement(x, x0).norm_squared() > half * half;
-            let any_moved =
-                |(xs, x0s): (&[Vec3], &[Vec3])| xs.iter().zip(x0s).fold(false, |any, pair| any | moved(pair));
-            if !parallel::any_share((positions, &self.reference[..]), any_moved) {
+            if !moved_farther(positions, &self.reference, domain, 0.5 * self.skin) {
                 self.since += 1;
                 return false;
             }
@@ -410,13 +399,8 @@ impl CloseCandidates {
         let periodic = domain.periodic != [false; 3];
         let candidates = verlet.candidates();
         parallel::collect_ordered_ranges(candidates.len(), &mut self.list, &mut self.pieces, |ks, out| {
-            for &(i, j) in &candidates[ks] {
-                let (a, b) = (&positions[i as usize], &positions[j as usize]);
-                let r = if periodic { domain.displacement(a, b) } else { a - b };
-                if r.norm_squared() < reach2 {
-                    out.push((i, j));
-                }
-            }
+            let close = |&&ij: &&(u32, u32)| separation(domain, periodic, positions, ij).norm_squared() < reach2;
+            out.extend(candidates[ks].iter().filter(close));
         });
         self.reference.clear();
         self.reference.extend_from_slice(positions);
@@ -509,17 +493,9 @@ impl CrossingPairs {
 
     /// The crossing candidates within `range` now, as the listing filters them.
     fn filter(&mut self, positions: &[Vec3], domain: &Domain, range: f64) {
-        let (range2, periodic) = (range * range, domain.periodic != [false; 3]);
-        let candidates = &self.candidates;
-        parallel::collect_ordered_ranges(candidates.len(), &mut self.pairs, &mut self.pair_pieces, |ks, out| {
-            for &(i, j) in &candidates[ks] {
-                let (a, b) = (&positions[i as usize], &positions[j as usize]);
-                let r = if periodic { domain.displacement(a, b) } else { a - b };
-                let d2 = r.norm_squared();
-                if d2 < range2 {
-                    out.push(Pair { i, j, r, dist: d2.sqrt() });
-                }
-            }
+        let crossing = Candidates::within(&self.candidates, range, domain);
+        parallel::collect_ordered_ranges(crossing.list.len(), &mut self.pairs, &mut self.pair_pieces, |ks, out| {
+            out.extend(crossing.list[ks].iter().filter_map(|&ij| crossing.pair(positions, ij)))
         });
     }
 
@@ -528,6 +504,30 @@ impl CrossingPairs {
     fn reaching(&self, lo: usize, len: usize) -> impl Iterator<Item = &Pair> {
         self.pairs.iter().filter(move |q| (lo..lo + len).contains(&(q.j as usize)))
     }
+}
+
+/// x_i − x_j, the minimum image where the domain is `periodic` on some axis (without, the plain
+/// difference: the same bits without the image arithmetic).
+#[inline(always)]
+fn separation(domain: &Domain, periodic: bool, positions: &[Vec3], (i, j): (u32, u32)) -> Vec3 {
+    let (a, b) = (&positions[i as usize], &positions[j as usize]);
+    if periodic {
+        domain.displacement(a, b)
+    } else {
+        a - b
+    }
+}
+
+/// Whether some particle has moved farther than `distance` (minimum image) from its `reference`
+/// position. Branch-free over a share, one such loop per share: rayon's element-wise map and
+/// reduce took three times as long on two threads (sparse 30 000 particles: 88–99 against
+/// 32–34 ms per 1 000 steps), more than on one.
+fn moved_farther(positions: &[Vec3], reference: &[Vec3], domain: &Domain, distance: f64) -> bool {
+    let limit = distance * distance;
+    let moved = |(x, x0): (&Vec3, &Vec3)| domain.displacement(x, x0).norm_squared() > limit;
+    parallel::any_share((positions, reference), |(xs, x0s)| {
+        xs.iter().zip(x0s).fold(false, |any, pair| any | moved(pair))
+    })
 }
 
 /// The pairs a force term needs from the neighbour layer.
@@ -589,11 +589,15 @@ impl<'a> Candidates<'a> {
         Candidates { list: &[], verlet: None, range2: 0.0, domain, periodic: false }
     }
 
+    /// `list` as candidates within `range` in `domain`, with no Verlet list behind them.
+    fn within(list: &'a [(u32, u32)], range: f64, domain: &'a Domain) -> Self {
+        Candidates { list, verlet: None, range2: range * range, domain, periodic: domain.periodic != [false; 3] }
+    }
+
     /// The candidate (i, j) as a [`Pair`] if it is closer than the range now.
     #[inline(always)]
     pub fn pair(&self, positions: &[Vec3], (i, j): (u32, u32)) -> Option<Pair> {
-        let (a, b) = (&positions[i as usize], &positions[j as usize]);
-        let r = if self.periodic { self.domain.displacement(a, b) } else { a - b };
+        let r = separation(self.domain, self.periodic, positions, (i, j));
         let d2 = r.norm_squared();
         (d2 < self.range2).then(|| Pair { i, j, r, dist: d2.sqrt() })
     }
@@ -906,7 +910,7 @@ impl Neighbours {
         RangePairs {
             listed: listed.map(|l| l.pairs.seq()),
             candidates: self.candidates(range, domain),
-            crossing: listed.filter(|l| l.range.distance().is_some()).map(|l| &l.crossing),
+            crossing: listed.map(|l| &l.crossing),
         }
     }
 
