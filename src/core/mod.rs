@@ -4,6 +4,7 @@
 pub mod domain;
 pub mod forces;
 pub mod integrators;
+pub mod lanes;
 pub mod magnetisation;
 pub mod neighbours;
 pub mod parallel;

@@ -618,6 +618,8 @@ pub trait PairSource: Sync {
     fn ij(item: &Self::Item) -> (u32, u32);
     /// The item as a pair if it is within the range now.
     fn pair(&self, positions: &[Vec3], item: &Self::Item) -> Option<Pair>;
+    /// The item as the pair it is, if it is one whatever the positions (a listed pair).
+    fn listed(item: &Self::Item) -> Option<&Pair>;
 }
 
 impl PairSource for Candidates<'_> {
@@ -633,6 +635,10 @@ impl PairSource for Candidates<'_> {
     fn pair(&self, positions: &[Vec3], item: &(u32, u32)) -> Option<Pair> {
         Candidates::pair(self, positions, *item)
     }
+    #[inline(always)]
+    fn listed(_: &(u32, u32)) -> Option<&Pair> {
+        None
+    }
 }
 
 impl PairSource for Pieced<'_, Pair> {
@@ -647,6 +653,10 @@ impl PairSource for Pieced<'_, Pair> {
     #[inline(always)]
     fn pair(&self, _: &[Vec3], item: &Pair) -> Option<Pair> {
         Some(*item)
+    }
+    #[inline(always)]
+    fn listed(item: &Pair) -> Option<&Pair> {
+        Some(item)
     }
 }
 
@@ -671,9 +681,22 @@ impl RangePairs<'_> {
         both: impl Fn(&Pair) -> (T, T) + Sync + Send,
         second: impl Fn(&Pair) -> T + Sync + Send,
     ) {
+        self.add_in_order_by_four(positions, out, &both, second, |q| q.map(&both))
+    }
+
+    /// [`Self::add_in_order`] with `four(pairs)`, `both` of four listed pairs computed together
+    /// with the same bits (in SIMD lanes), where the pairs are listed.
+    pub fn add_in_order_by_four<T: Copy + Send + std::ops::AddAssign>(
+        &self,
+        positions: &[Vec3],
+        out: &mut [T],
+        both: impl Fn(&Pair) -> (T, T) + Sync + Send,
+        second: impl Fn(&Pair) -> T + Sync + Send,
+        four: impl Fn([&Pair; 4]) -> [(T, T); 4] + Sync + Send,
+    ) {
         match self.listed {
-            Some(pairs) => add_in_order_from(&pairs, positions, self, out, both, second),
-            None => add_in_order_from(&self.candidates, positions, self, out, both, second),
+            Some(pairs) => add_in_order_from(&pairs, positions, self, out, both, second, four),
+            None => add_in_order_from(&self.candidates, positions, self, out, both, second, four),
         }
     }
 }
@@ -685,6 +708,7 @@ fn add_in_order_from<S: PairSource, T: Copy + Send + std::ops::AddAssign>(
     out: &mut [T],
     both: impl Fn(&Pair) -> (T, T) + Sync + Send,
     second: impl Fn(&Pair) -> T + Sync + Send,
+    four: impl Fn([&Pair; 4]) -> [(T, T); 4] + Sync + Send,
 ) {
     let ij = |q: &S::Item| {
         let (i, j) = S::ij(q);
@@ -702,8 +726,12 @@ fn add_in_order_from<S: PairSource, T: Copy + Send + std::ops::AddAssign>(
             parallel::add_earlier_rows(source.items(), ij, first_row, second, lo, share)
         }
     };
-    let both = |q: &S::Item| source.pair(positions, q).map(|pair| both(&pair));
-    parallel::add_pairs_in_order(out, source.items(), ij, earlier, both);
+    let one = |q: &S::Item| source.pair(positions, q).map(|pair| both(&pair));
+    let four = |q: [&S::Item; 4]| match q.map(S::listed) {
+        [Some(a), Some(b), Some(c), Some(d)] => Some(four([a, b, c, d])),
+        _ => None,
+    };
+    parallel::add_pairs_in_order(out, source.items(), ij, earlier, one, four);
 }
 
 /// Verlet skins, as fractions of the range they pad: the one numerical setting of the neighbour

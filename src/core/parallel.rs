@@ -377,12 +377,16 @@ pub fn any_share<S: Split>(parts: S, test: impl Fn(S) -> bool + Sync + Send) -> 
 /// first in its particles' serial sums; [`add_earlier_rows`] finds them by scanning the rows),
 /// then walks its own rows, leaving the j beyond it to the shares after. Nothing is buffered and
 /// no thread waits.
+///
+/// `four(k..k + 4)`, where it gives `Some`, is `both` of four consecutive items computed together
+/// (in SIMD lanes; `None`: take them one by one); the terms are then added one by one, in order.
 pub fn add_pairs_in_order<P: Sync, T: Copy + Send + std::ops::AddAssign>(
     out: &mut [T],
     pairs: Pieced<P>,
     ij: impl Fn(&P) -> (usize, usize) + Sync + Send,
     earlier: impl Fn(usize, &mut [T]) + Sync + Send,
     both: impl Fn(&P) -> Option<(T, T)> + Sync + Send,
+    four: impl Fn([&P; 4]) -> Option<[(T, T); 4]> + Sync + Send,
 ) {
     debug_assert!(
         pairs.iter().zip(pairs.iter().skip(1)).all(|(a, b)| ij(a).0 <= ij(b).0)
@@ -394,17 +398,44 @@ pub fn add_pairs_in_order<P: Sync, T: Copy + Send + std::ops::AddAssign>(
         if lo > 0 {
             earlier(lo, share);
         }
-        let row_below = |bound: usize| pairs.partition_point(|q| ij(q).0 < bound);
-        for slice in pairs.slices(row_below(lo), row_below(hi)) {
-            for q in slice {
-                let (i, j) = ij(q);
-                if let Some((a, b)) = both(q) {
-                    share[i - lo] += a;
-                    if j < hi {
-                        share[j - lo] += b;
+        // The row's particle (share index) and its sum so far, held out of memory while its row
+        // lasts: adding each term to memory made every pair wait for the store of the one
+        // before. No other pair of the walk touches particle i meanwhile (every j is above i),
+        // so the bits are those of adding in memory.
+        let mut row: Option<(usize, T)> = None;
+        let add = |share: &mut [T], row: &mut Option<(usize, T)>, q: &P, (a, b): (T, T)| {
+            let (i, j) = ij(q);
+            match row {
+                Some((r, sum)) if *r == i - lo => *sum += a,
+                _ => {
+                    if let Some((r, sum)) = *row {
+                        share[r] = sum;
                     }
+                    let mut sum = share[i - lo];
+                    sum += a;
+                    *row = Some((i - lo, sum));
                 }
             }
+            if j < hi {
+                share[j - lo] += b;
+            }
+        };
+        let row_below = |bound: usize| pairs.partition_point(|q| ij(q).0 < bound);
+        for slice in pairs.slices(row_below(lo), row_below(hi)) {
+            let mut quads = slice.chunks_exact(4);
+            for quad in &mut quads {
+                let quad = [&quad[0], &quad[1], &quad[2], &quad[3]];
+                match four(quad) {
+                    Some(terms) => quad.into_iter().zip(terms).for_each(|(q, t)| add(share, &mut row, q, t)),
+                    None => quad.into_iter().for_each(|q| both(q).into_iter().for_each(|t| add(share, &mut row, q, t))),
+                }
+            }
+            for q in quads.remainder() {
+                both(q).into_iter().for_each(|t| add(share, &mut row, q, t));
+            }
+        }
+        if let Some((r, sum)) = row {
+            share[r] = sum;
         }
     });
 }
@@ -519,6 +550,12 @@ mod tests {
             ((i + j) % 5 != 0).then(|| (1.0 / (1.0 + (i * 7 + j) as f64), -3.0e5 / (1.0 + (j * 3 + i) as f64)))
         };
         let second = |q: &(usize, usize)| both(q).map(|(_, b)| b);
+        // Four at a time where all four are pairs (as a list's kernel in SIMD lanes), otherwise
+        // one by one: both ways must add the same terms in the same order.
+        let four = |q: [&(usize, usize); 4]| match q.map(both) {
+            [Some(a), Some(b), Some(c), Some(d)] => Some([a, b, c, d]),
+            _ => None,
+        };
         let mut reaching = vec![usize::MAX; n + 1];
         for &(i, j) in &pairs {
             reaching[j] = reaching[j].min(i);
@@ -577,7 +614,7 @@ mod tests {
         }
         let mut out = vec![0.1; n];
         let earlier = |lo, share: &mut [f64]| add_earlier_rows(seq, |q| *q, 0, second, lo, share);
-        pool.install(|| with_warm_pool(n, || add_pairs_in_order(&mut out, seq, |q| *q, earlier, both)));
+        pool.install(|| with_warm_pool(n, || add_pairs_in_order(&mut out, seq, |q| *q, earlier, both, four)));
         assert!(out == serial_kept, "sums over pieces");
         for threads in [1, 2, 3] {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
@@ -585,7 +622,7 @@ mod tests {
                 let mut out = vec![0.1; n];
                 let whole = Pieced::Whole(&pairs);
                 let earlier = |lo, share: &mut [f64]| add_earlier_rows(whole, |q| *q, bound(lo), second, lo, share);
-                pool.install(|| with_warm_pool(n, || add_pairs_in_order(&mut out, whole, |q| *q, earlier, both)));
+                pool.install(|| with_warm_pool(n, || add_pairs_in_order(&mut out, whole, |q| *q, earlier, both, four)));
                 assert!(out == serial, "{threads} threads");
             }
         }
