@@ -399,8 +399,15 @@ impl CloseCandidates {
         let periodic = domain.periodic != [false; 3];
         let candidates = verlet.candidates();
         parallel::collect_ordered_ranges(candidates.len(), &mut self.list, &mut self.pieces, |ks, out| {
-            let close = |&&ij: &&(u32, u32)| separation(domain, periodic, positions, ij).norm_squared() < reach2;
-            out.extend(candidates[ks].iter().filter(close));
+            // Each candidate written at the end of the kept ones, which advances only if it is
+            // close: no branch on a test that goes either way from one candidate to the next.
+            let mut kept = out.len();
+            out.resize(kept + ks.len(), (0, 0));
+            for &ij in &candidates[ks] {
+                out[kept] = ij;
+                kept += (separation(domain, periodic, positions, ij).norm_squared() < reach2) as usize;
+            }
+            out.truncate(kept);
         });
         self.reference.clear();
         self.reference.extend_from_slice(positions);
