@@ -109,6 +109,11 @@ impl Magnetisation {
         (self.b0 + self.gradient * x) / MU0
     }
 
+    /// The applied field at every particle into `field` (in parallel for many particles).
+    fn external_fields(&self, p: &Particles, field: &mut Vec<Vec3>) {
+        parallel::map_ordered(p.len(), field, |i| self.external_field(&p.position[i]));
+    }
+
     /// Induced plus permanent moment of particle i in local field `h`.
     fn moment_in(&self, p: &Particles, i: usize, h: &Vec3) -> Vec3 {
         let s = p.species[i] as usize;
@@ -134,8 +139,7 @@ impl Magnetisation {
     /// Local fields from the applied field and the moments `moment` over `pairs`.
     fn sweep_fields(&mut self, p: &Particles, moment: &[Vec3], pairs: &RangePairs) {
         let mut field = std::mem::take(&mut self.field);
-        field.clear();
-        field.extend(p.position.iter().map(|x| self.external_field(x)));
+        self.external_fields(p, &mut field);
         pairs.add_in_order_by_four(
             &p.position,
             &mut field,
@@ -152,8 +156,7 @@ impl Magnetisation {
         match self.induction {
             Induction::None => {
                 let mut field = std::mem::take(&mut self.field);
-                field.clear();
-                field.extend(p.position.iter().map(|x| self.external_field(x)));
+                self.external_fields(p, &mut field);
                 self.field = field;
                 self.set_moments(p);
             }
@@ -254,7 +257,7 @@ impl ForceTerm for Magnetisation {
         self.update(&state.particles, &state.fields.moment, &pairs)
     }
     fn apply(&mut self, _ctx: &Context, _p: &Particles, out: &mut Forces) {
-        out.moment.copy_from_slice(&self.moments);
+        parallel::for_each_share((&mut *out.moment, &self.moments[..]), |_, (out, m)| out.copy_from_slice(m));
     }
     /// The previous moments are the state's; the local fields and moments held here follow
     /// their particles.

@@ -149,11 +149,29 @@ fn kick_drift(state: &mut State, kick: f64, drift: f64) {
     advance(&mut state.particles, &state.fields.force, &state.fields.torque, Kick::Plain(kick), drift);
 }
 
+/// v += F_slow/m `slow` (ω likewise), then a kick by `kick` and a drift by `drift`, in one pass
+/// over the particles (the arithmetic of [`slow_kick`] followed by [`kick_drift`]).
+fn slow_kick_then_kick_drift(state: &mut State, slow: f64, kick: f64, drift: f64) {
+    let before = (&state.fields.slow_force[..], &state.fields.slow_torque[..], slow);
+    advance(&mut state.particles, &state.fields.force, &state.fields.torque, Kick::After { before, h: kick }, drift);
+}
+
+/// Two kicks by `kick` with the same forces, then a drift by `drift`, in one pass over the
+/// particles: a Verlet step's closing half kick and the next step's opening one (the arithmetic
+/// of [`kick`] followed by [`kick_drift`]).
+fn kick_twice_drift(state: &mut State, kick: f64, drift: f64) {
+    let before = (&state.fields.force[..], &state.fields.torque[..], kick);
+    advance(&mut state.particles, &state.fields.force, &state.fields.torque, Kick::After { before, h: kick }, drift);
+}
+
 /// How a kick changes the velocities.
 #[derive(Clone, Copy)]
 enum Kick<'a> {
     /// v += F/m h, ω += T/I h (skipped at h = 0).
     Plain(f64),
+    /// v += F′/m h′, ω += T′/I h′ for `before` = (F′, T′, h′), then the plain kick by h: two kicks
+    /// in one pass, each velocity updated as two passes would.
+    After { before: (&'a [Vec3], &'a [Vec3], f64), h: f64 },
     /// The exact solution of m dv/dt = F − γ (v − u_f) over h with F held (see
     /// [`ExponentialVerlet`]), and likewise for ω with γ_r.
     Exponential { h: f64, gamma: &'a [f64], gamma_rotational: &'a [f64], fluid_velocity: Vec3 },
@@ -173,35 +191,61 @@ fn phi(x: f64) -> f64 {
 /// all of it (a parallel loop per array would hand out and join once per array).
 fn advance(p: &mut Particles, force: &[Vec3], torque: &[Vec3], kick: Kick, drift: f64) {
     let (x, v, w) = (&mut p.position[..], &mut p.velocity[..], &mut p.angular_velocity[..]);
+    // A kick before the plain one: another force's, or none (h′ = 0, skipped).
+    let ((before_f, before_t, hb), h) = match kick {
+        Kick::Plain(h) => ((force, torque, 0.0), h),
+        Kick::After { before, h } => (before, h),
+        Kick::Exponential { .. } => ((force, torque, 0.0), 0.0),
+    };
     match (kick, &p.inverse_masses) {
-        (Kick::Plain(kick), InverseMasses::Uniform { mass, inertia }) => {
-            let (c, ci) = (kick * mass, kick * inertia);
+        (Kick::Plain(_) | Kick::After { .. }, InverseMasses::Uniform { mass, inertia }) => {
+            let (c, ci, cb, cbi) = (h * mass, h * inertia, hb * mass, hb * inertia);
             // Component by component (SIMD across particles).
-            parallel::for_each_share((x, v, w, force, torque), |_, (x, v, w, f, t)| {
+            let parts = (x, v, w, (force, torque), (before_f, before_t));
+            parallel::for_each_share(parts, |_, (x, v, w, (f, t), (bf, bt))| {
                 let (x, v, w, f, t) =
                     (components_mut(x), components_mut(v), components_mut(w), components(f), components(t));
-                match (kick != 0.0, drift != 0.0) {
-                    (true, true) => x.iter_mut().zip(v).zip(f).for_each(|((x, v), f)| {
+                let (bf, bt) = (components(bf), components(bt));
+                match (hb != 0.0, h != 0.0, drift != 0.0) {
+                    (true, true, true) => x.iter_mut().zip(v).zip(bf.iter().zip(f)).for_each(|((x, v), (bf, f))| {
+                        *v += bf * cb;
                         *v += f * c;
                         *x += *v * drift;
                     }),
-                    (true, false) => v.iter_mut().zip(f).for_each(|(v, f)| *v += f * c),
-                    (false, true) => x.iter_mut().zip(v).for_each(|(x, v)| *x += *v * drift),
-                    (false, false) => {}
+                    (true, true, false) => v.iter_mut().zip(bf.iter().zip(f)).for_each(|(v, (bf, f))| {
+                        *v += bf * cb;
+                        *v += f * c;
+                    }),
+                    (false, true, true) => x.iter_mut().zip(v).zip(f).for_each(|((x, v), f)| {
+                        *v += f * c;
+                        *x += *v * drift;
+                    }),
+                    (false, true, false) => v.iter_mut().zip(f).for_each(|(v, f)| *v += f * c),
+                    (false, false, true) => x.iter_mut().zip(v).for_each(|(x, v)| *x += *v * drift),
+                    (false, false, false) => {}
+                    (true, false, _) => unreachable!("a kick before the plain one comes with it"),
                 }
-                if kick != 0.0 {
+                if hb != 0.0 {
+                    w.iter_mut().zip(bt).for_each(|(w, t)| *w += t * cbi);
+                }
+                if h != 0.0 {
                     w.iter_mut().zip(t).for_each(|(w, t)| *w += t * ci);
                 }
             });
         }
-        (Kick::Plain(kick), InverseMasses::PerParticle { mass, inertia }) => {
-            parallel::for_each_share((x, v, w, force, torque, &mass[..], &inertia[..]), |_, (x, v, w, f, t, m, i)| {
-                for ((((x, v), w), (f, t)), (m, i)) in
-                    x.iter_mut().zip(v).zip(w).zip(f.iter().zip(t)).zip(m.iter().zip(i))
+        (Kick::Plain(_) | Kick::After { .. }, InverseMasses::PerParticle { mass, inertia }) => {
+            let parts = (x, v, w, (force, torque), (before_f, before_t), (&mass[..], &inertia[..]));
+            parallel::for_each_share(parts, |_, (x, v, w, (f, t), (bf, bt), (m, i))| {
+                for (((x, v), w), (((f, t), (bf, bt)), (m, i))) in
+                    x.iter_mut().zip(v).zip(w).zip(f.iter().zip(t).zip(bf.iter().zip(bt)).zip(m.iter().zip(i)))
                 {
-                    if kick != 0.0 {
-                        *v += f * (kick * m);
-                        *w += t * (kick * i);
+                    if hb != 0.0 {
+                        *v += bf * (hb * m);
+                        *w += bt * (hb * i);
+                    }
+                    if h != 0.0 {
+                        *v += f * (h * m);
+                        *w += t * (h * i);
                     }
                     if drift != 0.0 {
                         *x += *v * drift;
@@ -265,6 +309,7 @@ mod tests {
         let (mut p, mut f) = (Particles::default(), crate::core::state::Fields::default());
         (p.position, p.velocity, p.angular_velocity, f.force, f.torque) =
             (vectors(0), vectors(1), vectors(2), vectors(3), vectors(4));
+        (f.slow_force, f.slow_torque) = (vectors(5), vectors(6));
         let (inv_m, inv_i) = (3.7e11, 2.9e21);
         p.inverse_masses = if per_particle {
             InverseMasses::PerParticle { mass: vec![inv_m; n], inertia: vec![inv_i; n] }
@@ -272,6 +317,29 @@ mod tests {
             InverseMasses::Uniform { mass: inv_m, inertia: inv_i }
         };
         State { particles: p, fields: f, ..State::default() }
+    }
+
+    /// Two kicks and a drift in one pass give the bits of the passes one after the other, with
+    /// shared and per-particle inverse masses, below and above the parallel threshold.
+    #[test]
+    fn fused_kicks_give_the_bits_of_separate_passes() {
+        for per_particle in [false, true] {
+            for n in [7, parallel::MIN_PARALLEL_LEN + 5] {
+                let (mut apart, mut fused) = (particles(n, per_particle), particles(n, per_particle));
+                parallel::with_warm_pool(n, || {
+                    slow_kick(&mut apart, 2.5e-8);
+                    kick_drift(&mut apart, 0.5e-8, 1e-8);
+                    kick(&mut apart, 0.5e-8);
+                    kick_drift(&mut apart, 0.5e-8, 1e-8);
+                    slow_kick_then_kick_drift(&mut fused, 2.5e-8, 0.5e-8, 1e-8);
+                    kick_twice_drift(&mut fused, 0.5e-8, 1e-8);
+                });
+                let (apart, fused) = (&apart.particles, &fused.particles);
+                assert_eq!(apart.position, fused.position, "n = {n}");
+                assert_eq!(apart.velocity, fused.velocity, "n = {n}");
+                assert_eq!(apart.angular_velocity, fused.angular_velocity, "n = {n}");
+            }
+        }
     }
 
     /// The componentwise loops of shared inverse masses do the per-vector arithmetic of
@@ -285,6 +353,8 @@ mod tests {
                     kick_drift(p, 0.5e-8, 1e-8);
                     kick(p, 0.5e-8);
                     drift(p, 1e-8);
+                    kick_twice_drift(p, 0.5e-8, 1e-8);
+                    slow_kick_then_kick_drift(p, 2.5e-8, 0.5e-8, 1e-8);
                 }
             });
             let (shared, own) = (&shared.particles, &own.particles);

@@ -6,7 +6,7 @@
 //! approaches half the period of a fast oscillation, which the stability studies measure.
 
 use super::ForceGroup;
-use super::{kick, kick_drift, slow_kick, tick, Evaluate, Integrator, Renumbering};
+use super::{kick, kick_twice_drift, slow_kick, slow_kick_then_kick_drift, tick, Evaluate, Integrator, Renumbering};
 use crate::core::state::State;
 
 pub struct Respa {
@@ -26,12 +26,18 @@ impl Integrator for Respa {
     }
     fn step(&mut self, state: &mut State, dt: f64, evaluate: &mut Evaluate) {
         let outer = self.slow_every as f64 * dt;
-        slow_kick(state, 0.5 * outer);
-        for _ in 0..self.slow_every {
-            kick_drift(state, 0.5 * dt, dt);
+        // Slow half kick, then K Verlet steps: kick, drift, evaluate, kick. Kicks that follow
+        // one another without an evaluation between them share one pass over the particles
+        // (the same arithmetic: each velocity takes the kicks in order).
+        slow_kick_then_kick_drift(state, 0.5 * outer, 0.5 * dt, dt);
+        for k in 0..self.slow_every {
             tick(state, dt);
             evaluate(state, ForceGroup::Fast, dt);
-            kick(state, 0.5 * dt);
+            if k + 1 < self.slow_every {
+                kick_twice_drift(state, 0.5 * dt, dt);
+            } else {
+                kick(state, 0.5 * dt);
+            }
         }
         evaluate(state, ForceGroup::Slow, dt);
         slow_kick(state, 0.5 * outer);
