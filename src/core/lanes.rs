@@ -27,6 +27,34 @@ pub fn dot(a: &Vec3x4, b: &Vec3x4) -> f64x4 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+/// Inputs for the lane kernels' tests.
+#[cfg(test)]
+pub(crate) mod testing {
+    use crate::core::neighbours::Pair;
+    use crate::core::state::Vec3;
+    use rand::{RngExt, SeedableRng};
+
+    /// Moments for 64 particles (any orientation) and `quads` groups of four pairs among them,
+    /// separated by up to 15 diameters of 11 µm in every direction.
+    pub fn random_quads(seed: u64, quads: usize) -> (Vec<Vec3>, Vec<[Pair; 4]>) {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let mut vector = |scale: f64| {
+            Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)) * scale
+        };
+        let moment: Vec<Vec3> = (0..64).map(|_| vector(4e-10)).collect();
+        let pairs = (0..quads)
+            .map(|k| {
+                std::array::from_fn(|l| {
+                    let (i, j) = ((k + 3 * l) % 63, 63 - (k * 7 + l) % 31);
+                    let r = vector(1.65e-4);
+                    Pair { i: i.min(j) as u32, j: i.max(j) as u32, r, dist: r.norm_squared().sqrt() }
+                })
+            })
+            .collect();
+        (moment, pairs)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

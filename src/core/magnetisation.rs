@@ -270,23 +270,13 @@ impl ForceTerm for Magnetisation {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rand::{RngExt, SeedableRng};
 
     /// Four pairs in lanes give each pair's scalar fields bit for bit, over separations from
     /// touching to the 15-diameter neighbourhood in every direction and moments of any orientation.
     #[test]
     fn fields_in_lanes_are_the_scalar_fields_bit_for_bit() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
-        let mut vector = |scale: f64| {
-            Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)) * scale
-        };
-        let moment: Vec<Vec3> = (0..64).map(|_| vector(4e-10)).collect();
-        for k in 0..4000 {
-            let pairs: [Pair; 4] = std::array::from_fn(|l| {
-                let (i, j) = ((k + 3 * l) % 63, 63 - (k * 7 + l) % 31);
-                let r = vector(1.65e-4);
-                Pair { i: i.min(j) as u32, j: i.max(j) as u32, r, dist: r.norm_squared().sqrt() }
-            });
+        let (moment, quads) = lanes::testing::random_quads(11, 4000);
+        for pairs in &quads {
             let lanes = pair_dipole_fields_four(&moment, [&pairs[0], &pairs[1], &pairs[2], &pairs[3]]);
             for (q, (on_i, on_j)) in pairs.iter().zip(lanes) {
                 let (m_i, m_j) = (&moment[q.i as usize], &moment[q.j as usize]);
