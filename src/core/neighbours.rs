@@ -684,7 +684,9 @@ pub struct RangePairs<'a> {
 impl RangePairs<'_> {
     /// Σ over the pairs of `both(pair).0` into `out[i]` and `both(pair).1` into `out[j]`, each
     /// particle's terms in pair order, the same bits on any thread count and from either source
-    /// ([`parallel::add_pairs_in_order`]); `second(pair)` is `both(pair).1` alone.
+    /// ([`parallel::add_pairs_in_order`]); `second(pair)` is `both(pair).1` alone. A term with a
+    /// lane kernel passes it to [`Self::add_in_order_by_four`] instead: through this one, a
+    /// listed range's pairs are still taken four at a time, each by `both`.
     pub fn add_in_order<T: Copy + Send + std::ops::AddAssign>(
         &self,
         positions: &[Vec3],

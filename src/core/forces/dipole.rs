@@ -17,7 +17,7 @@
 use super::{Context, ForceTerm, Forces, Renumbering};
 use crate::core::domain::Domain;
 use crate::core::lanes;
-use crate::core::magnetisation::{pair_dipole_field, pair_dipole_fields, MU0};
+use crate::core::magnetisation::{pair_dipole_field, pair_dipole_fields, pair_dipole_fields_four, MU0};
 use crate::core::neighbours::{Candidates, CellList, Pair, PairList, RangePairs, Skins, VerletList};
 use crate::core::parallel;
 use crate::core::state::{Particles, Vec3};
@@ -448,7 +448,7 @@ impl ForceTerm for DipoleForce {
             };
             let mut b_loc: Vec<Vec3> = p.position.iter().map(|x| self.b0 + self.gradient * x).collect();
             let moment = &*out.moment;
-            pairs.add_in_order(
+            pairs.add_in_order_by_four(
                 &p.position,
                 &mut b_loc,
                 |q| {
@@ -456,6 +456,7 @@ impl ForceTerm for DipoleForce {
                     (MU0 * on_i, MU0 * on_j)
                 },
                 |q| MU0 * pair_dipole_field(&moment[q.i as usize], q),
+                |q| pair_dipole_fields_four(moment, q).map(|(on_i, on_j)| (MU0 * on_i, MU0 * on_j)),
             );
             for ((torque, m), b) in out.torque.iter_mut().zip(&p.permanent_moment).zip(&b_loc) {
                 *torque += m.cross(b);
