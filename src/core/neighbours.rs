@@ -510,9 +510,14 @@ impl CrossingPairs {
         });
     }
 
+    /// Whether they were found for the split of `n` particles this thread pool makes.
+    pub fn found_for(&self, n: usize) -> bool {
+        self.split == parallel::split_of(n)
+    }
+
     /// The crossing pairs into the share from `lo` of `len` particles (of the split they were
     /// found for).
-    fn reaching(&self, lo: usize, len: usize) -> impl Iterator<Item = &Pair> {
+    pub fn reaching(&self, lo: usize, len: usize) -> impl Iterator<Item = &Pair> {
         self.pairs.iter().filter(move |q| (lo..lo + len).contains(&(q.j as usize)))
     }
 }
@@ -730,7 +735,7 @@ fn add_in_order_from<S: PairSource, T: Copy + Send + std::ops::AddAssign>(
     // The pairs crossing into a share from the rows before it: those found as the range was
     // listed, for this split (compared here: inside a share, on the pool's other thread, the
     // split is not the step's), or the rows before it scanned. The same pairs, in order.
-    let crossing = range.crossing.filter(|c| c.split == parallel::split_of(out.len()));
+    let crossing = range.crossing.filter(|c| c.found_for(out.len()));
     let earlier = |lo: usize, share: &mut [T]| match crossing {
         Some(c) => c.reaching(lo, share.len()).for_each(|q| share[q.j as usize - lo] += second(q)),
         None => {

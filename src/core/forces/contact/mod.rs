@@ -320,10 +320,14 @@ impl Contact {
     /// come first in each j's serial sum; the share before computes them too, for its own i),
     /// then the share's own rows, whose j beyond the share are left to the shares after. Each
     /// particle's force and torque are so summed in the serial order, on any split.
+    ///
+    /// `crossing`, where given, holds those earlier pairs with j in the share (the listed
+    /// range's [`CrossingPairs`]): read instead of scanning the rows before the share.
     #[allow(clippy::too_many_arguments)]
-    fn share_pass<S: PairSource>(
+    fn share_pass<'s, S: PairSource>(
         &self,
-        source: &S,
+        source: &'s S,
+        crossing: Option<impl Iterator<Item = &'s S::Item>>,
         p: &Particles,
         dt: f64,
         history: &PairSprings,
@@ -334,23 +338,21 @@ impl Contact {
         let near = source.items();
         let hi = lo + force.len();
         let row_below = |bound: usize| near.partition_point(|q| (S::ij(q).0 as usize) < bound);
-        let (reaching, rows, rest) = (row_below(first_row), row_below(lo), row_below(hi));
+        let (rows, rest) = (row_below(lo), row_below(hi));
         let history_from = |row: usize| Springs::from(history.pieces(), (row as u32, 0));
-        self.in_lanes(
-            p,
-            source,
-            near.range(reaching, rows),
-            history_from(first_row),
-            dt,
-            |j| (lo..hi).contains(&(j as usize)),
-            |batch, lanes| {
-                for (l, &((_, j), _)) in batch.iter().enumerate() {
-                    let j = j as usize - lo;
-                    force[j] -= lanes.force(l);
-                    torque[j] += lanes.torque_j(l);
-                }
-            },
-        );
+        let in_share = |j: u32| (lo..hi).contains(&(j as usize));
+        let add_to_j = |batch: &[((u32, u32), f64)], lanes: &Lanes| {
+            for (l, &((_, j), _)) in batch.iter().enumerate() {
+                let j = j as usize - lo;
+                force[j] -= lanes.force(l);
+                torque[j] += lanes.torque_j(l);
+            }
+        };
+        let springs = history_from(first_row);
+        match crossing {
+            Some(pairs) => self.in_lanes(p, source, pairs, springs, dt, in_share, add_to_j),
+            None => self.in_lanes(p, source, near.range(row_below(first_row), rows), springs, dt, in_share, add_to_j),
+        }
         next.clear();
         *diag = ContactDiagnostics::default();
         let mut adder = RowAdder::new(lo, diag, next);
@@ -366,7 +368,8 @@ impl Contact {
         slots.resize_with(shares.max(slots.len()), Default::default);
         // The near pairs as another term lists them, or the candidates filtered as they are read:
         // the same pairs, bit for bit.
-        let RangePairs { listed, candidates, .. } = ctx.neighbours.range_pairs(self.near, ctx.domain);
+        let RangePairs { listed, candidates, crossing } = ctx.neighbours.range_pairs(self.near, ctx.domain);
+        let crossing = crossing.filter(|c| c.found_for(out.force.len()));
         parallel::for_each_share((&mut *out.force, &mut *out.torque), |lo, parts| {
             let mut slot = slots[lo / size].lock().expect("one share per slot");
             // Filled on this thread's stack, not in the slot: the slots sit side by side, and
@@ -374,9 +377,16 @@ impl Contact {
             // writes is false sharing.
             let mut share = std::mem::take(&mut *slot);
             let rows = (candidates.first_row_reaching(lo), lo);
+            let len = parts.0.len();
             match listed {
-                Some(pairs) => self.share_pass(&pairs, p, ctx.dt, &history, rows, parts, &mut share),
-                None => self.share_pass(&candidates, p, ctx.dt, &history, rows, parts, &mut share),
+                Some(pairs) => {
+                    let crossing = crossing.map(|c| c.reaching(lo, len));
+                    self.share_pass(&pairs, crossing, p, ctx.dt, &history, rows, parts, &mut share)
+                }
+                None => {
+                    let crossing = None::<std::iter::Empty<_>>;
+                    self.share_pass(&candidates, crossing, p, ctx.dt, &history, rows, parts, &mut share)
+                }
             }
             *slot = share;
         });
