@@ -1,8 +1,9 @@
 //! One simulation: state, force pipeline, integrator and monitor. A step runs the named phases
 //! renumber (on its schedule) → neighbours (candidate upkeep) → pair-list (the listed ranges
-//! filtered) → seed (forces start from the constant term's, torques from zero) → one phase per
-//! force term, the moments first (inside the integrator's force evaluation), then integrate and
-//! monitor; each is timed.
+//! filtered) → seed (forces start from the constant term's, torques from zero; the next term
+//! may write them with its own in one pass, then timed as that term) → one phase per force term,
+//! the moments first (inside the integrator's force evaluation), then integrate and monitor;
+//! each is timed.
 
 use super::domain::Domain;
 use super::forces::{ConstantForce, Context, ForceGroup, ForceTerm, Forces};
@@ -84,16 +85,27 @@ impl ForceField {
             self.timers.stop(term.name(), t0);
         }
         let (particles, mut out) = Forces::of(state, group);
-        // The first term, if evaluated and constant, seeds the force (the constant terms come first).
+        // The first term, if evaluated and constant, seeds the force (the constant terms come
+        // first); the next term writes the seeded forces with its own in one pass if it can.
+        let seeded = self.terms.first().is_some_and(|t| group.has(t.as_ref()) && t.is_constant());
+        let (constant, others) = self.terms.split_at_mut(seeded as usize);
+        let mut others = others.iter_mut().filter(|t| group.has(t.as_ref()));
         let t0 = self.timers.start();
-        let seed = match self.terms.first_mut() {
-            Some(first) if group.has(first.as_ref()) => first.constant_force(particles),
-            _ => None,
-        };
-        let seeded = seed.is_some();
-        start_forces(out.force, out.torque, seed);
-        self.timers.stop("seed", t0);
-        for term in self.terms.iter_mut().skip(seeded as usize).filter(|t| group.has(t.as_ref())) {
+        let seed = constant.first_mut().and_then(|t| t.constant_force(particles));
+        let mut first = others.next();
+        match first.as_mut().is_some_and(|t| t.apply_from(&ctx, particles, &mut out, seed.as_ref())) {
+            true => self.timers.stop(first.map_or("seed", |t| t.name()), t0),
+            false => {
+                start_forces(out.force, out.torque, seed);
+                self.timers.stop("seed", t0);
+                if let Some(term) = first {
+                    let t0 = self.timers.start();
+                    term.apply(&ctx, particles, &mut out);
+                    self.timers.stop(term.name(), t0);
+                }
+            }
+        }
+        for term in others {
             let t0 = self.timers.start();
             term.apply(&ctx, particles, &mut out);
             self.timers.stop(term.name(), t0);

@@ -11,7 +11,7 @@
 
 use super::shielding::shadow_area;
 use super::wall_drag::WallCorrection;
-use super::{Context, ForceTerm, Forces, Renewal, Renumbering};
+use super::{ConstantForce, Context, ForceTerm, Forces, Renewal, Renumbering};
 use crate::core::neighbours::{PairForm, PairNeed, PairRange};
 use crate::core::parallel;
 use crate::core::state::{Particles, State, Vec3};
@@ -167,6 +167,68 @@ impl Drag {
     }
 }
 
+/// Where [`Drag::pass`] writes: added to the forces and torques, or onto their start (the
+/// constant force, zero if `None`, and zero torques).
+#[derive(Clone, Copy)]
+enum Onto<'a> {
+    Add,
+    Start(Option<&'a ConstantForce<'a>>),
+}
+
+impl Drag {
+    fn renew_if_due(&mut self, ctx: &Context, p: &Particles) {
+        if self.renewal.now(self.coefficient.len() == p.len()) {
+            self.renew_coefficients(ctx, p);
+        }
+    }
+
+    /// The drag on particle `i` with radius `a` and velocity `v`, to subtract from its force:
+    /// c_i u (with a wall, c_i times u's scaled parallel parts), less 6π μ a u if the linear part
+    /// is excluded.
+    #[inline(always)]
+    fn force_on(&self, p: &Particles, i: usize, a: f64, v: &Vec3) -> Vec3 {
+        let u = v - self.fluid.velocity;
+        let linear = if self.exclude_linear { Self::stokes_coefficient(self.fluid.viscosity, a) } else { 0.0 };
+        let coefficient = self.coefficient[i];
+        match &self.wall {
+            None => (coefficient - linear) * u,
+            Some(w) => coefficient * w.scale_parallel(u, w.factor(&p.position[i], a)) - linear * u,
+        }
+    }
+
+    /// The drag on every particle, in particle shares; the torque 8π μ a³ ω is subtracted where
+    /// [`Drag::rotational`] (and the linear part is not excluded), the torques are otherwise left
+    /// as they are (or zero).
+    fn pass(&self, p: &Particles, out: &mut Forces, onto: Onto) {
+        let rotational = self.rotational && !self.exclude_linear;
+        let spin_drag = |a: f64, w: &Vec3| 8.0 * PI * self.fluid.viscosity * a.powi(3) * w;
+        parallel::for_each_share((&mut *out.force, &mut *out.torque), |first, (force, torque)| {
+            let span = first..first + force.len();
+            let each = force.iter_mut().zip(torque).zip(&p.radius[span.clone()]).zip(&p.velocity[span.clone()]);
+            for (k, (((f, t), &a), v)) in each.enumerate() {
+                let (i, drag) = (first + k, self.force_on(p, first + k, a, v));
+                match onto {
+                    Onto::Add => {
+                        *f -= drag;
+                        if rotational {
+                            *t -= spin_drag(a, &p.angular_velocity[i]);
+                        }
+                    }
+                    Onto::Start(start) => {
+                        *f = start.map_or(Vec3::zeros(), |s| s.on(i)) - drag;
+                        *t = match rotational {
+                            // 0 − x, as the torque started at zero and then had x subtracted
+                            // (not −x: the two differ in the sign of a zero).
+                            true => Vec3::zeros() - spin_drag(a, &p.angular_velocity[i]),
+                            false => Vec3::zeros(),
+                        };
+                    }
+                }
+            }
+        });
+    }
+}
+
 /// Schiller–Naumann correction 1 + 0.15 Re^0.687, with the power as exp(0.687 ln Re): two thirds
 /// of `powf`'s time here (perf), relative error ≲ 1e-15 (|0.687 ln Re| ε), zero-safe (ln 0 = −∞).
 #[inline]
@@ -189,27 +251,15 @@ impl ForceTerm for Drag {
         self.renewal.begin_step(state.step);
     }
     fn apply(&mut self, ctx: &Context, p: &Particles, out: &mut Forces) {
-        if self.renewal.now(self.coefficient.len() == p.len()) {
-            self.renew_coefficients(ctx, p);
-        }
-        let Particles { position, velocity, angular_velocity, radius, .. } = p;
-        let (force, torque) = (&mut *out.force, &mut *out.torque);
-        let drag = |i: usize, f: &mut Vec3, t: &mut Vec3| {
-            let a = radius[i];
-            let u = velocity[i] - self.fluid.velocity;
-            let linear = if self.exclude_linear { Self::stokes_coefficient(self.fluid.viscosity, a) } else { 0.0 };
-            let coefficient = self.coefficient[i];
-            match &self.wall {
-                None => *f -= (coefficient - linear) * u,
-                Some(w) => *f -= coefficient * w.scale_parallel(u, w.factor(&position[i], a)) - linear * u,
-            }
-            if self.rotational && !self.exclude_linear {
-                *t -= 8.0 * PI * self.fluid.viscosity * a.powi(3) * angular_velocity[i];
-            }
-        };
-        parallel::for_each_share((force, torque), |first, (f, t)| {
-            f.iter_mut().zip(t).enumerate().for_each(|(k, (f, t))| drag(first + k, f, t));
-        });
+        self.renew_if_due(ctx, p);
+        self.pass(p, out, Onto::Add);
+    }
+    /// The drag written onto the starting force in the same pass (the drag is the first term
+    /// after the constant one in the paper's scenes: a pass over the forces saved each step).
+    fn apply_from(&mut self, ctx: &Context, p: &Particles, out: &mut Forces, start: Option<&ConstantForce>) -> bool {
+        self.renew_if_due(ctx, p);
+        self.pass(p, out, Onto::Start(start));
+        true
     }
     /// The held coefficients follow their particles (the shadows and flow directions are
     /// working space of a renewal).
@@ -222,7 +272,83 @@ impl ForceTerm for Drag {
 
 #[cfg(test)]
 mod tests {
-    use super::schiller_naumann;
+    use super::*;
+    use crate::core::domain::Domain;
+    use crate::core::forces::wall_drag::PlaneWall;
+    use crate::core::neighbours::Neighbours;
+    use crate::core::state::{ContactDiagnostics, ContactHistory};
+
+    /// Writing the drag onto the starting force and zero torques in one pass gives the bits of
+    /// starting them and then adding the drag: for every start (none, uniform, per particle),
+    /// with and without rotational drag, the linear part excluded or not, and a wall. Angular
+    /// velocities include zeros of both signs (0 − x and −x differ there).
+    #[test]
+    fn drag_onto_the_start_gives_the_bits_of_start_then_add() {
+        let value = |k: usize| (k as f64 * 0.618_033_988_749_895).fract() - 0.5;
+        let species = crate::core::state::test_sphere(5.5e-6);
+        let mut p = Particles::default();
+        for k in 0..50 {
+            let x = 1e-4 * Vec3::new(value(3 * k) + 0.5, value(3 * k + 1) + 0.5, value(3 * k + 2) + 0.5);
+            p.push(0, &species, x, 1e-3 * Vec3::new(value(7 * k), value(7 * k + 1), value(7 * k + 2)));
+        }
+        for (k, w) in p.angular_velocity.iter_mut().enumerate() {
+            *w = match k % 3 {
+                0 => Vec3::new(0.0, -0.0, 1.0),
+                _ => 1e2 * Vec3::new(value(11 * k), value(11 * k + 1), -0.0),
+            };
+        }
+        let weights: Vec<Vec3> = (0..p.len()).map(|k| Vec3::new(value(k), -1e-9, value(k + 5))).collect();
+        let starts = [
+            None,
+            Some(ConstantForce::Uniform(Vec3::new(0.0, 0.0, -1e-9))),
+            Some(ConstantForce::PerParticle(&weights)),
+        ];
+        let domain = Domain { lo: Vec3::zeros(), hi: Vec3::repeat(1e-4), periodic: [false; 3] };
+        let neighbours = Neighbours::new([]);
+        let ctx = Context { domain: &domain, neighbours: &neighbours, dt: 1e-8 };
+        let wall = WallCorrection::new(PlaneWall { axis: 2, position: 0.0, side: 1.0, min_gap: 1e-3 });
+        let fluid = Fluid { density: 1000.0, viscosity: 1e-3, velocity: Vec3::new(1e-4, 0.0, 0.0) };
+        let (mut cases, n) = (0, p.len());
+        for rotational in [false, true] {
+            for exclude_linear in [false, true] {
+                for wall in [None, Some(wall)] {
+                    for start in &starts {
+                        let mut drag = Drag::new(DragLaw::SchillerNaumann, Shielding::None, rotational, fluid);
+                        (drag.exclude_linear, drag.wall) = (exclude_linear, wall);
+                        let mut run = |fused: bool| {
+                            let (mut force, mut torque) =
+                                (vec![Vec3::repeat(f64::NAN); n], vec![Vec3::repeat(f64::NAN); n]);
+                            let (mut moment, mut contacts, mut diagnostics) =
+                                (vec![Vec3::zeros(); n], ContactHistory::default(), ContactDiagnostics::default());
+                            let mut out = Forces {
+                                force: &mut force,
+                                torque: &mut torque,
+                                moment: &mut moment,
+                                contacts: &mut contacts,
+                                diagnostics: &mut diagnostics,
+                            };
+                            if !fused || !drag.apply_from(&ctx, &p, &mut out, start.as_ref()) {
+                                for i in 0..n {
+                                    out.force[i] = start.as_ref().map_or(Vec3::zeros(), |s| s.on(i));
+                                    out.torque[i] = Vec3::zeros();
+                                }
+                                drag.apply(&ctx, &p, &mut out);
+                            }
+                            (force, torque)
+                        };
+                        let (separate, fused) = (run(false), run(true));
+                        let bits =
+                            |v: &[Vec3]| v.iter().flat_map(|x| x.iter().map(|c| c.to_bits())).collect::<Vec<_>>();
+                        assert_eq!(bits(&separate.0), bits(&fused.0), "force: rotational {rotational}, wall {wall:?}");
+                        assert_eq!(bits(&separate.1), bits(&fused.1), "torque: rotational {rotational}, wall {wall:?}");
+                        assert!(separate.0.iter().all(|f| f.iter().all(|c| c.is_finite())), "every force written");
+                        cases += 1;
+                    }
+                }
+            }
+        }
+        assert_eq!(cases, 24);
+    }
 
     /// The exp–ln form equals the power law to round-off from creeping flow (Re → 0, where the
     /// correction must vanish) to the top of the law's range (Re ≈ 800).

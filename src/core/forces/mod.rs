@@ -58,6 +58,17 @@ pub enum ConstantForce<'a> {
     PerParticle(&'a [Vec3]),
 }
 
+impl ConstantForce<'_> {
+    /// The force on particle `i`.
+    #[inline(always)]
+    pub fn on(&self, i: usize) -> Vec3 {
+        match self {
+            ConstantForce::Uniform(force) => *force,
+            ConstantForce::PerParticle(forces) => forces[i],
+        }
+    }
+}
+
 /// One physical contribution to the force and torque on every particle.
 pub trait ForceTerm: Send {
     /// Name used in timers and messages.
@@ -91,6 +102,20 @@ pub trait ForceTerm: Send {
     }
     /// Adds this term's contribution into `out`.
     fn apply(&mut self, ctx: &Context, particles: &Particles, out: &mut Forces);
+    /// Writes `out`'s forces as `start` (zero if `None`) plus this term's contribution and its
+    /// torques as zero plus its torque, in one pass over the particles: the bits of starting
+    /// them and then [`ForceTerm::apply`], without the starting pass. Returns whether it did; a
+    /// term without such a pass (the default) leaves `out` alone, and the evaluation starts the
+    /// forces itself.
+    fn apply_from(
+        &mut self,
+        _ctx: &Context,
+        _p: &Particles,
+        _out: &mut Forces,
+        _start: Option<&ConstantForce>,
+    ) -> bool {
+        false
+    }
     /// The particles were renumbered between two step calls: per-particle values the term holds
     /// follow `r` ([`Renumbering::permute`]), particle indices it holds are renamed or dropped.
     /// Required, so that a term cannot hold particle data and miss a renumbering.
