@@ -57,15 +57,15 @@ pub fn pair_dipole_field(m: &Vec3, pair: &Pair) -> Vec3 {
 #[inline(always)]
 pub fn pair_dipole_fields_four(moment: &[Vec3], q: [&Pair; 4]) -> [(Vec3, Vec3); 4] {
     let d = f64x4::new(q.map(|q| q.dist));
-    let rhat = lanes::gather(q.map(|q| q.r)).map(|c| c / d);
+    let rhat = lanes::gather(q.map(|q| &q.r)).map(|c| c / d);
     // 4π r³ with r³ = (r r) r, as powi(3) multiplies.
     let scale = f64x4::ONE / (f64x4::splat(4.0 * PI) * (d * d * d));
     let field = |m: Vec3x4| {
         let t = f64x4::splat(3.0) * lanes::dot(&m, &rhat);
         lanes::scatter(&std::array::from_fn(|c| (t * rhat[c] - m[c]) * scale))
     };
-    let on_i = field(lanes::gather(q.map(|q| moment[q.j as usize])));
-    let on_j = field(lanes::gather(q.map(|q| moment[q.i as usize])));
+    let on_i = field(lanes::gather(q.map(|q| &moment[q.j as usize])));
+    let on_j = field(lanes::gather(q.map(|q| &moment[q.i as usize])));
     std::array::from_fn(|k| (on_i[k], on_j[k]))
 }
 

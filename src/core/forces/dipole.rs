@@ -43,8 +43,8 @@ pub fn dipole_pair_force(mi: &Vec3, mj: &Vec3, r: &Vec3, dist: f64) -> Vec3 {
 #[inline(always)]
 fn dipole_pair_forces_four(moment: &[Vec3], q: [&Pair; 4]) -> [Vec3; 4] {
     let inv = f64x4::ONE / f64x4::new(q.map(|q| q.dist));
-    let rhat = lanes::gather(q.map(|q| q.r)).map(|c| c * inv);
-    let (mi, mj) = (lanes::gather(q.map(|q| moment[q.i as usize])), lanes::gather(q.map(|q| moment[q.j as usize])));
+    let rhat = lanes::gather(q.map(|q| &q.r)).map(|c| c * inv);
+    let (mi, mj) = (lanes::gather(q.map(|q| &moment[q.i as usize])), lanes::gather(q.map(|q| &moment[q.j as usize])));
     let (mir, mjr) = (lanes::dot(&mi, &rhat), lanes::dot(&mj, &rhat));
     let inv2 = inv * inv;
     let scale = f64x4::splat(PREFACTOR) * inv2 * inv2;
