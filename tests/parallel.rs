@@ -61,6 +61,30 @@ fn one_and_two_threads_give_identical_bits() {
     }
 }
 
+/// Two threads whose shares split the particles unevenly (the balance moves the split as a run
+/// goes, by how long each share takes) give the bits of one thread: a third and two thirds
+/// either way, with the paper's induction (listed pairs, the near list's crossing pairs read by
+/// the contact) and with contacts formed.
+#[test]
+fn uneven_shares_give_the_bits_of_one_thread() {
+    let scene = crowd(MIN_PARALLEL_LEN + 500, "induction = \"paper\"\ncutoff_diameters = 15.0", 60);
+    let one = run_on(&scene, 1);
+    assert!(!one.contacts.pairs.is_empty(), "the test should exercise contacts");
+    for first in [0.3, 0.7] {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        let two = pool.install(|| {
+            let mut sim = scene.simulation(None);
+            sim.balance = magdem::core::parallel::Balance::starting_at(first);
+            sim.initialise().unwrap();
+            for _ in 0..scene.total_steps() {
+                sim.step().unwrap();
+            }
+            sim.state
+        });
+        assert_eq!(one, two, "first share {first}: states differ from one thread's");
+    }
+}
+
 /// A packed bed (an FCC block of 4 631 particles pre-compressed in its walled box) driven sideways
 /// by a body force of 3e4 weights, so that its contacts shear and slide: the pair pass splits into
 /// one share of particles per thread, each adding the earlier shares' pairs that reach it first,

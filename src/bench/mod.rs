@@ -316,9 +316,9 @@ pub fn time_magdem_from(
             }
             Work::Forces => {
                 // Each evaluation as a step runs it, in a warm pool.
-                let (field, state) = (&mut simulation.field, &mut simulation.state);
+                let (field, state, balance) = (&mut simulation.field, &mut simulation.state, &mut simulation.balance);
                 for _ in 0..scene.total_steps() {
-                    parallel::with_warm_pool(state.particles.len(), || field.evaluate(state, scene.dt()));
+                    parallel::with_warm_pool(state.particles.len(), balance, || field.evaluate(state, scene.dt()));
                 }
             }
         }

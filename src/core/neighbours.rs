@@ -1083,7 +1083,7 @@ mod tests {
         for step in 0..12 {
             let mut sums = vec![0.1; n];
             let crossing = pool.install(|| {
-                parallel::with_warm_pool(n, || {
+                parallel::with_warm_pool(n, &mut parallel::Balance::default(), || {
                     layer.update(&pos, &domain, |_| true, &mut PhaseTimers::default());
                     let pairs = layer.range_pairs(range, &domain);
                     pairs.add_in_order(&pos, &mut sums, term, |q| term(q).1);

@@ -23,6 +23,75 @@ pub fn share(len: usize) -> usize {
 thread_local! {
     /// Set on the thread running a step inside [`with_warm_pool`].
     static WARM: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    /// The step's split between two threads and what its shares took so far (on the thread
+    /// running the step, inside [`with_warm_pool`]).
+    static BALANCE: std::cell::Cell<Balance> = const { std::cell::Cell::new(Balance::EVEN) };
+}
+
+/// Where the loops of a step split their items between two threads (the first share's
+/// fraction), learnt from how long each share took. Equal shares of particles are not equal
+/// work: the two halves of a box hold different neighbourhoods and contacts, and the two cores
+/// of a shared machine do not run at one speed. The split moves towards equal times: after
+/// [`Balance::SAMPLE`] of timed shares, towards the fraction at which the two shares' times per
+/// item would be equal, half of the way. Any split gives the same bits (every parallel loop
+/// does), so the balance decides only how long a run takes; with more than two threads the
+/// shares stay equal.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Balance {
+    /// The first share's fraction of the items.
+    first: f64,
+    /// Seconds and items of each of the two shares since the last move.
+    time: [f64; 2],
+    items: [f64; 2],
+}
+
+impl Default for Balance {
+    fn default() -> Self {
+        Self::EVEN
+    }
+}
+
+impl Balance {
+    /// Equal shares.
+    pub const EVEN: Balance = Balance { first: 0.5, time: [0.0; 2], items: [0.0; 2] };
+    /// Timed share-seconds between two moves of the split.
+    const SAMPLE: f64 = 0.2;
+    /// The split is kept within these fractions.
+    const LIMITS: (f64, f64) = (0.25, 0.75);
+    /// Moves smaller than this are not made (each move makes the pair sums find their
+    /// crossing pairs again).
+    const STEP: f64 = 1.0 / 256.0;
+
+    /// The first share at `first` of the items (within [`Balance::LIMITS`]).
+    pub fn starting_at(first: f64) -> Self {
+        Balance { first: first.clamp(Self::LIMITS.0, Self::LIMITS.1), ..Self::EVEN }
+    }
+
+    /// The first share's fraction of the items.
+    pub fn first(&self) -> f64 {
+        self.first
+    }
+
+    /// Adds share `k`'s `seconds` over `items` items.
+    fn record(&mut self, k: usize, seconds: f64, items: usize) {
+        self.time[k] += seconds;
+        self.items[k] += items as f64;
+    }
+
+    /// Moves the split once enough has been timed: the fraction f at which f c₀ = (1 − f) c₁
+    /// (c, a share's time per item) is c₁/(c₀ + c₁); the split goes half way there.
+    fn settle(&mut self) {
+        if self.time[0] + self.time[1] < Self::SAMPLE || self.items.contains(&0.0) {
+            return;
+        }
+        let (c0, c1) = (self.time[0] / self.items[0], self.time[1] / self.items[1]);
+        let target = self.first + 0.5 * (c1 / (c0 + c1) - self.first);
+        let target = (target / Self::STEP).round() * Self::STEP;
+        if (target - self.first).abs() >= Self::STEP {
+            self.first = target.clamp(Self::LIMITS.0, Self::LIMITS.1);
+        }
+        (self.time, self.items) = ([0.0; 2], [0.0; 2]);
+    }
 }
 
 /// Whether a loop of `len` items should run in parallel: long enough, and inside a warm step
@@ -257,15 +326,11 @@ impl<'a, T> Pieced<'a, T> {
     }
 }
 
-/// `f(k)` for k in 0..n into `out`, in k order (in parallel chunks when worth it).
-pub fn map_ordered<T: Send>(n: usize, out: &mut Vec<T>, f: impl Fn(usize) -> T + Sync + Send) {
-    out.clear();
-    if worth_it(n) {
-        use rayon::prelude::*;
-        (0..n).into_par_iter().with_min_len(CHUNK).map(f).collect_into_vec(out);
-    } else {
-        out.extend((0..n).map(f));
-    }
+/// `out[k] = f(k)` for k in 0..n (`out` resized to n), in the shares of [`for_each_share`]: each
+/// thread writes the particles it reads and writes in the step's other loops.
+pub fn map_ordered<T: Send + Clone + Default>(n: usize, out: &mut Vec<T>, f: impl Fn(usize) -> T + Sync + Send) {
+    out.resize(n, T::default());
+    for_each_share(&mut out[..], |first, share| share.iter_mut().enumerate().for_each(|(k, x)| *x = f(first + k)));
 }
 
 /// Per-particle slices, or tuples of them, that split at an index: the arguments of a loop run
@@ -324,21 +389,25 @@ split_tuple!(A, B, C, D, E, F);
 split_tuple!(A, B, C, D, E, F, G);
 
 /// How [`for_each_share`] splits a loop of `len` items: (number of shares, items per share;
-/// share k starts at item k × items per share).
+/// share k starts at item k × items per share, the last takes the rest). Two shares split where
+/// the step's [`Balance`] puts them.
 pub fn split_of(len: usize) -> (usize, usize) {
     if !worth_it(len) {
         return (1, len.max(1));
     }
     let share = share(len);
-    (len.div_ceil(share).max(1), share)
+    match len.div_ceil(share).max(1) {
+        2 => (2, ((len as f64 * BALANCE.with(|b| b.get().first)).round() as usize).clamp(1, len - 1)),
+        shares => (shares, share),
+    }
 }
 
-/// `parts` cut into the shares of [`share`], each with the index of its first item.
+/// `parts` cut into the shares of [`split_of`], each with the index of its first item.
 fn shares<S: Split>(parts: S) -> Vec<(usize, S)> {
     let len = parts.len();
-    let (_, share) = split_of(len);
-    let (mut pieces, mut rest, mut first) = (Vec::with_capacity(len.div_ceil(share)), parts, 0);
-    while rest.len() > share {
+    let (count, share) = split_of(len);
+    let (mut pieces, mut rest, mut first) = (Vec::with_capacity(count), parts, 0);
+    while pieces.len() + 1 < count {
         let (piece, tail) = rest.split_at(share);
         pieces.push((first, piece));
         (rest, first) = (tail, first + share);
@@ -356,7 +425,26 @@ pub fn for_each_share<S: Split>(parts: S, f: impl Fn(usize, S) + Sync + Send) {
     if !worth_it(parts.len()) {
         return f(0, parts);
     }
-    shares(parts).into_par_iter().for_each(|(first, piece)| f(first, piece));
+    let shares = shares(parts);
+    if shares.len() != 2 {
+        return shares.into_par_iter().for_each(|(first, piece)| f(first, piece));
+    }
+    // Two shares: each timed from the loop's start to its own end (the other thread starts its
+    // share a little later, when it takes it), for the balance.
+    let started = std::time::Instant::now();
+    let timed: Vec<(f64, usize)> = shares
+        .into_par_iter()
+        .map(|(first, piece)| {
+            let len = piece.len();
+            f(first, piece);
+            (started.elapsed().as_secs_f64(), len)
+        })
+        .collect();
+    BALANCE.with(|b| {
+        let mut balance = b.get();
+        timed.iter().enumerate().for_each(|(k, &(seconds, items))| balance.record(k, seconds, items));
+        b.set(balance);
+    });
 }
 
 /// Whether `test` holds on any share of `parts` (an exact reduction: the same answer serially).
@@ -468,8 +556,9 @@ pub fn add_earlier_rows<P, T: std::ops::AddAssign>(
 /// Runs `f` (one step of a system of `len` particles) while the pool's other threads spin and
 /// steal its parallel work, instead of falling asleep in the serial stretches between parallel
 /// loops: waking a sleeping thread costs about 25 µs on the 2-core machines this runs on, more
-/// than a loop over 30 000 particles takes. Without parallel work to share, just `f()`.
-pub fn with_warm_pool<R: Send>(len: usize, f: impl FnOnce() -> R + Send) -> R {
+/// than a loop over 30 000 particles takes. Without parallel work to share, just `f()`. Two
+/// threads split the step's loops at `balance`, which then moves by what their shares took.
+pub fn with_warm_pool<R: Send>(len: usize, balance: &mut Balance, f: impl FnOnce() -> R + Send) -> R {
     if len < MIN_PARALLEL_LEN || rayon::current_num_threads() < 2 {
         return f();
     }
@@ -486,7 +575,10 @@ pub fn with_warm_pool<R: Send>(len: usize, f: impl FnOnce() -> R + Send) -> R {
             });
         }
         let was_warm = WARM.with(|w| w.replace(true));
+        let was = BALANCE.with(|b| b.replace(*balance));
         let result = f();
+        *balance = BALANCE.with(|b| b.replace(was));
+        balance.settle();
         WARM.with(|w| w.set(was_warm));
         done.store(true, Ordering::Release);
         result
@@ -496,6 +588,33 @@ pub fn with_warm_pool<R: Send>(len: usize, f: impl FnOnce() -> R + Send) -> R {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The split waits for enough timed work, then moves half way to where the two shares'
+    /// times per item would make equal times, and stays within its limits.
+    #[test]
+    fn the_balance_moves_half_way_to_equal_times() {
+        let mut b = Balance::EVEN;
+        // The second share's items take three times as long: equal times at a first share of 3/4.
+        b.record(0, 0.025, 500);
+        b.record(1, 0.075, 500);
+        b.settle();
+        assert_eq!(b.first(), 0.5, "0.1 s timed, half the sample: not yet");
+        b.record(0, 0.025, 500);
+        b.record(1, 0.075, 500);
+        b.settle();
+        assert_eq!(b.first(), 0.625, "half way from 1/2 to 3/4");
+        for _ in 0..20 {
+            b.record(0, 0.5, 900);
+            b.record(1, 0.5, 100);
+            b.settle();
+        }
+        assert_eq!(b.first(), Balance::LIMITS.1, "held at its limit");
+        let mut even = Balance::starting_at(0.4);
+        even.record(0, 0.1, 400);
+        even.record(1, 0.1001, 600);
+        even.settle();
+        assert!((even.first() - 0.4).abs() < 1e-12, "a move below the step is not made");
+    }
 
     /// Reused buffers give the serial loop's items in order, whether the calls grow or shrink,
     /// and whether the items are many (parallel copy) or few (serial copy).
@@ -517,7 +636,9 @@ mod tests {
             for f in [&items as &(dyn Fn(usize, &mut Vec<u64>) + Sync), &rare] {
                 let mut serial = vec![];
                 (0..n).for_each(|k| f(k, &mut serial));
-                pool.install(|| with_warm_pool(n, || collect_ordered(n, &mut out, &mut pieces, f)));
+                pool.install(|| {
+                    with_warm_pool(n, &mut Balance::default(), || collect_ordered(n, &mut out, &mut pieces, f))
+                });
                 assert_eq!(out, serial, "n = {n}");
             }
         }
@@ -576,7 +697,7 @@ mod tests {
         let mut pieced = PieceList::default();
         let pool = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
         pool.install(|| {
-            with_warm_pool(pairs.len(), || {
+            with_warm_pool(pairs.len(), &mut Balance::default(), || {
                 // First every pair, then fewer: the slots the first call wrote and the second
                 // does not must not show through.
                 let all = |_: &(usize, usize)| true;
@@ -614,7 +735,11 @@ mod tests {
         }
         let mut out = vec![0.1; n];
         let earlier = |lo, share: &mut [f64]| add_earlier_rows(seq, |q| *q, 0, second, lo, share);
-        pool.install(|| with_warm_pool(n, || add_pairs_in_order(&mut out, seq, |q| *q, earlier, both, four)));
+        pool.install(|| {
+            with_warm_pool(n, &mut Balance::default(), || {
+                add_pairs_in_order(&mut out, seq, |q| *q, earlier, both, four)
+            })
+        });
         assert!(out == serial_kept, "sums over pieces");
         for threads in [1, 2, 3] {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
@@ -622,7 +747,11 @@ mod tests {
                 let mut out = vec![0.1; n];
                 let whole = Pieced::Whole(&pairs);
                 let earlier = |lo, share: &mut [f64]| add_earlier_rows(whole, |q| *q, bound(lo), second, lo, share);
-                pool.install(|| with_warm_pool(n, || add_pairs_in_order(&mut out, whole, |q| *q, earlier, both, four)));
+                pool.install(|| {
+                    with_warm_pool(n, &mut Balance::default(), || {
+                        add_pairs_in_order(&mut out, whole, |q| *q, earlier, both, four)
+                    })
+                });
                 assert!(out == serial, "{threads} threads");
             }
         }

@@ -174,6 +174,9 @@ pub struct Simulation {
     pub estimate: StepEstimate,
     /// Renumbering during the run, or none.
     pub renumber: Option<RenumberSchedule>,
+    /// How the step's loops split between two threads (learnt as the run goes; never changes a
+    /// result).
+    pub balance: parallel::Balance,
 }
 
 impl Simulation {
@@ -203,7 +206,8 @@ impl Simulation {
     /// Advances one step and checks it.
     pub fn step(&mut self) -> Result<(), RunError> {
         let n = self.state.particles.len();
-        parallel::with_warm_pool(n, || {
+        let mut balance = self.balance;
+        let result = parallel::with_warm_pool(n, &mut balance, || {
             if let Some(s) = self.renumber.filter(|s| self.state.step.is_multiple_of(s.every)) {
                 let t0 = self.field.timers.start();
                 self.renumber(s.cell);
@@ -223,7 +227,9 @@ impl Simulation {
             let result = self.check();
             self.field.timers.stop("monitor", t0);
             result
-        })
+        });
+        self.balance = balance;
+        result
     }
 
     fn check(&mut self) -> Result<(), RunError> {

@@ -350,6 +350,7 @@ impl Scene {
                 max_step_fraction: spec.stability.max_step_fraction,
             },
             estimate: self.estimate.clone(),
+            balance: Default::default(),
             renumber: (spec.integration.renumber_every > 0).then(|| RenumberSchedule {
                 every: spec.integration.renumber_every,
                 cell: 2.0 * self.initial.radius.iter().copied().fold(f64::INFINITY, f64::min),

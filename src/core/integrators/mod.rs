@@ -326,7 +326,7 @@ mod tests {
         for per_particle in [false, true] {
             for n in [7, parallel::MIN_PARALLEL_LEN + 5] {
                 let (mut apart, mut fused) = (particles(n, per_particle), particles(n, per_particle));
-                parallel::with_warm_pool(n, || {
+                parallel::with_warm_pool(n, &mut parallel::Balance::default(), || {
                     slow_kick(&mut apart, 2.5e-8);
                     kick_drift(&mut apart, 0.5e-8, 1e-8);
                     kick(&mut apart, 0.5e-8);
@@ -348,7 +348,7 @@ mod tests {
     fn kicks_give_the_same_bits_for_shared_and_per_particle_inverse_masses() {
         for n in [7, parallel::MIN_PARALLEL_LEN + 5] {
             let (mut shared, mut own) = (particles(n, false), particles(n, true));
-            parallel::with_warm_pool(n, || {
+            parallel::with_warm_pool(n, &mut parallel::Balance::default(), || {
                 for p in [&mut shared, &mut own] {
                     kick_drift(p, 0.5e-8, 1e-8);
                     kick(p, 0.5e-8);
