@@ -15,7 +15,8 @@ pub const CHUNK: usize = 1024;
 /// Piece length of a parallel loop over `len` per-particle items: one contiguous share per
 /// thread, split the same way in every loop of the step, so that each thread reads back from its
 /// own cache the particles it wrote in the loop before (with finer pieces rayon hands them out by
-/// timing, and half of them come from the other core).
+/// timing, and half of them come from the other core). Two threads' loops over particles split
+/// where the step's [`Balance`] puts them instead ([`split_of`]).
 pub fn share(len: usize) -> usize {
     len.div_ceil(rayon::current_num_threads()).max(CHUNK)
 }
