@@ -467,8 +467,20 @@ fn held_drag_at_scale(runs: &[Run]) -> Option<String> {
         .filter_map(|n| {
             let held = held.iter().find(|h| h.seed == n.seed)?;
             let (a, b) = (n.mean_length_um(), held.mean_length_um());
+            // Wall times of two builds also differ by the solver's changes between them.
+            let short = |build: &str| build.chars().take(7).collect::<String>();
+            let builds = match (n.build.as_str(), held.build.as_str()) {
+                (x, y) if x.is_empty() || y.is_empty() => String::new(),
+                (x, y) if x == y => format!("; build {}", short(x)),
+                (x, y) => format!(
+                    "; builds {} and {}: the difference includes the solver's changes between them, \
+                     `reports/performance-history.md`",
+                    short(x),
+                    short(y)
+                ),
+            };
             Some(format!(
-                "seed {}: {a:.0} µm against {b:.0} µm ({:+.1} %), {:.0} s against {:.0} s of wall time ({:+.1} %)",
+                "seed {}: {a:.0} µm against {b:.0} µm ({:+.1} %), {:.0} s against {:.0} s of wall time ({:+.1} %{builds})",
                 n.seed,
                 100.0 * (a / b - 1.0),
                 n.wall_time,

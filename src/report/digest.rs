@@ -29,6 +29,7 @@ struct Entry {
     status: String,
     message: String,
     wall_time: f64,
+    build: String,
     threads: f64,
     box_extent: f64,
     times: Vec<f64>,
@@ -46,6 +47,7 @@ impl Entry {
             status: run.status.clone(),
             message: run.message.clone(),
             wall_time: run.wall_time,
+            build: run.build.clone(),
             threads: run.threads,
             box_extent: run.box_extent,
             times: run.times.clone(),
@@ -60,6 +62,7 @@ impl Entry {
         run.status = self.status.clone();
         run.message = self.message.clone();
         run.wall_time = self.wall_time;
+        run.build = self.build.clone();
         run.threads = self.threads;
         run.box_extent = self.box_extent;
         run.times = self.times.clone();
@@ -96,9 +99,10 @@ fn read(dir: &Path) -> Result<BTreeMap<String, Entry>, Error> {
         floats(&runs, "wall_time_s")?,
         floats(&runs, "box_extent_m")?,
     );
-    // Digests written before the thread count or the image measures were recorded have no such
-    // columns; image measures of another imaging are not this report's.
+    // Digests written before the thread count, the build or the image measures were recorded
+    // have no such columns; image measures of another imaging are not this report's.
     let threads = floats(&runs, "threads").unwrap_or_else(|_| vec![f64::NAN; runs.height()]);
+    let build = strings(&runs, "build").unwrap_or_else(|_| vec![String::new(); runs.height()]);
     let imaging = strings(&runs, "imaging").unwrap_or_else(|_| vec![String::new(); runs.height()]);
     let key = imaging_key();
     let image_columns = IMAGE_COLUMNS.map(|c| floats(&runs, c).unwrap_or_else(|_| vec![f64::NAN; runs.height()]));
@@ -109,6 +113,7 @@ fn read(dir: &Path) -> Result<BTreeMap<String, Entry>, Error> {
             status: st[k].clone(),
             message: msg[k].clone(),
             wall_time: wall[k],
+            build: build[k].clone(),
             threads: threads[k],
             box_extent: extent[k],
             times: vec![],
@@ -177,6 +182,7 @@ fn encode(entries: &BTreeMap<String, Entry>) -> Result<[Vec<u8>; 3], Error> {
         scol("status", entries.values().map(|e| e.status.clone()).collect()),
         scol("message", entries.values().map(|e| e.message.clone()).collect()),
         col("wall_time_s", all(|e| e.wall_time)),
+        scol("build", entries.values().map(|e| e.build.clone()).collect()),
         col("threads", all(|e| e.threads)),
         col("box_extent_m", all(|e| e.box_extent)),
         scol(
@@ -355,6 +361,7 @@ mod tests {
             status: status::COMPLETED.into(),
             message: "ok".into(),
             wall_time: 12.345,
+            build: "c198f6783e98".into(),
             threads: 2.0,
             box_extent: 3e-4,
             image: Some([1.25e2, f64::NAN, 3.5, 4.75]),
@@ -386,6 +393,7 @@ mod tests {
         assert_eq!(a.source, Source::Digest);
         assert_eq!((a.status.as_str(), a.message.as_str()), ("completed", "ok"));
         assert_eq!(bits(&[a.wall_time, a.threads, a.box_extent]), bits(&[12.345, 2.0, 3e-4]));
+        assert_eq!(a.build, "c198f6783e98");
         assert_eq!(bits(&a.times), bits(&made[0].times));
         assert_eq!(a.image.map(|m| bits(&m)), made[0].image.map(|m| bits(&m)));
         assert_eq!(bits(&a.mean_length), bits(&made[0].mean_length));

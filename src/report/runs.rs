@@ -58,6 +58,8 @@ pub struct Run {
     pub status: String,
     pub message: String,
     pub wall_time: f64,
+    /// The commit of the magdem build that ran it (empty where not recorded).
+    pub build: String,
     /// Threads the run's last piece ran on (engine processes for a reference engine); NaN where
     /// the trajectory or digest predates the record.
     pub threads: f64,
@@ -219,6 +221,7 @@ fn load(
         status: "missing".into(),
         message: String::new(),
         wall_time: f64::NAN,
+        build: String::new(),
         threads: f64::NAN,
         file: file.clone(),
         times: vec![],
@@ -258,6 +261,7 @@ fn read_run(
     run.status = t.attr_string("status").map_err(|e| e.to_string())?;
     run.message = t.attr_string("status_message").unwrap_or_default();
     run.wall_time = t.attr::<f64>("wall_time_s").unwrap_or(f64::NAN);
+    run.build = t.attr_string("git_commit").unwrap_or_default();
     run.threads = t.attr::<u64>("threads").map_or(f64::NAN, |n| n as f64);
     if run.completed() {
         let reader = FrameReader::new(&t).map_err(|e| e.to_string())?;
