@@ -141,10 +141,6 @@ fn print_timings(summary: &RunSummary) {
     for (name, d) in summary.simulation.timers().phases() {
         println!("  {name:<12} {:>9.3} s  {:>5.1}%", d.as_secs_f64(), 100.0 * d.as_secs_f64() / total.max(1e-12));
     }
-    if rayon::current_num_threads() == 2 {
-        let first = summary.simulation.balance.first();
-        println!("two threads: the first share holds {:.1} % of the particles at the end", 100.0 * first);
-    }
     println!("neighbour ranges (neighbours: candidate upkeep and rebuilds; pair-list: filtering the listed pairs):");
     for u in summary.simulation.neighbour_usage() {
         let mut listed = u.listed.map_or("not listed".into(), |n| format!("{n} listed"));
@@ -158,5 +154,10 @@ fn print_timings(summary: &RunSummary) {
             ),
             PairRange::All => println!("  all pairs: searched at every evaluation, {listed}"),
         }
+    }
+    let particles = summary.simulation.state.particles.len();
+    if rayon::current_num_threads() == 2 && particles >= magdem::core::parallel::MIN_PARALLEL_LEN {
+        let first = summary.simulation.balance.first();
+        println!("two threads: the first share held {:.1} % of the particles at the end", 100.0 * first);
     }
 }
