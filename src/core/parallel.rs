@@ -33,8 +33,8 @@ thread_local! {
 /// fraction), learnt from how long each share took. Equal shares of particles are not equal
 /// work: the two halves of a box hold different neighbourhoods and contacts, and the two cores
 /// of a shared machine do not run at one speed. The split moves towards equal times: after
-/// [`Balance::SAMPLE`] of timed shares, towards the fraction at which the two shares' times per
-/// item would be equal, half of the way. Any split gives the same bits (every parallel loop
+/// [`Balance::SAMPLE`] of timed shares, half of the way to the fraction at which the two shares
+/// would take equal times (each at its measured time per item). Any split gives the same bits (every parallel loop
 /// does), so the balance decides only how long a run takes; with more than two threads the
 /// shares stay equal.
 #[derive(Debug, Clone, Copy, PartialEq)]

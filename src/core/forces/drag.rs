@@ -206,7 +206,8 @@ impl Drag {
             let span = first..first + force.len();
             let each = force.iter_mut().zip(torque).zip(&p.radius[span.clone()]).zip(&p.velocity[span.clone()]);
             for (k, (((f, t), &a), v)) in each.enumerate() {
-                let (i, drag) = (first + k, self.force_on(p, first + k, a, v));
+                let i = first + k;
+                let drag = self.force_on(p, i, a, v);
                 match onto {
                     Onto::Add => {
                         *f -= drag;
