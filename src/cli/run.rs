@@ -157,7 +157,16 @@ fn print_timings(summary: &RunSummary) {
     }
     let particles = summary.simulation.state.particles.len();
     if rayon::current_num_threads() == 2 && particles >= magdem::core::parallel::MIN_PARALLEL_LEN {
-        let first = summary.simulation.balance.first();
-        println!("two threads: the first share held {:.1} % of the particles at the end", 100.0 * first);
+        let balance = &summary.simulation.balance;
+        println!("two threads: the first share held {:.1} % of the particles at the end", 100.0 * balance.first());
+        let g = balance.gaps();
+        if g.loops > 0 {
+            println!(
+                "  {} loops in two shares: the later share ended {:.1} µs after the other on average, {:.1} % of a loop's time",
+                g.loops,
+                1e6 * g.gap / g.loops as f64,
+                100.0 * g.gap / g.span
+            );
+        }
     }
 }
