@@ -438,8 +438,8 @@ fn filter(
         // it is in range: no branch on the test, which goes either way from one candidate to the
         // next in a wide list (61 % in range at 15 diameters in the chained 100× state).
         let mut kept = 0;
-        // Four candidates at a time, their square roots taken together (one vector sqrt: the
-        // same correctly rounded bits as four scalar ones, for a quarter of the latency).
+        // Four candidates at a time, their square roots independent of one another (the
+        // compiled loop takes four scalar roots; one vector root, the same bits, was no faster).
         let mut quads = candidates[ks].chunks_exact(4);
         for quad in &mut quads {
             // Written out: through `array::from_fn` the displacement was called out of line, its
