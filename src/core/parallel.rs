@@ -49,9 +49,8 @@ pub struct Balance {
 }
 
 /// How far apart the two shares of the timed loops ended: the thread that ends first waits for
-/// the other, so a step loses about half of each loop's gap. In the mid state of the 100× run the
-/// gap was 4–14 % of a loop's time, changing with the machine's load, and random from loop to
-/// loop: a split learnt per kind of loop removed its lasting part (a tenth of it) and no wall time.
+/// the other, so a step loses about half of each loop's gap (measured in
+/// `reports/performance-history.md`, stage 35).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ShareGaps {
     /// Two-share loops timed.
