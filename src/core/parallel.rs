@@ -27,106 +27,6 @@ thread_local! {
     /// The step's split between two threads and what its shares took so far (on the thread
     /// running the step, inside [`with_warm_pool`]).
     static BALANCE: std::cell::Cell<Balance> = const { std::cell::Cell::new(Balance::EVEN) };
-    /// The hand-off to the pool's other thread, with two threads (on the thread running a step
-    /// inside [`with_warm_pool`], null elsewhere and while that thread runs a share).
-    static RELAY: std::cell::Cell<*const Relay> = const { std::cell::Cell::new(std::ptr::null()) };
-}
-
-/// How the thread running a warm step hands the second share of a two-share loop to the pool's
-/// other thread, which spins for it in [`with_warm_pool`]: a posted job, taken by whichever thread
-/// comes first (the poster takes it back if the other has not started it when its own share
-/// ends). Both threads spin rather than sleep, so a share starts within a cache line's transfer
-/// and the loop returns as soon as the later share ends (rayon's join parks a thread that waits
-/// after a few dozen yields, and waking it cost 1–6 µs per loop on average in the 100× run,
-/// `reports/performance-history.md` stages 35–36).
-struct Relay {
-    state: std::sync::atomic::AtomicU8,
-    /// The posted job, its lifetime erased: valid from [`Relay::POSTED`] until the poster sees
-    /// [`Relay::DONE`] or takes it back.
-    job: std::cell::UnsafeCell<Option<&'static (dyn Fn() + Sync)>>,
-}
-
-// SAFETY: `job` is written only by the posting thread while no job is posted, and read only by
-// the thread that moved `state` from POSTED to RUNNING (an acquire after the poster's release).
-unsafe impl Sync for Relay {}
-
-impl Relay {
-    const IDLE: u8 = 0;
-    const POSTED: u8 = 1;
-    const RUNNING: u8 = 2;
-    const DONE: u8 = 3;
-
-    fn new() -> Self {
-        Relay { state: std::sync::atomic::AtomicU8::new(Self::IDLE), job: std::cell::UnsafeCell::new(None) }
-    }
-
-    /// Runs `a` here and `b` on the other thread if it takes it in time (else here, after `a`).
-    fn join<RA, RB: Send>(&self, a: impl FnOnce() -> RA, b: impl FnOnce() -> RB + Send) -> (RA, RB) {
-        use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
-        use std::sync::atomic::Ordering::{AcqRel, Acquire, Relaxed, Release};
-        use std::sync::Mutex;
-        let b = Mutex::new(Some(b));
-        let out = Mutex::new(None);
-        let job = || {
-            let b = b.lock().expect("taken once").take().expect("run once");
-            *out.lock().expect("written once") = Some(catch_unwind(AssertUnwindSafe(b)));
-        };
-        let job: &(dyn Fn() + Sync) = &job;
-        // SAFETY: the job is not reachable once this function returns: it returns only after the
-        // other thread has finished it (DONE) or after taking it back unstarted (POSTED → IDLE).
-        let job: &'static (dyn Fn() + Sync) = unsafe { std::mem::transmute(job) };
-        unsafe { *self.job.get() = Some(job) };
-        self.state.store(Self::POSTED, Release);
-        let ra = catch_unwind(AssertUnwindSafe(a));
-        if self.state.compare_exchange(Self::POSTED, Self::IDLE, AcqRel, Acquire).is_ok() {
-            job();
-        } else {
-            while self.state.load(Acquire) != Self::DONE {
-                std::hint::spin_loop();
-            }
-            self.state.store(Self::IDLE, Relaxed);
-        }
-        let rb = out.into_inner().expect("written once").expect("the job ran");
-        match (ra, rb) {
-            (Ok(ra), Ok(rb)) => (ra, rb),
-            (Err(panic), _) | (_, Err(panic)) => resume_unwind(panic),
-        }
-    }
-
-    /// On the other thread: runs the posted job if there is one; returns whether it did.
-    fn serve(&self) -> bool {
-        use std::sync::atomic::Ordering::{Acquire, Relaxed, Release};
-        if self.state.load(Relaxed) != Self::POSTED
-            || self.state.compare_exchange(Self::POSTED, Self::RUNNING, Acquire, Relaxed).is_err()
-        {
-            return false;
-        }
-        // SAFETY: moved from POSTED to RUNNING by this thread: the job is set and stays valid
-        // until DONE is stored.
-        let job = unsafe { (*self.job.get()).expect("a posted job") };
-        job();
-        self.state.store(Self::DONE, Release);
-        true
-    }
-}
-
-/// `(a(), b())`, the two run side by side: through the step's [`Relay`] with two threads inside
-/// a warm step, otherwise as `rayon::join`.
-fn join<RA: Send, RB: Send>(a: impl FnOnce() -> RA + Send, b: impl FnOnce() -> RB + Send) -> (RA, RB) {
-    let relay = RELAY.with(|r| r.get());
-    if relay.is_null() {
-        return rayon::join(a, b);
-    }
-    // SAFETY: set by `with_warm_pool` to its own relay, which outlives the step it runs.
-    let relay = unsafe { &*relay };
-    // A loop inside the share runs as on any other thread: through rayon.
-    let a = || {
-        RELAY.with(|r| r.set(std::ptr::null()));
-        let ra = a();
-        RELAY.with(|r| r.set(relay));
-        ra
-    };
-    relay.join(a, b)
 }
 
 /// Where the loops of a step split their items between two threads (the first share's
@@ -328,12 +228,7 @@ impl<T: Send + Sync + Copy + Default> PieceList<T> {
             }
             f(ks, &mut piece[..len])
         };
-        if chunks == 2 {
-            let (first, second) = self.pieces.split_at_mut(1);
-            let lengths = join(|| fill((0, &mut first[0])), || fill((1, &mut second[0])));
-            self.lengths.clear();
-            self.lengths.extend([lengths.0, lengths.1]);
-        } else if chunks > 1 {
+        if chunks > 1 {
             self.pieces[..chunks].par_iter_mut().enumerate().map(fill).collect_into_vec(&mut self.lengths);
         } else {
             self.lengths.clear();
@@ -556,23 +451,24 @@ pub fn for_each_share<S: Split>(parts: S, f: impl Fn(usize, S) + Sync + Send) {
     if !worth_it(parts.len()) {
         return f(0, parts);
     }
-    let mut shares = shares(parts);
+    let shares = shares(parts);
     if shares.len() != 2 {
         return shares.into_par_iter().for_each(|(first, piece)| f(first, piece));
     }
     // Two shares: each timed from the loop's start to its own end (the other thread starts its
     // share a little later, when it takes it), for the balance.
-    let (second, first) = (shares.pop().expect("two shares"), shares.pop().expect("two shares"));
     let started = std::time::Instant::now();
-    let run = |(lo, piece): (usize, S)| {
-        let len = piece.len();
-        f(lo, piece);
-        (started.elapsed().as_secs_f64(), len)
-    };
-    let (timed0, timed1) = join(|| run(first), || run(second));
+    let timed: Vec<(f64, usize)> = shares
+        .into_par_iter()
+        .map(|(first, piece)| {
+            let len = piece.len();
+            f(first, piece);
+            (started.elapsed().as_secs_f64(), len)
+        })
+        .collect();
     BALANCE.with(|b| {
         let mut balance = b.get();
-        balance.record([timed0, timed1]);
+        balance.record([timed[0], timed[1]]);
         b.set(balance);
     });
 }
@@ -583,13 +479,7 @@ pub fn any_share<S: Split>(parts: S, test: impl Fn(S) -> bool + Sync + Send) -> 
     if !worth_it(parts.len()) {
         return test(parts);
     }
-    let mut shares = shares(parts);
-    if shares.len() == 2 {
-        let (second, first) = (shares.pop().expect("two shares"), shares.pop().expect("two shares"));
-        let (a, b) = join(|| test(first.1), || test(second.1));
-        return a | b;
-    }
-    shares.into_par_iter().map(|(_, piece)| test(piece)).reduce(|| false, |a, b| a | b)
+    shares(parts).into_par_iter().map(|(_, piece)| test(piece)).reduce(|| false, |a, b| a | b)
 }
 
 /// Σ over the pairs k (sorted by i, with i < j) of `both(k).0` into `out[i]` and `both(k).1`
@@ -699,32 +589,26 @@ pub fn with_warm_pool<R: Send>(len: usize, balance: &mut Balance, f: impl FnOnce
         return f();
     }
     use std::sync::atomic::{AtomicBool, Ordering};
-    /// Ends the other threads' spinning and clears the step's relay, however the step ends (a
-    /// step that panicked would otherwise leave the scope waiting for them forever).
+    /// Ends the other threads' spinning however the step ends (a step that panicked would
+    /// otherwise leave the scope waiting for them forever).
     struct Finish<'a>(&'a AtomicBool);
     impl Drop for Finish<'_> {
         fn drop(&mut self) {
-            RELAY.with(|r| r.set(std::ptr::null()));
             self.0.store(true, Ordering::Release);
         }
     }
     let done = AtomicBool::new(false);
-    let relay = Relay::new();
-    let two = rayon::current_num_threads() == 2;
     rayon::scope(|scope| {
         for _ in 1..rayon::current_num_threads() {
             scope.spawn(|_| {
                 while !done.load(Ordering::Acquire) {
-                    if !(two && relay.serve()) && rayon::yield_now() != Some(rayon::Yield::Executed) {
+                    if rayon::yield_now() != Some(rayon::Yield::Executed) {
                         std::hint::spin_loop();
                     }
                 }
             });
         }
         let finish = Finish(&done);
-        if two {
-            RELAY.with(|r| r.set(&relay));
-        }
         let was_warm = WARM.with(|w| w.replace(true));
         let was = BALANCE.with(|b| b.replace(*balance));
         let result = f();
@@ -809,46 +693,13 @@ mod tests {
     /// loop's order, so the sums are its bits. The terms are chosen so that the order matters.
     /// The pairs held in a [`PieceList`] read (items, partition points, ranges across pieces)
     /// and sum as the same pairs in one slice.
-    /// With two threads a warm step hands each loop's second share to the other thread: every
-    /// share runs once, loops inside a share run too, a two-piece collection keeps its order,
-    /// and a share that panics ends the step with its panic instead of leaving the pool waiting.
+    /// A share that panics inside a warm step ends the step with its panic (instead of leaving
+    /// the pool's scope waiting for the spinning threads), and the pool then runs steps again.
     #[test]
-    fn the_relay_runs_every_share_once_and_passes_on_a_panic() {
+    fn a_panic_in_a_warm_step_reaches_the_caller() {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
         let n = 3 * MIN_PARALLEL_LEN + 5;
         let mut out = vec![0u32; n];
-        let mut pieced = PieceList::default();
-        let mut balance = Balance::starting_at(0.3);
-        pool.install(|| {
-            with_warm_pool(n, &mut balance, || {
-                for round in 1..=200u32 {
-                    for_each_share(&mut out[..], |lo, share| {
-                        share.iter_mut().enumerate().for_each(|(k, x)| *x += (lo + k) as u32);
-                        // A loop inside a share: serial on the other thread, through rayon here.
-                        let mut inner = vec![1u8; MIN_PARALLEL_LEN];
-                        for_each_share(&mut inner[..], |_, s| s.iter_mut().for_each(|x| *x += 1));
-                        assert!(inner.iter().all(|&x| x == 2));
-                    });
-                    // The last particle lies in the second share; no particle holds u32::MAX.
-                    let last = round * (n as u32 - 1);
-                    assert!(
-                        any_share(&out[..], |s| s.contains(&last)) && !any_share(&out[..], |s| s.contains(&u32::MAX))
-                    );
-                }
-                pieced.collect(n, |ks, slots: &mut [usize]| {
-                    let mut kept = 0;
-                    for k in ks.filter(|k| k % 3 != 0) {
-                        slots[kept] = k;
-                        kept += 1;
-                    }
-                    kept
-                });
-            })
-        });
-        assert!(out.iter().enumerate().all(|(k, &x)| x == 200 * k as u32), "each share once per loop");
-        // Every outer loop timed, and the inner loops of the shares this thread ran.
-        assert!(balance.gaps().loops >= 200, "two shares timed in every loop");
-        assert_eq!(pieced.seq().iter().copied().collect::<Vec<_>>(), (0..n).filter(|k| k % 3 != 0).collect::<Vec<_>>());
         for panicking_share in [0, 1] {
             let caught = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                 pool.install(|| {
@@ -859,7 +710,6 @@ mod tests {
             }));
             assert!(caught.is_err(), "share {panicking_share}'s panic reaches the caller");
         }
-        // The pool still runs steps after them.
         pool.install(|| with_warm_pool(n, &mut Balance::default(), || for_each_share(&mut out[..], |_, s| s.fill(7))));
         assert!(out.iter().all(|&x| x == 7));
     }
