@@ -688,11 +688,6 @@ mod tests {
         assert!(pieces.0.len() >= 20, "the buffers of the longest call are kept");
     }
 
-    /// Pairs of random particles (sorted by i, i < j, rows of every length, particles in no
-    /// pair): the shares of one, two and three threads add each particle's terms in the serial
-    /// loop's order, so the sums are its bits. The terms are chosen so that the order matters.
-    /// The pairs held in a [`PieceList`] read (items, partition points, ranges across pieces)
-    /// and sum as the same pairs in one slice.
     /// A share that panics inside a warm step ends the step with its panic (instead of leaving
     /// the pool's scope waiting for the spinning threads), and the pool then runs steps again.
     #[test]
@@ -704,7 +699,7 @@ mod tests {
             let caught = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                 pool.install(|| {
                     with_warm_pool(n, &mut Balance::default(), || {
-                        for_each_share(&mut out[..], |lo, _| assert!((lo > 0) != (panicking_share == 1), "share"))
+                        for_each_share(&mut out[..], |lo, _| assert_ne!(usize::from(lo > 0), panicking_share))
                     })
                 })
             }));
@@ -714,6 +709,11 @@ mod tests {
         assert!(out.iter().all(|&x| x == 7));
     }
 
+    /// Pairs of random particles (sorted by i, i < j, rows of every length, particles in no
+    /// pair): the shares of one, two and three threads add each particle's terms in the serial
+    /// loop's order, so the sums are its bits. The terms are chosen so that the order matters.
+    /// The pairs held in a [`PieceList`] read (items, partition points, ranges across pieces)
+    /// and sum as the same pairs in one slice.
     #[test]
     fn ordered_pair_sums_equal_the_serial_loop_on_any_thread_count() {
         // Not a multiple of 2 or 3: the last share is shorter than the others.
