@@ -568,15 +568,15 @@ impl PairRange {
 /// How a term reads its pairs.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum PairForm {
-    /// A list of [`Pair`]s written once per evaluation: for terms that sweep the pairs more than
-    /// once (the exact induction's iterations; the paper's sweep and then the dipole forces,
-    /// whose branchy filtering of the candidates in each pass cost more than writing the list),
-    /// or whose pairs another term of the range reads too (the shielding's touching pairs,
-    /// which the contact then reads).
+    /// A list of [`Pair`]s written once per evaluation, in a branch-free pass of its own: what
+    /// every term of the model reads (the exact induction's iterations, the paper's sweep and
+    /// the dipole forces, the shielding, the contact). Filtering the candidates inside a term's
+    /// own pass, with a branch per candidate, cost more than writing the list, even for the
+    /// contact, which reads each pair once.
     Listed,
-    /// The Verlet candidates, each filtered by the term as it reads them ([`RangePairs`]): for
-    /// a term that reads each pair once per evaluation (the contact), which so never writes the
-    /// list. Only for [`PairRange::Within`].
+    /// The Verlet candidates, each filtered by the term as it reads them ([`RangePairs`]), so
+    /// that the list is never written: the same pairs, bit for bit. Only for
+    /// [`PairRange::Within`].
     Candidates,
 }
 

@@ -91,9 +91,9 @@ type WallShareOut = (Vec<WallSpring>, ContactDiagnostics);
 
 /// Particle–particle and particle–wall contacts.
 ///
-/// Pairs: one pass per particle share over the near candidates in (i, j) order finds the touching
-/// pairs (no pair list is written; where another term lists the range, the pass reads that list)
-/// and their springs (a merge with the sorted history), computes them [`LANES`] at a time and
+/// Pairs: one pass per particle share over the listed near pairs in (i, j) order finds the
+/// touching ones (the list, filtered from the Verlet candidates once per evaluation, is shared
+/// with the shielding where the drag has it) and their springs (a merge with the sorted history), computes them [`LANES`] at a time and
 /// adds them in order (see [`Contact::share_pass`]). Walls: found in particle order, then
 /// computed and added in the same particle shares ([`Contact::apply_walls`]), their springs
 /// merged the same way. The same bits for any thread count.
@@ -366,8 +366,8 @@ impl Contact {
         let (shares, size) = parallel::split_of(out.force.len());
         let mut slots = std::mem::take(&mut self.shares);
         slots.resize_with(shares.max(slots.len()), Default::default);
-        // The near pairs as another term lists them, or the candidates filtered as they are read:
-        // the same pairs, bit for bit.
+        // The listed near pairs (the contact declares them listed), or, for a range declared as
+        // candidates, the candidates filtered as they are read: the same pairs, bit for bit.
         let RangePairs { listed, candidates, crossing } = ctx.neighbours.range_pairs(self.near, ctx.domain);
         let crossing = crossing.filter(|c| c.found_for(out.force.len()));
         parallel::for_each_share((&mut *out.force, &mut *out.torque), |lo, parts| {
@@ -520,8 +520,10 @@ impl ForceTerm for Contact {
     fn name(&self) -> &'static str {
         "contact"
     }
+    /// Listed: filtering the candidates inside the contact's pass (a branch per candidate among
+    /// the lanes' fill) cost more than writing the list first, in packed beds and in chains.
     fn pairs(&self) -> Option<PairNeed> {
-        Some(PairNeed { range: self.near, form: PairForm::Candidates })
+        Some(PairNeed { range: self.near, form: PairForm::Listed })
     }
     fn apply(&mut self, ctx: &Context, p: &Particles, out: &mut Forces) {
         let mut diag = ContactDiagnostics::default();
