@@ -93,10 +93,11 @@ type WallShareOut = (Vec<WallSpring>, ContactDiagnostics);
 ///
 /// Pairs: one pass per particle share over the listed near pairs in (i, j) order finds the
 /// touching ones (the list, filtered from the Verlet candidates once per evaluation, is shared
-/// with the shielding where the drag has it) and their springs (a merge with the sorted history), computes them [`LANES`] at a time and
-/// adds them in order (see [`Contact::share_pass`]). Walls: found in particle order, then
-/// computed and added in the same particle shares ([`Contact::apply_walls`]), their springs
-/// merged the same way. The same bits for any thread count.
+/// with the shielding where the drag has it) and their springs (a merge with the sorted
+/// history), computes them [`LANES`] at a time and adds them in order (see
+/// [`Contact::share_pass`]). Walls: found in particle order, then computed and added in the same
+/// particle shares ([`Contact::apply_walls`]), their springs merged the same way. The same bits
+/// for any thread count.
 pub struct Contact {
     /// Pair constants indexed `[species_i * n_species + species_j]`.
     materials: Vec<PairMaterial>,
