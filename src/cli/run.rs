@@ -143,7 +143,7 @@ fn print_timings(summary: &RunSummary) {
     }
     println!("neighbour ranges (neighbours: candidate upkeep and rebuilds; pair-list: filtering the listed pairs):");
     for u in summary.simulation.neighbour_usage() {
-        let mut listed = u.listed.map_or("not listed".into(), |n| format!("{n} listed"));
+        let mut listed = format!("{} listed", u.listed);
         if let Some((count, skin, builds)) = u.close {
             listed = format!("{count} close candidates (skin {skin:.3e} m, taken {builds} times), {listed}");
         }

@@ -18,7 +18,7 @@
 pub use super::forces::InductionError;
 use super::forces::{Context, ForceTerm, Forces, Renumbering};
 use super::lanes::{self, Vec3x4};
-use super::neighbours::{Pair, PairForm, PairNeed, PairRange, RangePairs, Skins};
+use super::neighbours::{Pair, PairRange, RangePairs, Skins};
 use super::parallel;
 use super::parallel::Pieced;
 use super::state::{sphere_volume, Particles, Saturation, Species, State, Vec3};
@@ -141,7 +141,6 @@ impl Magnetisation {
         let mut field = std::mem::take(&mut self.field);
         self.external_fields(p, &mut field);
         pairs.add_in_order_by_four(
-            &p.position,
             &mut field,
             |q| pair_dipole_fields(&moment[q.i as usize], &moment[q.j as usize], q),
             |q| pair_dipole_field(&moment[q.i as usize], q),
@@ -166,7 +165,7 @@ impl Magnetisation {
             }
             Induction::Exact { tolerance, max_iterations, dense_max } => {
                 if p.len() <= dense_max && self.saturation.iter().all(Option::is_none) {
-                    self.solve_dense(p, pairs.listed.expect("all pairs are listed"));
+                    self.solve_dense(p, pairs.pairs);
                     self.last_iterations = 1;
                 } else {
                     self.moments.clear();
@@ -246,14 +245,12 @@ impl ForceTerm for Magnetisation {
     fn is_slow(&self) -> bool {
         true
     }
-    /// Listed: the exact induction sweeps the pairs again and again, and the paper's sweep and
-    /// the dipole forces read its neighbourhood twice per evaluation.
-    fn pairs(&self) -> Option<PairNeed> {
-        self.range.map(|range| PairNeed { range, form: PairForm::Listed })
+    fn pairs(&self) -> Option<PairRange> {
+        self.range
     }
     fn prepare(&mut self, ctx: &Context, state: &State) -> Result<(), InductionError> {
         // Without induction no pairs are read (and none declared).
-        let pairs = ctx.neighbours.range_pairs(self.range.unwrap_or(PairRange::All), ctx.domain);
+        let pairs = ctx.neighbours.range_pairs(self.range.unwrap_or(PairRange::All));
         self.update(&state.particles, &state.fields.moment, &pairs)
     }
     fn apply(&mut self, _ctx: &Context, _p: &Particles, out: &mut Forces) {

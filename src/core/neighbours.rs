@@ -504,9 +504,14 @@ impl CrossingPairs {
 
     /// The crossing candidates within `range` now, as the listing filters them.
     fn filter(&mut self, positions: &[Vec3], domain: &Domain, range: f64) {
-        let crossing = Candidates::within(&self.candidates, range, domain);
-        parallel::collect_ordered_ranges(crossing.list.len(), &mut self.pairs, &mut self.pair_pieces, |ks, out| {
-            out.extend(crossing.list[ks].iter().filter_map(|&ij| crossing.pair(positions, ij)))
+        let (candidates, range2, periodic) = (&self.candidates, range * range, domain.periodic != [false; 3]);
+        let pair = |(i, j): (u32, u32)| {
+            let r = separation(domain, periodic, positions, (i, j));
+            let d2 = r.norm_squared();
+            (d2 < range2).then(|| Pair { i, j, r, dist: d2.sqrt() })
+        };
+        parallel::collect_ordered_ranges(candidates.len(), &mut self.pairs, &mut self.pair_pieces, |ks, out| {
+            out.extend(candidates[ks].iter().filter_map(|&ij| pair(ij)))
         });
     }
 
@@ -565,191 +570,70 @@ impl PairRange {
     }
 }
 
-/// How a term reads its pairs.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum PairForm {
-    /// A list of [`Pair`]s written once per evaluation, in a branch-free pass of its own: what
-    /// every term of the model reads (the exact induction's iterations, the paper's sweep and
-    /// the dipole forces, the shielding, the contact). Filtering the candidates inside a term's
-    /// own pass, with a branch per candidate, cost more than writing the list, even for the
-    /// contact, which reads each pair once.
-    Listed,
-    /// The Verlet candidates, each filtered by the term as it reads them ([`RangePairs`]), so
-    /// that the list is never written: the same pairs, bit for bit. Only for
-    /// [`PairRange::Within`].
-    Candidates,
-}
-
-/// What a force term asks of the neighbour layer.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PairNeed {
-    pub range: PairRange,
-    pub form: PairForm,
-}
-
-/// The Verlet candidates of a [`PairRange::Within`], for a term to filter as it goes: sorted by
-/// (i, j), so the pairs [`Candidates::pair`] keeps come in (i, j) order, the same pairs and
-/// separations, bit for bit, as a listed search of the range.
-#[derive(Debug, Clone, Copy)]
-pub struct Candidates<'a> {
-    pub list: &'a [(u32, u32)],
-    verlet: Option<&'a VerletList>,
-    range2: f64,
-    domain: &'a Domain,
-    periodic: bool,
-}
-
-impl<'a> Candidates<'a> {
-    /// No candidates.
-    pub fn none(domain: &'a Domain) -> Self {
-        Candidates { list: &[], verlet: None, range2: 0.0, domain, periodic: false }
-    }
-
-    /// `list` as candidates within `range` in `domain`, with no Verlet list behind them.
-    fn within(list: &'a [(u32, u32)], range: f64, domain: &'a Domain) -> Self {
-        Candidates { list, verlet: None, range2: range * range, domain, periodic: domain.periodic != [false; 3] }
-    }
-
-    /// The candidate (i, j) as a [`Pair`] if it is closer than the range now.
-    #[inline(always)]
-    pub fn pair(&self, positions: &[Vec3], (i, j): (u32, u32)) -> Option<Pair> {
-        let r = separation(self.domain, self.periodic, positions, (i, j));
-        let d2 = r.norm_squared();
-        (d2 < self.range2).then(|| Pair { i, j, r, dist: d2.sqrt() })
-    }
-
-    /// The lowest row with a candidate reaching particle `lo` or beyond
-    /// ([`VerletList::first_row_reaching`]; 0 without candidates); every pair within the range,
-    /// listed by any term, is a candidate, so the bound holds for listed pairs of the range too.
-    pub fn first_row_reaching(&self, lo: usize) -> usize {
-        self.verlet.map_or(0, |v| v.first_row_reaching(lo))
-    }
-}
-
-/// Pairs of a range in (i, j) order as a term reads them: the candidates, each filtered as it is
-/// read, or the pairs some term listed. Both give the same pairs and separations, bit for bit.
-pub trait PairSource: Sync {
-    type Item: Sync;
-    fn items(&self) -> Pieced<'_, Self::Item>;
-    fn ij(item: &Self::Item) -> (u32, u32);
-    /// The item as a pair if it is within the range now.
-    fn pair(&self, positions: &[Vec3], item: &Self::Item) -> Option<Pair>;
-    /// The item as the pair it is, if it is one whatever the positions (a listed pair).
-    fn listed(item: &Self::Item) -> Option<&Pair>;
-}
-
-impl PairSource for Candidates<'_> {
-    type Item = (u32, u32);
-    fn items(&self) -> Pieced<'_, (u32, u32)> {
-        Pieced::Whole(self.list)
-    }
-    #[inline(always)]
-    fn ij(item: &(u32, u32)) -> (u32, u32) {
-        *item
-    }
-    #[inline(always)]
-    fn pair(&self, positions: &[Vec3], item: &(u32, u32)) -> Option<Pair> {
-        Candidates::pair(self, positions, *item)
-    }
-    #[inline(always)]
-    fn listed(_: &(u32, u32)) -> Option<&Pair> {
-        None
-    }
-}
-
-impl PairSource for Pieced<'_, Pair> {
-    type Item = Pair;
-    fn items(&self) -> Pieced<'_, Pair> {
-        *self
-    }
-    #[inline(always)]
-    fn ij(item: &Pair) -> (u32, u32) {
-        (item.i, item.j)
-    }
-    #[inline(always)]
-    fn pair(&self, _: &[Vec3], item: &Pair) -> Option<Pair> {
-        Some(*item)
-    }
-    #[inline(always)]
-    fn listed(item: &Pair) -> Option<&Pair> {
-        Some(item)
-    }
-}
-
-/// The pairs of one range as the layer holds them: listed, if some term lists the range, and
-/// always its candidates (whose [`Candidates::first_row_reaching`] bounds the listed pairs too).
+/// The pairs of one range as the layer lists them, with what a term summing them over shares of
+/// particles needs: the Verlet candidates they were filtered from (whose
+/// [`VerletList::first_row_reaching`] bounds the pairs too) and the pairs crossing between
+/// shares.
 #[derive(Debug, Clone, Copy)]
 pub struct RangePairs<'a> {
-    pub listed: Option<Pieced<'a, Pair>>,
-    pub candidates: Candidates<'a>,
+    pub pairs: Pieced<'a, Pair>,
+    /// The Verlet list the pairs were filtered from (`None`: every pair, or a term's own list).
+    pub verlet: Option<&'a VerletList>,
     /// The listed pairs crossing from one share of particles to a later one, where known.
     pub crossing: Option<&'a CrossingPairs>,
 }
 
-impl RangePairs<'_> {
+impl<'a> RangePairs<'a> {
+    /// `pairs`, a term's own, with no candidates or crossing pairs behind them.
+    pub fn own(pairs: Pieced<'a, Pair>) -> Self {
+        RangePairs { pairs, verlet: None, crossing: None }
+    }
+
+    /// The lowest row with a pair reaching particle `lo` or beyond, or a row before it (0 without
+    /// candidates behind the pairs): every pair is a candidate.
+    pub fn first_row_reaching(&self, lo: usize) -> usize {
+        self.verlet.map_or(0, |v| v.first_row_reaching(lo))
+    }
+
     /// Σ over the pairs of `both(pair).0` into `out[i]` and `both(pair).1` into `out[j]`, each
-    /// particle's terms in pair order, the same bits on any thread count and from either source
+    /// particle's terms in pair order, the same bits on any thread count
     /// ([`parallel::add_pairs_in_order`]); `second(pair)` is `both(pair).1` alone. A term with a
     /// lane kernel passes it to [`Self::add_in_order_by_four`] instead: through this one, a
     /// listed range's pairs are still taken four at a time, each by `both`.
     pub fn add_in_order<T: Copy + Send + std::ops::AddAssign>(
         &self,
-        positions: &[Vec3],
         out: &mut [T],
         both: impl Fn(&Pair) -> (T, T) + Sync + Send,
         second: impl Fn(&Pair) -> T + Sync + Send,
     ) {
-        self.add_in_order_by_four(positions, out, &both, second, |q| q.map(&both))
+        self.add_in_order_by_four(out, &both, second, |q| q.map(&both))
     }
 
-    /// [`Self::add_in_order`] with `four(pairs)`, `both` of four listed pairs computed together
-    /// with the same bits (in SIMD lanes), where the pairs are listed.
+    /// [`Self::add_in_order`] with `four(pairs)`, `both` of four pairs computed together with
+    /// the same bits (in SIMD lanes).
     pub fn add_in_order_by_four<T: Copy + Send + std::ops::AddAssign>(
         &self,
-        positions: &[Vec3],
         out: &mut [T],
         both: impl Fn(&Pair) -> (T, T) + Sync + Send,
         second: impl Fn(&Pair) -> T + Sync + Send,
         four: impl Fn([&Pair; 4]) -> [(T, T); 4] + Sync + Send,
     ) {
-        match self.listed {
-            Some(pairs) => add_in_order_from(&pairs, positions, self, out, both, second, four),
-            None => add_in_order_from(&self.candidates, positions, self, out, both, second, four),
-        }
+        let ij = |q: &Pair| (q.i as usize, q.j as usize);
+        // The pairs crossing into a share from the rows before it: those found as the range was
+        // listed, for this split (compared here: inside a share, on the pool's other thread, the
+        // split is not the step's), or the rows before it scanned. The same pairs, in order.
+        let crossing = self.crossing.filter(|c| c.found_for(out.len()));
+        let earlier = |lo: usize, share: &mut [T]| match crossing {
+            Some(c) => c.reaching(lo, share.len()).for_each(|q| share[q.j as usize - lo] += second(q)),
+            None => {
+                let first_row = self.first_row_reaching(lo);
+                parallel::add_earlier_rows(self.pairs, ij, first_row, |q| Some(second(q)), lo, share)
+            }
+        };
+        let one = |q: &Pair| Some(both(q));
+        let four = |q: [&Pair; 4]| Some(four(q));
+        parallel::add_pairs_in_order(out, self.pairs, ij, earlier, one, four);
     }
-}
-
-fn add_in_order_from<S: PairSource, T: Copy + Send + std::ops::AddAssign>(
-    source: &S,
-    positions: &[Vec3],
-    range: &RangePairs,
-    out: &mut [T],
-    both: impl Fn(&Pair) -> (T, T) + Sync + Send,
-    second: impl Fn(&Pair) -> T + Sync + Send,
-    four: impl Fn([&Pair; 4]) -> [(T, T); 4] + Sync + Send,
-) {
-    let ij = |q: &S::Item| {
-        let (i, j) = S::ij(q);
-        (i as usize, j as usize)
-    };
-    // The pairs crossing into a share from the rows before it: those found as the range was
-    // listed, for this split (compared here: inside a share, on the pool's other thread, the
-    // split is not the step's), or the rows before it scanned. The same pairs, in order.
-    let crossing = range.crossing.filter(|c| c.found_for(out.len()));
-    let earlier = |lo: usize, share: &mut [T]| match crossing {
-        Some(c) => c.reaching(lo, share.len()).for_each(|q| share[q.j as usize - lo] += second(q)),
-        None => {
-            let second = |q: &S::Item| source.pair(positions, q).map(|pair| second(&pair));
-            let first_row = range.candidates.first_row_reaching(lo);
-            parallel::add_earlier_rows(source.items(), ij, first_row, second, lo, share)
-        }
-    };
-    let one = |q: &S::Item| source.pair(positions, q).map(|pair| both(&pair));
-    let four = |q: [&S::Item; 4]| match q.map(S::listed) {
-        [Some(a), Some(b), Some(c), Some(d)] => Some(four([a, b, c, d])),
-        _ => None,
-    };
-    parallel::add_pairs_in_order(out, source.items(), ij, earlier, one, four);
 }
 
 /// Verlet skins, as fractions of the range they pad: the one numerical setting of the neighbour
@@ -802,18 +686,16 @@ pub struct RangeUsage {
     pub rebuilds: u64,
     pub skin_in_use: f64,
     pub candidates: usize,
-    /// Pairs in the last listing, for a listed range.
-    pub listed: Option<usize>,
+    /// Pairs in the last listing.
+    pub listed: usize,
     /// Close candidates of a listed range, if in use: how many, their skin, how often taken.
     pub close: Option<(usize, f64, u64)>,
 }
 
-/// One pair range of the neighbour layer: its candidates, and its pairs if some term lists them.
+/// One pair range of the neighbour layer: its candidates and its pairs.
 #[derive(Debug, Clone)]
 struct Listed {
     range: PairRange,
-    /// Whether some term reads the range as a [`PairForm::Listed`] list.
-    listed: bool,
     verlet: VerletList,
     /// The listed pairs' own, closer candidates.
     close: CloseCandidates,
@@ -825,31 +707,31 @@ struct Listed {
 }
 
 /// The neighbour layer: one entry per distinct range the force terms declare, brought up to date
-/// once per evaluation that needs it and shared by every term that declared it. A range is
-/// listed (its pairs written) only when some term reads it [`PairForm::Listed`].
+/// once per evaluation that needs it and shared by every term that declared it. Each range's
+/// pairs are listed in a branch-free pass of their own, which every term reads: filtering the
+/// candidates inside a term's own pass, with a branch per candidate, cost more than writing the
+/// list, even for the contact, which reads each pair once (`reports/performance-history.md`,
+/// stages 37 and 38).
 #[derive(Debug, Default, Clone)]
 pub struct Neighbours {
     lists: Vec<Listed>,
 }
 
 impl Neighbours {
-    /// A layer serving `needs` (equal ranges share one entry).
-    pub fn new(needs: impl IntoIterator<Item = PairNeed>) -> Self {
+    /// A layer serving `ranges` (equal ranges share one entry).
+    pub fn new(ranges: impl IntoIterator<Item = PairRange>) -> Self {
         let mut lists: Vec<Listed> = vec![];
-        for need in needs {
-            let listed = need.form == PairForm::Listed || need.range == PairRange::All;
-            match lists.iter_mut().find(|l| l.range == need.range) {
-                Some(l) => l.listed |= listed,
-                None => lists.push(Listed {
-                    range: need.range,
-                    listed,
+        for range in ranges {
+            if !lists.iter().any(|l| l.range == range) {
+                lists.push(Listed {
+                    range,
                     verlet: VerletList::default(),
                     close: CloseCandidates::default(),
                     cells: CellList::default(),
                     pairs: PairList::default(),
                     crossing: CrossingPairs::default(),
                     rebuilt: None,
-                }),
+                });
             }
         }
         Self { lists }
@@ -871,19 +753,15 @@ impl Neighbours {
                     let (verlet, close, crossing) = (&mut list.verlet, &mut list.close, &mut list.crossing);
                     let rebuilt = timers.time("neighbours", || {
                         let rebuilt = verlet.update(positions, domain, range, skin);
-                        if list.listed {
-                            let retaken = close.update(verlet, rebuilt.is_some(), positions, domain, range);
-                            crossing.follow(close.candidates(verlet), positions.len(), rebuilt.is_some() || retaken);
-                        }
+                        let retaken = close.update(verlet, rebuilt.is_some(), positions, domain, range);
+                        crossing.follow(close.candidates(verlet), positions.len(), rebuilt.is_some() || retaken);
                         rebuilt
                     });
-                    if list.listed {
-                        let (candidates, pairs) = (close.candidates(verlet), &mut list.pairs);
-                        timers.time("pair-list", || {
-                            filter_candidates(candidates, positions, domain, range, pairs);
-                            crossing.filter(positions, domain, range);
-                        });
-                    }
+                    let (candidates, pairs) = (close.candidates(verlet), &mut list.pairs);
+                    timers.time("pair-list", || {
+                        filter_candidates(candidates, positions, domain, range, pairs);
+                        crossing.filter(positions, domain, range);
+                    });
                     rebuilt
                 }
                 PairRange::All => {
@@ -918,7 +796,7 @@ impl Neighbours {
                 rebuilds: l.verlet.rebuilds,
                 skin_in_use: l.verlet.skin_in_use(),
                 candidates: l.verlet.candidates().len(),
-                listed: l.listed.then_some(l.pairs.len()),
+                listed: l.pairs.len(),
                 close: l.close.in_use.then_some((l.close.list.len(), l.close.skin, l.close.builds)),
             })
             .collect()
@@ -929,34 +807,21 @@ impl Neighbours {
     }
 
     /// The listed pairs of `range` (i < j, in (i, j) order); empty for a range no term declared.
-    /// Panics for a range declared only as [`PairForm::Candidates`]: its pairs are never written.
     pub fn pairs(&self, range: PairRange) -> Pieced<'_, Pair> {
-        self.list(range).map_or(Pieced::Whole(&[]), |l| {
-            assert!(l.listed, "{range:?} is declared as candidates only: read it with Neighbours::candidates");
-            l.pairs.seq()
-        })
+        self.list(range).map_or(Pieced::Whole(&[]), |l| l.pairs.seq())
     }
 
-    /// The candidates of `range` (a [`PairRange::Within`]; none for a range no term declared) in
-    /// `domain`, the one the layer was updated for.
-    pub fn candidates<'a>(&'a self, range: PairRange, domain: &'a Domain) -> Candidates<'a> {
-        let (verlet, range2) = match (self.list(range), range) {
-            (Some(l), PairRange::Within { range, .. }) => (Some(&l.verlet), range * range),
-            _ => (None, 0.0),
-        };
-        let list = verlet.map_or(&[][..], |v| v.candidates());
-        Candidates { list, verlet, range2, domain, periodic: domain.periodic != [false; 3] }
-    }
-
-    /// The pairs of `range` in `domain` (the one the layer was updated for): the pairs listed
-    /// within its distance by any term, with any skin (a term reuses them instead of filtering
-    /// again), and its candidates. Every pair of [`PairRange::All`] is listed.
-    pub fn range_pairs<'a>(&'a self, range: PairRange, domain: &'a Domain) -> RangePairs<'a> {
-        let listed = self.lists.iter().find(|l| l.listed && l.range.distance() == range.distance());
-        RangePairs {
-            listed: listed.map(|l| l.pairs.seq()),
-            candidates: self.candidates(range, domain),
-            crossing: listed.map(|l| &l.crossing),
+    /// The pairs of `range`: those listed within its distance for any term, with any skin (a
+    /// term reuses them instead of filtering again); none for a distance no term declared. Every
+    /// pair of [`PairRange::All`] is listed.
+    pub fn range_pairs(&self, range: PairRange) -> RangePairs<'_> {
+        match self.lists.iter().find(|l| l.range.distance() == range.distance()) {
+            Some(l) => RangePairs {
+                pairs: l.pairs.seq(),
+                verlet: matches!(l.range, PairRange::Within { .. }).then_some(&l.verlet),
+                crossing: Some(&l.crossing),
+            },
+            None => RangePairs::own(Pieced::Whole(&[])),
         }
     }
 
@@ -1040,7 +905,7 @@ mod tests {
     fn the_close_candidates_give_the_listed_pairs_as_particles_move() {
         let (mut rng, domain, mut pos) = random_box(13, [true, false, true]);
         let range = PairRange::Within { range: 0.12, skin: 0.06 };
-        let mut layer = Neighbours::new([PairNeed { range, form: PairForm::Listed }]);
+        let mut layer = Neighbours::new([range]);
         let (mut in_use, mut taken) = (0, 0);
         for step in 0..120 {
             layer.update(&pos, &domain, |_| true, &mut PhaseTimers::default());
@@ -1077,7 +942,7 @@ mod tests {
         // In Morton order, as the renumbering keeps them: rows of the first share reach the second.
         pos = crate::core::renumber::morton_order(&pos, 0.05, &domain).into_iter().map(|i| pos[i]).collect();
         let range = PairRange::Within { range: 0.06, skin: 0.03 };
-        let mut layer = Neighbours::new([PairNeed { range, form: PairForm::Listed }]);
+        let mut layer = Neighbours::new([range]);
         let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
         let term = |q: &Pair| (1.0 / (1.0 + q.dist * q.i as f64), -3.0e5 / (1.0 + q.r.x * q.j as f64));
         for step in 0..12 {
@@ -1085,8 +950,8 @@ mod tests {
             let crossing = pool.install(|| {
                 parallel::with_warm_pool(n, &mut parallel::Balance::default(), || {
                     layer.update(&pos, &domain, |_| true, &mut PhaseTimers::default());
-                    let pairs = layer.range_pairs(range, &domain);
-                    pairs.add_in_order(&pos, &mut sums, term, |q| term(q).1);
+                    let pairs = layer.range_pairs(range);
+                    pairs.add_in_order(&mut sums, term, |q| term(q).1);
                     pairs.crossing.map(|c| (c.split, c.pairs.len()))
                 })
             });
@@ -1161,26 +1026,25 @@ mod tests {
         assert_eq!(narrow.skin_in_use(), 0.01);
     }
 
-    /// A term filtering the candidates as it goes gets the listed pairs, bit for bit, in order:
-    /// walled and periodic boxes, as the particles move and the candidates are rebuilt.
+    /// The listed pairs are the brute-force pairs in (i, j) order, each with r the minimum-image
+    /// displacement x_i − x_j (the plain difference in a walled box) and dist = |r|, bit for
+    /// bit: walled and periodic boxes, as the particles move and the candidates are rebuilt.
     #[test]
-    fn filtered_candidates_are_the_listed_pairs_bit_for_bit() {
+    fn listed_pairs_carry_their_displacement_bit_for_bit() {
         for periodic in [[true, false, true], [false; 3]] {
             let (mut rng, domain, mut pos) = random_box(5, periodic);
             let range = PairRange::Within { range: 0.12, skin: 0.03 };
-            let need = |form| PairNeed { range, form };
-            let mut listed = Neighbours::new([need(PairForm::Listed)]);
-            let mut filtered = Neighbours::new([need(PairForm::Candidates)]);
+            let mut layer = Neighbours::new([range]);
             for step in 0..30 {
-                listed.update(&pos, &domain, |_| true, &mut PhaseTimers::default());
-                filtered.update(&pos, &domain, |_| true, &mut PhaseTimers::default());
-                let c = filtered.candidates(range, &domain);
-                let got: Vec<Pair> = c.list.iter().filter_map(|&ij| c.pair(&pos, ij)).collect();
-                let want = listed.pairs(range);
-                assert_eq!(got.len(), want.len(), "step {step}, periodic {periodic:?}");
-                assert!(want.len() > 100, "{} pairs", want.len());
-                for (g, w) in got.iter().zip(want.iter()) {
-                    assert!((g.i, g.j, g.r, g.dist) == (w.i, w.j, w.r, w.dist), "step {step}: {g:?} vs {w:?}");
+                layer.update(&pos, &domain, |_| true, &mut PhaseTimers::default());
+                let listed: Vec<Pair> = layer.pairs(range).iter().copied().collect();
+                let ij: Vec<(u32, u32)> = listed.iter().map(|q| (q.i, q.j)).collect();
+                assert_eq!(ij, brute(&pos, &domain, 0.12), "step {step}, periodic {periodic:?}");
+                assert!(listed.len() > 100, "{} pairs", listed.len());
+                for q in &listed {
+                    let (a, b) = (&pos[q.i as usize], &pos[q.j as usize]);
+                    let r = if periodic == [false; 3] { a - b } else { domain.displacement(a, b) };
+                    assert!(q.r == r && q.dist == r.norm_squared().sqrt(), "step {step}: {q:?}");
                 }
                 jiggle(&mut rng, &mut pos, &domain, 0.01);
             }

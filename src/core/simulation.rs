@@ -74,7 +74,7 @@ impl ForceField {
             });
         }
         let terms = &self.terms;
-        let wanted = |range| terms.iter().any(|t| group.has(t.as_ref()) && t.pairs().is_some_and(|n| n.range == range));
+        let wanted = |range| terms.iter().any(|t| group.has(t.as_ref()) && t.pairs() == Some(range));
         self.neighbours.update(&state.particles.position, &self.domain, wanted, &mut self.timers);
         let ctx = Context { domain: &self.domain, neighbours: &self.neighbours, dt };
         for term in self.terms.iter_mut().filter(|t| group.has(t.as_ref())) {

@@ -18,7 +18,7 @@ use super::{Context, ForceTerm, Forces, Renumbering};
 use crate::core::domain::Domain;
 use crate::core::lanes;
 use crate::core::magnetisation::{pair_dipole_field, pair_dipole_fields, pair_dipole_fields_four, MU0};
-use crate::core::neighbours::{Candidates, CellList, Pair, PairList, RangePairs, Skins, VerletList};
+use crate::core::neighbours::{CellList, Pair, PairList, RangePairs, Skins, VerletList};
 use crate::core::parallel;
 use crate::core::state::{Particles, Vec3};
 use nalgebra::Matrix3;
@@ -339,11 +339,10 @@ fn add_row_sums_in<const PERIODIC: bool>(
 }
 
 /// Adds F_ij to i and −F_ij to j for each pair of the range, each particle's in pair order.
-fn add_range_pairs(pairs: &RangePairs, position: &[Vec3], moment: &[Vec3], force: &mut [Vec3]) {
+fn add_range_pairs(pairs: &RangePairs, moment: &[Vec3], force: &mut [Vec3]) {
     let pair_force = |q: &Pair| dipole_pair_force(&moment[q.i as usize], &moment[q.j as usize], &q.r, q.dist);
     // −F_ij added is F_ij subtracted, bit for bit.
     pairs.add_in_order_by_four(
-        position,
         force,
         |q| {
             let f = pair_force(q);
@@ -397,9 +396,9 @@ impl ForceTerm for DipoleForce {
     /// blocks.
     fn apply(&mut self, ctx: &Context, p: &Particles, out: &mut Forces) {
         let n = p.len();
-        let shared = ctx.neighbours.declared(self.cutoff).map(|range| ctx.neighbours.range_pairs(range, ctx.domain));
+        let shared = ctx.neighbours.declared(self.cutoff).map(|range| ctx.neighbours.range_pairs(range));
         match (&shared, self.cutoff) {
-            (Some(pairs), _) => add_range_pairs(pairs, &p.position, out.moment, out.force),
+            (Some(pairs), _) => add_range_pairs(pairs, out.moment, out.force),
             (None, Some(c)) => {
                 if self.verlet.update(&p.position, ctx.domain, c, c * self.skin).is_some() {
                     self.rows.build(n, self.verlet.candidates());
@@ -439,17 +438,12 @@ impl ForceTerm for DipoleForce {
                             .pairs
                             .fill_whole(|out| CellList::default().pairs_within(&p.position, ctx.domain, None, out)),
                     }
-                    RangePairs {
-                        listed: Some(self.pairs.seq()),
-                        candidates: Candidates::none(ctx.domain),
-                        crossing: None,
-                    }
+                    RangePairs::own(self.pairs.seq())
                 }
             };
             let mut b_loc: Vec<Vec3> = p.position.iter().map(|x| self.b0 + self.gradient * x).collect();
             let moment = &*out.moment;
             pairs.add_in_order_by_four(
-                &p.position,
                 &mut b_loc,
                 |q| {
                     let (on_i, on_j) = pair_dipole_fields(&moment[q.i as usize], &moment[q.j as usize], q);

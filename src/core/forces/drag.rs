@@ -12,7 +12,7 @@
 use super::shielding::shadow_area;
 use super::wall_drag::WallCorrection;
 use super::{ConstantForce, Context, ForceTerm, Forces, Renewal, Renumbering};
-use crate::core::neighbours::{PairForm, PairNeed, PairRange};
+use crate::core::neighbours::PairRange;
 use crate::core::parallel;
 use crate::core::state::{Particles, State, Vec3};
 use std::f64::consts::PI;
@@ -241,11 +241,11 @@ impl ForceTerm for Drag {
     fn name(&self) -> &'static str {
         "drag"
     }
-    fn pairs(&self) -> Option<PairNeed> {
+    fn pairs(&self) -> Option<PairRange> {
         match self.shielding {
             Shielding::None => None,
-            // Listed: the contact term reads the same list instead of filtering the candidates again.
-            Shielding::Paper { near, .. } => Some(PairNeed { range: near, form: PairForm::Listed }),
+            // The contact's near range: one list serves both.
+            Shielding::Paper { near, .. } => Some(near),
         }
     }
     fn begin_step(&mut self, state: &State) {

@@ -13,7 +13,7 @@ pub mod shielding;
 pub mod wall_drag;
 
 use super::domain::Domain;
-use super::neighbours::{Neighbours, PairNeed};
+use super::neighbours::{Neighbours, PairRange};
 pub use super::renumber::Renumbering;
 use super::state::{ContactDiagnostics, ContactHistory, Particles, State, Vec3};
 
@@ -78,8 +78,8 @@ pub trait ForceTerm: Send {
     fn is_slow(&self) -> bool {
         false
     }
-    /// The pairs the term needs from the neighbour layer, and in which form (`None`: none).
-    fn pairs(&self) -> Option<PairNeed> {
+    /// The pairs the term needs from the neighbour layer (`None`: none), which lists them.
+    fn pairs(&self) -> Option<PairRange> {
         None
     }
     /// Whether the term's force depends on nothing but fixed particle properties (mass,

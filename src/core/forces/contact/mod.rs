@@ -7,8 +7,9 @@ pub mod law;
 mod walls;
 
 use super::{Context, ForceTerm, Forces, Renumbering};
-use crate::core::neighbours::{Pair, PairForm, PairNeed, PairRange, PairSource, RangePairs};
+use crate::core::neighbours::{Pair, PairRange};
 use crate::core::parallel;
+use crate::core::parallel::Pieced;
 use crate::core::state::{
     ContactDiagnostics, PairSpring, PairSprings, Particles, Sizes, Species, Vec3, WallFace, WallSpring,
 };
@@ -267,19 +268,16 @@ impl Contact {
         }
     }
 
-    /// The touching pairs among the near `items` that `keep(j)` selects, in order, their springs
-    /// merged from `history` (positioned at or before the first), computed [`LANES`] at a time;
-    /// `emit(batch, lanes)` receives each batch of pairs (with their smaller diameters) and its
-    /// computed lanes, in order.
-    #[allow(clippy::too_many_arguments)]
-    fn in_lanes<'s, S: PairSource>(
+    /// The touching pairs among `pairs`, in order, their springs merged from `history`
+    /// (positioned at or before the first), computed [`LANES`] at a time; `emit(batch, lanes)`
+    /// receives each batch of pairs (with their smaller diameters) and its computed lanes, in
+    /// order.
+    fn in_lanes<'s>(
         &self,
         p: &Particles,
-        source: &'s S,
-        items: impl Iterator<Item = &'s S::Item>,
+        pairs: impl Iterator<Item = &'s Pair>,
         mut history: Springs<(u32, u32)>,
         dt: f64,
-        keep: impl Fn(u32) -> bool,
         mut emit: impl FnMut(&[((u32, u32), f64)], &Lanes),
     ) {
         // With one size, R* and m* are set once in the lanes instead of per contact.
@@ -290,22 +288,15 @@ impl Contact {
             self.law.apply(lanes, dt);
             emit(batch, lanes);
         };
-        let touching = |item: &S::Item| {
-            let (i, j) = S::ij(item);
-            if !keep(j) {
-                return None;
-            }
-            let pair = source.pair(&p.position, item)?;
-            (pair.dist < p.radius[i as usize] + p.radius[j as usize]).then_some(pair)
-        };
-        for pair in items.filter_map(touching) {
+        let touching = |pair: &&Pair| pair.dist < p.radius[pair.i as usize] + p.radius[pair.j as usize];
+        for pair in pairs.filter(touching) {
             let (i, j) = (pair.i as usize, pair.j as usize);
             let s = history.get((pair.i, pair.j));
             let reduced = match alike {
                 Some(_) => None,
                 None => Some(cache.get((p.radius[i], p.radius[j], p.mass[i], p.mass[j]))),
             };
-            batch[used] = ((pair.i, pair.j), self.fill_pair(&mut lanes, used, p, &pair, reduced, s));
+            batch[used] = ((pair.i, pair.j), self.fill_pair(&mut lanes, used, p, pair, reduced, s));
             used += 1;
             if used == LANES {
                 flush(&mut lanes, &batch);
@@ -317,18 +308,18 @@ impl Contact {
 
     /// Pair contacts on the particles `lo..lo + force.len()` (a share; `force` and `torque` are
     /// its slices): first the pairs (i, j) of earlier rows (from `first_row`, the first whose
-    /// candidates reach the share) with j in the share, in order (they
-    /// come first in each j's serial sum; the share before computes them too, for its own i),
-    /// then the share's own rows, whose j beyond the share are left to the shares after. Each
-    /// particle's force and torque are so summed in the serial order, on any split.
+    /// pairs reach the share) with j in the share, in order (they come first in each j's serial
+    /// sum; the share before computes them too, for its own i), then the share's own rows, whose
+    /// j beyond the share are left to the shares after. Each particle's force and torque are so
+    /// summed in the serial order, on any split.
     ///
-    /// `crossing`, where given, holds those earlier pairs with j in the share (the listed
-    /// range's [`CrossingPairs`]): read instead of scanning the rows before the share.
+    /// `crossing`, where given, holds those earlier pairs with j in the share (the near range's
+    /// [`CrossingPairs`]): read instead of scanning the rows before the share.
     #[allow(clippy::too_many_arguments)]
-    fn share_pass<'s, S: PairSource>(
+    fn share_pass<'s>(
         &self,
-        source: &'s S,
-        crossing: Option<impl Iterator<Item = &'s S::Item>>,
+        near: Pieced<'s, Pair>,
+        crossing: Option<impl Iterator<Item = &'s Pair>>,
         p: &Particles,
         dt: f64,
         history: &PairSprings,
@@ -336,12 +327,11 @@ impl Contact {
         (force, torque): (&mut [Vec3], &mut [Vec3]),
         (next, diag): &mut ShareOut,
     ) {
-        let near = source.items();
         let hi = lo + force.len();
-        let row_below = |bound: usize| near.partition_point(|q| (S::ij(q).0 as usize) < bound);
+        let row_below = |bound: usize| near.partition_point(|q| (q.i as usize) < bound);
         let (rows, rest) = (row_below(lo), row_below(hi));
         let history_from = |row: usize| Springs::from(history.pieces(), (row as u32, 0));
-        let in_share = |j: u32| (lo..hi).contains(&(j as usize));
+        let in_share = |q: &&Pair| (lo..hi).contains(&(q.j as usize));
         let add_to_j = |batch: &[((u32, u32), f64)], lanes: &Lanes| {
             for (l, &((_, j), _)) in batch.iter().enumerate() {
                 let j = j as usize - lo;
@@ -351,14 +341,14 @@ impl Contact {
         };
         let springs = history_from(first_row);
         match crossing {
-            Some(pairs) => self.in_lanes(p, source, pairs, springs, dt, in_share, add_to_j),
-            None => self.in_lanes(p, source, near.range(row_below(first_row), rows), springs, dt, in_share, add_to_j),
+            Some(pairs) => self.in_lanes(p, pairs.filter(in_share), springs, dt, add_to_j),
+            None => self.in_lanes(p, near.range(row_below(first_row), rows).filter(in_share), springs, dt, add_to_j),
         }
         next.clear();
         *diag = ContactDiagnostics::default();
         let mut adder = RowAdder::new(lo, diag, next);
         let add = |batch: &[((u32, u32), f64)], lanes: &Lanes| adder.add(force, torque, batch, lanes);
-        self.in_lanes(p, source, near.range(rows, rest), history_from(lo), dt, |_| true, add);
+        self.in_lanes(p, near.range(rows, rest), history_from(lo), dt, add);
         adder.finish(force, torque);
     }
 
@@ -367,28 +357,17 @@ impl Contact {
         let (shares, size) = parallel::split_of(out.force.len());
         let mut slots = std::mem::take(&mut self.shares);
         slots.resize_with(shares.max(slots.len()), Default::default);
-        // The listed near pairs (the contact declares them listed), or, for a range declared as
-        // candidates, the candidates filtered as they are read: the same pairs, bit for bit.
-        let RangePairs { listed, candidates, crossing } = ctx.neighbours.range_pairs(self.near, ctx.domain);
-        let crossing = crossing.filter(|c| c.found_for(out.force.len()));
+        let near = ctx.neighbours.range_pairs(self.near);
+        let crossing = near.crossing.filter(|c| c.found_for(out.force.len()));
         parallel::for_each_share((&mut *out.force, &mut *out.torque), |lo, parts| {
             let mut slot = slots[lo / size].lock().expect("one share per slot");
             // Filled on this thread's stack, not in the slot: the slots sit side by side, and
             // writing a history's length at every contact into a cache line the other share also
             // writes is false sharing.
             let mut share = std::mem::take(&mut *slot);
-            let rows = (candidates.first_row_reaching(lo), lo);
-            let len = parts.0.len();
-            match listed {
-                Some(pairs) => {
-                    let crossing = crossing.map(|c| c.reaching(lo, len));
-                    self.share_pass(&pairs, crossing, p, ctx.dt, &history, rows, parts, &mut share)
-                }
-                None => {
-                    let crossing = None::<std::iter::Empty<_>>;
-                    self.share_pass(&candidates, crossing, p, ctx.dt, &history, rows, parts, &mut share)
-                }
-            }
+            let rows = (near.first_row_reaching(lo), lo);
+            let crossing = crossing.map(|c| c.reaching(lo, parts.0.len()));
+            self.share_pass(near.pairs, crossing, p, ctx.dt, &history, rows, parts, &mut share);
             *slot = share;
         });
         // The shares' pieces in order, swapped for those of the history before last (the slots'
@@ -521,10 +500,8 @@ impl ForceTerm for Contact {
     fn name(&self) -> &'static str {
         "contact"
     }
-    /// Listed: filtering the candidates inside the contact's pass (a branch per candidate among
-    /// the lanes' fill) cost more than writing the list first, in packed beds and in chains.
-    fn pairs(&self) -> Option<PairNeed> {
-        Some(PairNeed { range: self.near, form: PairForm::Listed })
+    fn pairs(&self) -> Option<PairRange> {
+        Some(self.near)
     }
     fn apply(&mut self, ctx: &Context, p: &Particles, out: &mut Forces) {
         let mut diag = ContactDiagnostics::default();
@@ -575,59 +552,6 @@ mod tests {
                 );
             }
         }
-    }
-
-    /// Where another term lists the near range, the pair pass reads that list instead of
-    /// filtering the candidates: the same forces, torques and springs, bit for bit, step by
-    /// step, in a crowded box periodic on two axes (overlapping pairs, springs carried along).
-    #[test]
-    fn reading_the_listed_near_pairs_gives_the_bits_of_filtering_the_candidates() {
-        let a = 5e-6;
-        let species = crate::core::state::test_sphere(a);
-        let edge = 60e-6;
-        let domain = Domain { lo: Vec3::zeros(), hi: Vec3::repeat(edge), periodic: [true, true, false] };
-        let value = |k: usize| (k as f64 * 0.618_033_988_75).fract();
-        let mut state = State::default();
-        for i in 0..250 {
-            let x = Vec3::from_fn(|c, _| a + (edge - 2.0 * a) * value(3 * i + c));
-            let v = Vec3::from_fn(|c, _| value(1000 + 3 * i + c) - 0.5) * 0.05;
-            state.particles.push(0, &species, x, v);
-        }
-        state.fields.fit(state.particles.len());
-        let near = PairRange::Within { range: 2.0 * a, skin: 0.4 * a };
-        let candidates_only = PairNeed { range: near, form: PairForm::Candidates };
-        let also_listed = PairNeed { range: near, form: PairForm::Listed };
-        let mut filtering = (Neighbours::new([candidates_only]), state.clone());
-        let mut reading = (Neighbours::new([candidates_only, also_listed]), state);
-        let mut contacts =
-            [0, 1].map(|_| Contact::new(std::slice::from_ref(&species), ContactLaw::default(), true, near));
-        let dt = 1e-8;
-        let mut touching = 0;
-        for step in 0..200 {
-            for ((neighbours, state), contact) in [&mut filtering, &mut reading].into_iter().zip(&mut contacts) {
-                let p = &mut state.particles;
-                for (x, v) in p.position.iter_mut().zip(&p.velocity) {
-                    *x += *v * dt;
-                    domain.wrap(x);
-                }
-                neighbours.update(&p.position, &domain, |_| true, &mut crate::core::timers::PhaseTimers::default());
-                let ctx = Context { domain: &domain, neighbours, dt };
-                state.fields.force.iter_mut().for_each(|f| *f = Vec3::zeros());
-                let (p, mut out) = Forces::of(state, ForceGroup::All);
-                contact.apply(&ctx, p, &mut out);
-                let (p, f) = (&mut state.particles, &state.fields.force);
-                for ((v, f), m) in p.velocity.iter_mut().zip(f).zip(&p.mass) {
-                    *v += f * (dt / m);
-                }
-            }
-            let listed = |n: &Neighbours| n.range_pairs(near, &domain).listed.is_some();
-            assert!(listed(&reading.0) && !listed(&filtering.0));
-            let (x, y) = (&filtering.1, &reading.1);
-            assert!(x.fields.force == y.fields.force && x.fields.torque == y.fields.torque, "step {step}");
-            assert!(x.contacts.pairs == y.contacts.pairs && x.particles.position == y.particles.position);
-            touching += x.contacts.pairs.len();
-        }
-        assert!(touching > 1000, "{touching} pair contacts over the run");
     }
 
     /// Two species of different stiffness: each lane of a batch takes its own pair's constants
