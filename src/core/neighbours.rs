@@ -627,12 +627,10 @@ impl<'a> RangePairs<'a> {
             Some(c) => c.reaching(lo, share.len()).for_each(|q| share[q.j as usize - lo] += second(q)),
             None => {
                 let first_row = self.first_row_reaching(lo);
-                parallel::add_earlier_rows(self.pairs, ij, first_row, |q| Some(second(q)), lo, share)
+                parallel::add_earlier_rows(self.pairs, ij, first_row, &second, lo, share)
             }
         };
-        let one = |q: &Pair| Some(both(q));
-        let four = |q: [&Pair; 4]| Some(four(q));
-        parallel::add_pairs_in_order(out, self.pairs, ij, earlier, one, four);
+        parallel::add_pairs_in_order(out, self.pairs, ij, earlier, both, four);
     }
 }
 

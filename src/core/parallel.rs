@@ -484,23 +484,22 @@ pub fn any_share<S: Split>(parts: S, test: impl Fn(S) -> bool + Sync + Send) -> 
 
 /// Σ over the pairs k (sorted by i, with i < j) of `both(k).0` into `out[i]` and `both(k).1`
 /// into `out[j]`, each particle's terms added in pair order, as the loop
-/// `for k { if let Some((a, b)) = both(k) { out[i] += a; out[j] += b } }` adds them, bit for bit
-/// (`None`: an item that is no pair now, a candidate out of range). In shares of particles when
-/// worth it: a share from `lo` > 0 first takes `earlier(lo, share)`, which adds, in pair order,
-/// the parts for j alone of the pairs of rows before `lo` whose j is in the share (those come
-/// first in its particles' serial sums; [`add_earlier_rows`] finds them by scanning the rows),
-/// then walks its own rows, leaving the j beyond it to the shares after. Nothing is buffered and
-/// no thread waits.
+/// `for k { let (a, b) = both(k); out[i] += a; out[j] += b }` adds them, bit for bit. In shares
+/// of particles when worth it: a share from `lo` > 0 first takes `earlier(lo, share)`, which
+/// adds, in pair order, the parts for j alone of the pairs of rows before `lo` whose j is in the
+/// share (those come first in its particles' serial sums; [`add_earlier_rows`] finds them by
+/// scanning the rows), then walks its own rows, leaving the j beyond it to the shares after.
+/// Nothing is buffered and no thread waits.
 ///
-/// `four(k..k + 4)`, where it gives `Some`, is `both` of four consecutive items computed together
-/// (in SIMD lanes; `None`: take them one by one); the terms are then added one by one, in order.
+/// `four(k..k + 4)` is `both` of four consecutive items computed together (in SIMD lanes); the
+/// terms are then added one by one, in order.
 pub fn add_pairs_in_order<P: Sync, T: Copy + Send + std::ops::AddAssign>(
     out: &mut [T],
     pairs: Pieced<P>,
     ij: impl Fn(&P) -> (usize, usize) + Sync + Send,
     earlier: impl Fn(usize, &mut [T]) + Sync + Send,
-    both: impl Fn(&P) -> Option<(T, T)> + Sync + Send,
-    four: impl Fn([&P; 4]) -> Option<[(T, T); 4]> + Sync + Send,
+    both: impl Fn(&P) -> (T, T) + Sync + Send,
+    four: impl Fn([&P; 4]) -> [(T, T); 4] + Sync + Send,
 ) {
     debug_assert!(
         pairs.iter().zip(pairs.iter().skip(1)).all(|(a, b)| ij(a).0 <= ij(b).0)
@@ -539,13 +538,10 @@ pub fn add_pairs_in_order<P: Sync, T: Copy + Send + std::ops::AddAssign>(
             let mut quads = slice.chunks_exact(4);
             for quad in &mut quads {
                 let quad = [&quad[0], &quad[1], &quad[2], &quad[3]];
-                match four(quad) {
-                    Some(terms) => quad.into_iter().zip(terms).for_each(|(q, t)| add(share, &mut row, q, t)),
-                    None => quad.into_iter().for_each(|q| both(q).into_iter().for_each(|t| add(share, &mut row, q, t))),
-                }
+                quad.into_iter().zip(four(quad)).for_each(|(q, t)| add(share, &mut row, q, t));
             }
             for q in quads.remainder() {
-                both(q).into_iter().for_each(|t| add(share, &mut row, q, t));
+                add(share, &mut row, q, both(q));
             }
         }
         if let Some((r, sum)) = row {
@@ -561,7 +557,7 @@ pub fn add_earlier_rows<P, T: std::ops::AddAssign>(
     pairs: Pieced<P>,
     ij: impl Fn(&P) -> (usize, usize),
     first_row: usize,
-    second: impl Fn(&P) -> Option<T>,
+    second: impl Fn(&P) -> T,
     lo: usize,
     share: &mut [T],
 ) {
@@ -571,9 +567,7 @@ pub fn add_earlier_rows<P, T: std::ops::AddAssign>(
         for q in slice {
             let j = ij(q).1;
             if (lo..hi).contains(&j) {
-                if let Some(b) = second(q) {
-                    share[j - lo] += b;
-                }
+                share[j - lo] += second(q);
             }
         }
     }
@@ -729,18 +723,13 @@ mod tests {
         let mut pairs: Vec<(usize, usize)> =
             (0..40 * n as u64).map(|k| (particle(2 * k), particle(2 * k + 1))).filter(|(i, j)| i < j).collect();
         pairs.sort_unstable();
-        // Every fifth item is no pair (a candidate out of range), and the rows reaching a share
-        // are bounded as a Verlet list bounds them: the lowest i of a pair with j at or beyond it.
-        let both = |&(i, j): &(usize, usize)| {
-            ((i + j) % 5 != 0).then(|| (1.0 / (1.0 + (i * 7 + j) as f64), -3.0e5 / (1.0 + (j * 3 + i) as f64)))
-        };
-        let second = |q: &(usize, usize)| both(q).map(|(_, b)| b);
-        // Four at a time where all four are pairs (as a list's kernel in SIMD lanes), otherwise
-        // one by one: both ways must add the same terms in the same order.
-        let four = |q: [&(usize, usize); 4]| match q.map(both) {
-            [Some(a), Some(b), Some(c), Some(d)] => Some([a, b, c, d]),
-            _ => None,
-        };
+        // The rows reaching a share are bounded as a Verlet list bounds them: the lowest i of a
+        // pair with j at or beyond it.
+        let both = |&(i, j): &(usize, usize)| (1.0 / (1.0 + (i * 7 + j) as f64), -3.0e5 / (1.0 + (j * 3 + i) as f64));
+        let second = |q: &(usize, usize)| both(q).1;
+        // Four at a time (as a list's kernel in SIMD lanes) and one by one at the end of a
+        // slice: both ways must add the same terms in the same order.
+        let four = |q: [&(usize, usize); 4]| q.map(both);
         let mut reaching = vec![usize::MAX; n + 1];
         for &(i, j) in &pairs {
             reaching[j] = reaching[j].min(i);
@@ -751,10 +740,9 @@ mod tests {
         let reach = |lo: usize| reaching[lo];
         let mut serial = vec![0.1; n];
         for q in &pairs {
-            if let Some((a, b)) = both(q) {
-                serial[q.0] += a;
-                serial[q.1] += b;
-            }
+            let (a, b) = both(q);
+            serial[q.0] += a;
+            serial[q.1] += b;
         }
         // The same pairs held in pieces, some empty (left out of the list), as a filter writes
         // them into slots left from a longer list.
@@ -792,10 +780,9 @@ mod tests {
         // the earlier pieces).
         let mut serial_kept = vec![0.1; n];
         for q in &kept {
-            if let Some((a, b)) = both(q) {
-                serial_kept[q.0] += a;
-                serial_kept[q.1] += b;
-            }
+            let (a, b) = both(q);
+            serial_kept[q.0] += a;
+            serial_kept[q.1] += b;
         }
         let mut out = vec![0.1; n];
         let earlier = |lo, share: &mut [f64]| add_earlier_rows(seq, |q| *q, 0, second, lo, share);
