@@ -478,8 +478,7 @@ pub struct CrossingPairs {
     split: (usize, usize),
     candidates: Vec<(u32, u32)>,
     candidate_pieces: Pieces<(u32, u32)>,
-    pairs: Vec<Pair>,
-    pair_pieces: Pieces<Pair>,
+    pairs: PairList,
 }
 
 impl CrossingPairs {
@@ -502,17 +501,9 @@ impl CrossingPairs {
         self.split = split;
     }
 
-    /// The crossing candidates within `range` now, as the listing filters them.
+    /// The crossing candidates within `range` now, filtered by the listing's own filter.
     fn filter(&mut self, positions: &[Vec3], domain: &Domain, range: f64) {
-        let (candidates, range2, periodic) = (&self.candidates, range * range, domain.periodic != [false; 3]);
-        let pair = |(i, j): (u32, u32)| {
-            let r = separation(domain, periodic, positions, (i, j));
-            let d2 = r.norm_squared();
-            (d2 < range2).then(|| Pair { i, j, r, dist: d2.sqrt() })
-        };
-        parallel::collect_ordered_ranges(candidates.len(), &mut self.pairs, &mut self.pair_pieces, |ks, out| {
-            out.extend(candidates[ks].iter().filter_map(|&ij| pair(ij)))
-        });
+        filter_candidates(&self.candidates, positions, domain, range, &mut self.pairs);
     }
 
     /// Whether they were found for the split of `n` particles this thread pool makes.
@@ -523,7 +514,7 @@ impl CrossingPairs {
     /// The crossing pairs into the share from `lo` of `len` particles (of the split they were
     /// found for).
     pub fn reaching(&self, lo: usize, len: usize) -> impl Iterator<Item = &Pair> {
-        self.pairs.iter().filter(move |q| (lo..lo + len).contains(&(q.j as usize)))
+        self.pairs.seq().iter().filter(move |q| (lo..lo + len).contains(&(q.j as usize)))
     }
 }
 
