@@ -43,6 +43,38 @@ fn has(program: &str, probe: &[&str]) -> bool {
     Command::new(program).args(probe).output().is_ok_and(|o| o.status.success())
 }
 
+/// A virtual X server for ParaView's render, stopped when dropped. Started with `-displayfd`, it
+/// names its display only once it accepts clients: `xvfb-run` instead signals readiness with
+/// SIGUSR1, and on a loaded machine its pvbatch sometimes met no server ("bad X server
+/// connection") three times running.
+struct VirtualDisplay {
+    server: std::process::Child,
+    display: String,
+}
+
+impl VirtualDisplay {
+    fn start() -> Option<Self> {
+        use std::io::BufRead;
+        let mut server = Command::new("Xvfb")
+            .args(["-displayfd", "1", "-screen", "0", "1280x1024x24", "-nolisten", "tcp"])
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .ok()?;
+        let mut line = String::new();
+        std::io::BufReader::new(server.stdout.take()?).read_line(&mut line).ok()?;
+        let number: u32 = line.trim().parse().ok()?;
+        Some(VirtualDisplay { server, display: format!(":{number}") })
+    }
+}
+
+impl Drop for VirtualDisplay {
+    fn drop(&mut self) {
+        let _ = self.server.kill();
+        let _ = self.server.wait();
+    }
+}
+
 fn path(p: &Path) -> &str {
     p.to_str().unwrap()
 }
@@ -114,16 +146,18 @@ print("arrays", len(names), " ".join(names))
     for array in ["radius", "species", "velocity", "angular_velocity", "moment"] {
         assert!(text.contains(array), "{array} in {text}");
     }
-    if !has("xvfb-run", &["--help"]) {
-        println!("skipped the render: xvfb-run (Debian's xvfb) is not installed");
+    if !has("Xvfb", &["-help"]) {
+        println!("skipped the render: Xvfb (Debian's xvfb) is not installed");
         return;
     }
+    let x = VirtualDisplay::start().expect("Xvfb starts and names its display");
     let png = work.join("frame.png");
     let script = magdem::io::export::PARAVIEW_RENDER;
     std::fs::write(work.join("render.py"), script).unwrap();
     let render = || {
-        Command::new("xvfb-run")
-            .args(["-a", "pvbatch", path(&work.join("render.py")), path(&xdmf), path(&png)])
+        Command::new("pvbatch")
+            .args([path(&work.join("render.py")), path(&xdmf), path(&png)])
+            .env("DISPLAY", &x.display)
             .output()
             .unwrap()
     };
@@ -132,8 +166,6 @@ print("arrays", len(names), " ".join(names))
         if out.status.success() {
             break;
         }
-        // pvbatch under a fresh X server occasionally aborts at start-up ("bad X server
-        // connection"), more often on a loaded machine; two more tries, a second apart.
         println!(
             "render failed, attempt {attempt}: {}",
             String::from_utf8_lossy(&out.stderr).lines().last().unwrap_or("")
