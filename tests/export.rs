@@ -43,38 +43,6 @@ fn has(program: &str, probe: &[&str]) -> bool {
     Command::new(program).args(probe).output().is_ok_and(|o| o.status.success())
 }
 
-/// A virtual X server for ParaView's render, stopped when dropped. Started with `-displayfd`, it
-/// names its display only once it accepts clients: `xvfb-run` instead signals readiness with
-/// SIGUSR1, and on a loaded machine its pvbatch sometimes met no server ("bad X server
-/// connection") three times running.
-struct VirtualDisplay {
-    server: std::process::Child,
-    display: String,
-}
-
-impl VirtualDisplay {
-    fn start() -> Option<Self> {
-        use std::io::BufRead;
-        let mut server = Command::new("Xvfb")
-            .args(["-displayfd", "1", "-screen", "0", "1280x1024x24", "-nolisten", "tcp"])
-            .stdout(std::process::Stdio::piped())
-            .stderr(std::process::Stdio::null())
-            .spawn()
-            .ok()?;
-        let mut line = String::new();
-        std::io::BufReader::new(server.stdout.take()?).read_line(&mut line).ok()?;
-        let number: u32 = line.trim().parse().ok()?;
-        Some(VirtualDisplay { server, display: format!(":{number}") })
-    }
-}
-
-impl Drop for VirtualDisplay {
-    fn drop(&mut self) {
-        let _ = self.server.kill();
-        let _ = self.server.wait();
-    }
-}
-
 fn path(p: &Path) -> &str {
     p.to_str().unwrap()
 }
@@ -146,34 +114,14 @@ print("arrays", len(names), " ".join(names))
     for array in ["radius", "species", "velocity", "angular_velocity", "moment"] {
         assert!(text.contains(array), "{array} in {text}");
     }
-    if !has("Xvfb", &["-help"]) {
-        println!("skipped the render: Xvfb (Debian's xvfb) is not installed");
-        return;
-    }
-    let x = VirtualDisplay::start().expect("Xvfb starts and names its display");
     let png = work.join("frame.png");
-    let script = magdem::io::export::PARAVIEW_RENDER;
-    std::fs::write(work.join("render.py"), script).unwrap();
-    let render = || {
-        Command::new("pvbatch")
-            .args([path(&work.join("render.py")), path(&xdmf), path(&png)])
-            .env("DISPLAY", &x.display)
-            .output()
-            .unwrap()
-    };
-    let mut out = render();
-    for attempt in 2..=3 {
-        if out.status.success() {
-            break;
+    match magdem::io::export::render_last_frame(&xdmf, &png) {
+        Err(magdem::io::export::RenderError::Missing(program)) => {
+            println!("skipped the render: {program} is not installed");
+            return;
         }
-        println!(
-            "render failed, attempt {attempt}: {}",
-            String::from_utf8_lossy(&out.stderr).lines().last().unwrap_or("")
-        );
-        std::thread::sleep(std::time::Duration::from_secs(1));
-        out = render();
+        outcome => outcome.expect("pvbatch renders the last frame"),
     }
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     // A white image compresses to a few kB; spheres on it do not.
     let size = std::fs::metadata(&png).map(|m| m.len()).unwrap_or(0);
     assert!(size > 15_000, "rendered PNG of {size} bytes");

@@ -117,7 +117,8 @@ pub fn write_lammps_dump(h5: &Path, out: &Path) -> Result<(), Error> {
 
 /// A pvbatch script (arguments: XDMF file, PNG file) that renders a trajectory's last frame:
 /// the particles as spheres of their radius, coloured by the moment along x, seen along −z (the
-/// field along x lies in the picture). Run it as `xvfb-run -a pvbatch SCRIPT FILE.xdmf OUT.png`.
+/// field along x lies in the picture). Run it as `xvfb-run -a pvbatch SCRIPT FILE.xdmf OUT.png`, or through
+/// [`render_last_frame`].
 pub const PARAVIEW_RENDER: &str = r#"
 import sys
 from paraview.simple import *
@@ -157,3 +158,92 @@ view.OrientationAxesVisibility = 1
 Render(view)
 SaveScreenshot(sys.argv[2], view, ImageResolution=[1400, 1000])
 "#;
+
+/// Why [`render_last_frame`] made no picture.
+#[derive(Debug)]
+pub enum RenderError {
+    /// The program (`Xvfb` or `pvbatch`) is not installed.
+    Missing(&'static str),
+    /// It ran and failed; the last line it wrote to stderr.
+    Failed(String),
+}
+
+impl std::fmt::Display for RenderError {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        match self {
+            RenderError::Missing(program) => write!(f, "{program} is not installed"),
+            RenderError::Failed(why) => write!(f, "the render failed: {why}"),
+        }
+    }
+}
+
+impl std::error::Error for RenderError {}
+
+/// A virtual X server, stopped when dropped. `-displayfd` makes Xvfb name its display only once
+/// it accepts clients; `xvfb-run` signals readiness otherwise, and on a loaded machine its
+/// pvbatch met no server ("bad X server connection") three times running.
+struct VirtualDisplay {
+    server: std::process::Child,
+    display: String,
+}
+
+impl VirtualDisplay {
+    fn start() -> Result<Self, RenderError> {
+        use std::io::BufRead;
+        let mut server = std::process::Command::new("Xvfb")
+            .args(["-displayfd", "1", "-screen", "0", "1280x1024x24", "-nolisten", "tcp"])
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .map_err(|_| RenderError::Missing("Xvfb"))?;
+        let mut line = String::new();
+        let named = server.stdout.take().map(|o| std::io::BufReader::new(o).read_line(&mut line));
+        let display = VirtualDisplay { server, display: format!(":{}", line.trim()) };
+        match (named, line.trim().parse::<u32>()) {
+            (Some(Ok(_)), Ok(_)) => Ok(display),
+            _ => Err(RenderError::Failed(format!("Xvfb named no display ({:?})", line.trim()))),
+        }
+    }
+}
+
+impl Drop for VirtualDisplay {
+    fn drop(&mut self) {
+        let _ = self.server.kill();
+        let _ = self.server.wait();
+    }
+}
+
+/// Renders the last frame of the trajectory that `xdmf` describes into `png` with
+/// [`PARAVIEW_RENDER`], under pvbatch on a virtual X server of its own. Up to three attempts,
+/// a second apart: pvbatch can still fail to start on a loaded machine.
+pub fn render_last_frame(xdmf: &Path, png: &Path) -> Result<(), RenderError> {
+    let failed = |e: std::io::Error| RenderError::Failed(e.to_string());
+    static RENDERS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let k = RENDERS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let script = std::env::temp_dir().join(format!("magdem-render-{}-{k}.py", std::process::id()));
+    std::fs::write(&script, PARAVIEW_RENDER).map_err(failed)?;
+    let x = VirtualDisplay::start();
+    let outcome = x.and_then(|x| {
+        let mut why = String::new();
+        for attempt in 1..=3 {
+            if attempt > 1 {
+                std::thread::sleep(std::time::Duration::from_secs(1));
+            }
+            let out = std::process::Command::new("pvbatch")
+                .arg(&script)
+                .arg(xdmf)
+                .arg(png)
+                .env("DISPLAY", &x.display)
+                .output()
+                .map_err(|_| RenderError::Missing("pvbatch"))?;
+            if out.status.success() {
+                return Ok(());
+            }
+            why = String::from_utf8_lossy(&out.stderr).lines().last().unwrap_or("no message").to_string();
+            eprintln!("pvbatch attempt {attempt} of 3 failed: {why}");
+        }
+        Err(RenderError::Failed(why))
+    });
+    let _ = std::fs::remove_file(&script);
+    outcome
+}

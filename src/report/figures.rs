@@ -231,32 +231,26 @@ pub fn shielding_figure(out: &Path) -> Result<String, Error> {
     ))
 }
 
-/// A ParaView render (pvbatch under xvfb-run, through the run's XDMF sidecar) of `run`'s last
-/// frame into `paraview-case1.png`; an existing render is kept where ParaView is absent.
+/// A ParaView render (`io::export::render_last_frame`, through the run's XDMF sidecar) of `run`'s
+/// last frame into `paraview-case1.png`. Where ParaView or Xvfb is absent or the render fails, an
+/// earlier render is kept and the report says why no new one was made.
 pub fn paraview_section(run: Option<&Run>, out: &Path) -> Result<String, Error> {
     let Some(r) = run else { return Ok(String::new()) };
     let png = out.join("paraview-case1.png");
     let xdmf = crate::io::export::write_xdmf(&r.file)?;
-    let script = std::env::temp_dir().join(format!("magdem-render-{}.py", std::process::id()));
-    std::fs::write(&script, crate::io::export::PARAVIEW_RENDER)?;
-    let rendered = std::process::Command::new("xvfb-run")
-        .args(["-a", "pvbatch"])
-        .arg(&script)
-        .arg(&xdmf)
-        .arg(&png)
-        .output()
-        .is_ok_and(|o| o.status.success());
-    let _ = std::fs::remove_file(&script);
-    if !rendered && !png.exists() {
-        return Ok(
-            "## In ParaView\n\nParaView (pvbatch) or xvfb-run is not installed here, so no render was made.\n\n".into(),
-        );
-    }
+    let kept = match crate::io::export::render_last_frame(&xdmf, &png) {
+        Ok(()) => String::new(),
+        Err(why) if png.exists() => {
+            eprintln!("ParaView render of {}: {why}; the earlier render is kept", r.id);
+            format!(" The picture is an earlier render; this time {why}.")
+        }
+        Err(why) => return Ok(format!("## In ParaView\n\nNo render was made: {why}.\n\n")),
+    };
     Ok(format!(
         "## In ParaView and OVITO\n\nEvery run writes an XDMF sidecar beside its HDF5 file (`OUT.xdmf`, referencing the datasets in place), \
          which ParaView opens (`paraview runs/…/RUN.xdmf`, or `pvpython`/`pvbatch` scripts); `magdem export RUN.h5 --format \
          lammps-dump` writes a LAMMPS dump that OVITO opens. `{}` at 5 ms, rendered by pvbatch with the script \
-         `io::export::PARAVIEW_RENDER` (spheres of their radius coloured by the moment along x, seen along −z):\n\n\
+         `io::export::PARAVIEW_RENDER` (spheres of their radius coloured by the moment along x, seen along −z).{kept}\n\n\
          ![ParaView render](paraview-case1.png)\n\n",
         r.id
     ))
