@@ -1100,7 +1100,7 @@ fn both_cores(bench: &Bench) -> String {
 }
 
 /// Turns, at least, of the case with the two-thread target (packed 30 000).
-const TARGET_TURNS: usize = 5;
+const TARGET_TURNS: usize = 9;
 
 /// Passes (reads and writes) over arrays of three-vectors the velocity-Verlet kicks and drift
 /// make per step (see [`both_cores`]).
