@@ -247,13 +247,15 @@ enum Command {
     /// Describe a trajectory file.
     Info { file: PathBuf },
     /// Export trajectories for ParaView (an XDMF sidecar beside each file, referencing its HDF5
-    /// datasets in place) or OVITO and LAMMPS' tools (a LAMMPS text dump of every frame).
+    /// datasets in place), OVITO and LAMMPS' tools (a LAMMPS text dump of every frame), or as a
+    /// picture of the last frame rendered by ParaView (needs pvbatch and Xvfb).
     Export {
         #[arg(required = true)]
         files: Vec<PathBuf>,
         #[arg(long, value_enum, default_value = "xdmf")]
         format: ExportFormat,
-        /// Dump file (lammps-dump, one trajectory; default FILE.dump beside it).
+        /// Dump or picture (lammps-dump or png, one trajectory; default FILE.dump or FILE.png
+        /// beside it).
         #[arg(short, long)]
         output: Option<PathBuf>,
     },

@@ -17,6 +17,9 @@ pub enum ExportFormat {
     Xdmf,
     /// A LAMMPS text dump for OVITO: id type x y z vx vy vz radius mux muy muz.
     LammpsDump,
+    /// A picture of the last frame (FILE.png): ParaView's pvbatch on a virtual X server, spheres
+    /// of their radius coloured by the moment along x, seen along −z.
+    Png,
 }
 
 /// Exit code 0, or 2 after `error: FILE: why` (an unreadable or foreign file is invalid input).
@@ -161,7 +164,8 @@ fn describe(path: &Path) -> Result<(), Error> {
     Ok(())
 }
 
-/// `magdem export FILE… --format F [-o OUT]`: an XDMF sidecar or a LAMMPS dump per trajectory.
+/// `magdem export FILE… --format F [-o OUT]`: an XDMF sidecar, a LAMMPS dump or a picture of the
+/// last frame per trajectory.
 pub fn export(files: &[PathBuf], format: ExportFormat, output: Option<&Path>) -> ExitCode {
     if output.is_some() && files.len() > 1 {
         eprintln!("error: --output names one file; {} trajectories given", files.len());
@@ -174,16 +178,22 @@ pub fn export(files: &[PathBuf], format: ExportFormat, output: Option<&Path>) ->
                 let out = output.map_or_else(|| export::beside(file, "dump"), Path::to_path_buf);
                 export::write_lammps_dump(file, &out).map(|_| out)
             }
+            ExportFormat::Png => {
+                let out = output.map_or_else(|| export::beside(file, "png"), Path::to_path_buf);
+                let xdmf = export::write_xdmf(file);
+                xdmf.and_then(|xdmf| export::render_last_frame(&xdmf, &out).map(|()| out).map_err(Error::from))
+            }
         };
         match written {
             Ok(out) => println!("{}: wrote {}", file.display(), out.display()),
+            // A render that fails is the machine's, not the file's: exit 1, not 2.
             Err(e) => {
                 eprintln!(
                     "error: {}: {}",
                     file.display(),
                     e.to_string().split_whitespace().collect::<Vec<_>>().join(" ")
                 );
-                return ExitCode::from(2);
+                return ExitCode::from(if e.is::<export::RenderError>() { 1 } else { 2 });
             }
         }
     }

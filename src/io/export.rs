@@ -116,9 +116,9 @@ pub fn write_lammps_dump(h5: &Path, out: &Path) -> Result<(), Error> {
 }
 
 /// A pvbatch script (arguments: XDMF file, PNG file) that renders a trajectory's last frame:
-/// the particles as spheres of their radius, coloured by the moment along x, seen along −z (the
-/// field along x lies in the picture). Run it as `xvfb-run -a pvbatch SCRIPT FILE.xdmf OUT.png`, or through
-/// [`render_last_frame`].
+/// the particles as spheres of their radius, coloured by the moment along x (one colour where all
+/// moments are equal), seen along −z (the field along x lies in the picture).
+/// [`render_last_frame`] runs it.
 pub const PARAVIEW_RENDER: &str = r#"
 import sys
 from paraview.simple import *
@@ -139,13 +139,19 @@ shown.ScaleByArray = 1
 shown.SetScaleArray = ["POINTS", "radius"]
 shown.ScaleTransferFunction.Points = [0.0, 0.0, 0.5, 0.0, 1.0, 1.0, 0.5, 0.0]
 shown.GaussianRadius = 1.0
-ColorBy(shown, ("POINTS", "moment", "X"))
-shown.SetScalarBarVisibility(view, True)
-bar = GetScalarBar(GetColorTransferFunction("moment"), view)
-bar.Title = "moment along x (A m^2)"
-bar.ComponentTitle = ""
-bar.TitleColor = [0, 0, 0]
-bar.LabelColor = [0, 0, 0]
+reader.UpdatePipeline(reader.TimestepValues[-1])
+low, high = reader.PointData["moment"].GetRange(0)
+if high > low:
+    ColorBy(shown, ("POINTS", "moment", "X"))
+    shown.SetScalarBarVisibility(view, True)
+    bar = GetScalarBar(GetColorTransferFunction("moment"), view)
+    bar.Title = "moment along x (A m^2)"
+    bar.ComponentTitle = ""
+    bar.TitleColor = [0, 0, 0]
+    bar.LabelColor = [0, 0, 0]
+else:
+    ColorBy(shown, None)
+    shown.AmbientColor = shown.DiffuseColor = [0.35, 0.45, 0.75]
 outline = Show(Outline(Input=reader), view)
 outline.DiffuseColor = [0, 0, 0]
 outline.AmbientColor = [0, 0, 0]
@@ -164,7 +170,7 @@ SaveScreenshot(sys.argv[2], view, ImageResolution=[1400, 1000])
 pub enum RenderError {
     /// The program (`Xvfb` or `pvbatch`) is not installed.
     Missing(&'static str),
-    /// It ran and failed; the last line it wrote to stderr.
+    /// It ran and failed, timed out, or wrote no picture: what happened.
     Failed(String),
 }
 
@@ -179,71 +185,146 @@ impl std::fmt::Display for RenderError {
 
 impl std::error::Error for RenderError {}
 
-/// A virtual X server, stopped when dropped. `-displayfd` makes Xvfb name its display only once
-/// it accepts clients; `xvfb-run` signals readiness otherwise, and on a loaded machine its
-/// pvbatch met no server ("bad X server connection") three times running.
-struct VirtualDisplay {
-    server: std::process::Child,
-    display: String,
-}
+/// Seconds Xvfb may take to name its display.
+const XVFB_START_S: u64 = 20;
+/// Seconds pvbatch may take to render one frame.
+const PVBATCH_S: u64 = 300;
 
-impl VirtualDisplay {
-    fn start() -> Result<Self, RenderError> {
-        use std::io::BufRead;
-        let mut server = std::process::Command::new("Xvfb")
-            .args(["-displayfd", "1", "-screen", "0", "1280x1024x24", "-nolisten", "tcp"])
-            .stdout(std::process::Stdio::piped())
-            .stderr(std::process::Stdio::null())
-            .spawn()
-            .map_err(|_| RenderError::Missing("Xvfb"))?;
-        let mut line = String::new();
-        let named = server.stdout.take().map(|o| std::io::BufReader::new(o).read_line(&mut line));
-        let display = VirtualDisplay { server, display: format!(":{}", line.trim()) };
-        match (named, line.trim().parse::<u32>()) {
-            (Some(Ok(_)), Ok(_)) => Ok(display),
-            _ => Err(RenderError::Failed(format!("Xvfb named no display ({:?})", line.trim()))),
-        }
+/// `Missing(program)` where it is not installed, else `Failed` with the reason.
+fn spawn_error(program: &'static str, e: std::io::Error) -> RenderError {
+    if e.kind() == std::io::ErrorKind::NotFound {
+        RenderError::Missing(program)
+    } else {
+        RenderError::Failed(format!("{program}: {e}"))
     }
 }
 
-impl Drop for VirtualDisplay {
+/// The last line of `text` that is not blank.
+fn last_line(text: &[u8]) -> String {
+    let text = String::from_utf8_lossy(text);
+    text.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("no message").trim().to_string()
+}
+
+/// A child process, stopped with SIGTERM (so that Xvfb removes its lock and socket) and reaped
+/// when dropped.
+struct Stopped(std::process::Child);
+
+impl Drop for Stopped {
     fn drop(&mut self) {
-        let _ = self.server.kill();
-        let _ = self.server.wait();
+        if let Ok(None) = self.0.try_wait() {
+            // SAFETY: kill(2) on the pid of our own child, which has not been reaped yet.
+            unsafe { libc::kill(self.0.id() as libc::pid_t, libc::SIGTERM) };
+        }
+        let _ = self.0.wait();
     }
+}
+
+/// A virtual X server and its display (`:N`). `-displayfd` makes Xvfb name its display only once
+/// it accepts clients; `xvfb-run` waits for SIGUSR1 instead, and on a loaded machine its pvbatch
+/// met no server ("bad X server connection") three times running.
+fn virtual_display() -> Result<(Stopped, String), RenderError> {
+    use std::io::BufRead;
+    use std::process::{Command, Stdio};
+    let mut server = Command::new("Xvfb")
+        .args(["-displayfd", "1", "-screen", "0", "1280x1024x24", "-nolisten", "tcp"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .map_err(|e| spawn_error("Xvfb", e))?;
+    let stdout = server.stdout.take();
+    let server = Stopped(server);
+    let (send, receive) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let mut line = String::new();
+        if let Some(out) = stdout {
+            let _ = std::io::BufReader::new(out).read_line(&mut line);
+        }
+        let _ = send.send(line);
+    });
+    let line = receive.recv_timeout(std::time::Duration::from_secs(XVFB_START_S)).unwrap_or_default();
+    match line.trim().parse::<u32>() {
+        Ok(number) => Ok((server, format!(":{number}"))),
+        Err(_) => Err(RenderError::Failed(format!("Xvfb named no display within {XVFB_START_S} s"))),
+    }
+}
+
+/// One pvbatch run of `script` on `display`, stopped after [`PVBATCH_S`] seconds.
+fn pvbatch(script: &Path, xdmf: &Path, png: &Path, display: &str) -> Result<(), RenderError> {
+    use std::process::{Command, Stdio};
+    let stderr = tempfile_beside(png, "pvbatch-log")?;
+    let log = std::fs::File::create(&stderr).map_err(|e| RenderError::Failed(e.to_string()))?;
+    let child = Command::new("pvbatch")
+        .arg(script)
+        .arg(xdmf)
+        .arg(png)
+        .env("DISPLAY", display)
+        .stdout(Stdio::null())
+        .stderr(log)
+        .spawn()
+        .map_err(|e| spawn_error("pvbatch", e))?;
+    let mut child = Stopped(child);
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(PVBATCH_S);
+    let status = loop {
+        match child.0.try_wait() {
+            Ok(Some(status)) => break Some(status),
+            Ok(None) if std::time::Instant::now() < deadline => {
+                std::thread::sleep(std::time::Duration::from_millis(50))
+            }
+            _ => break None,
+        }
+    };
+    let why = last_line(&std::fs::read(&stderr).unwrap_or_default());
+    let _ = std::fs::remove_file(&stderr);
+    match status {
+        Some(s) if s.success() => Ok(()),
+        Some(_) => Err(RenderError::Failed(why)),
+        None => Err(RenderError::Failed(format!("pvbatch did not finish within {PVBATCH_S} s"))),
+    }
+}
+
+/// A path beside `path` for a scratch file of this process (`.FILE.PID.K.NAME`, `NAME` last so
+/// that its extension is NAME's).
+fn tempfile_beside(path: &Path, name: &str) -> Result<PathBuf, RenderError> {
+    static FILES: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let k = FILES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let file = path.file_name().and_then(|f| f.to_str()).unwrap_or("render");
+    Ok(path.with_file_name(format!(".{file}.{}.{k}.{name}", std::process::id())))
 }
 
 /// Renders the last frame of the trajectory that `xdmf` describes into `png` with
 /// [`PARAVIEW_RENDER`], under pvbatch on a virtual X server of its own. Up to three attempts,
-/// a second apart: pvbatch can still fail to start on a loaded machine.
+/// a second apart (pvbatch can fail to start on a loaded machine); the picture is written under
+/// a scratch name and moved into place only when it is there, so a failed render leaves an
+/// earlier `png` as it was.
 pub fn render_last_frame(xdmf: &Path, png: &Path) -> Result<(), RenderError> {
     let failed = |e: std::io::Error| RenderError::Failed(e.to_string());
-    static RENDERS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-    let k = RENDERS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let script = std::env::temp_dir().join(format!("magdem-render-{}-{k}.py", std::process::id()));
-    std::fs::write(&script, PARAVIEW_RENDER).map_err(failed)?;
-    let x = VirtualDisplay::start();
-    let outcome = x.and_then(|x| {
-        let mut why = String::new();
+    let script = tempfile_beside(png, "render.py")?;
+    let scratch = tempfile_beside(png, "png")?;
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&script)
+        .and_then(|mut f| std::io::Write::write_all(&mut f, PARAVIEW_RENDER.as_bytes()))
+        .map_err(failed)?;
+    let outcome = virtual_display().and_then(|(_server, display)| {
+        let mut why = RenderError::Failed("no attempt".into());
         for attempt in 1..=3 {
             if attempt > 1 {
                 std::thread::sleep(std::time::Duration::from_secs(1));
             }
-            let out = std::process::Command::new("pvbatch")
-                .arg(&script)
-                .arg(xdmf)
-                .arg(png)
-                .env("DISPLAY", &x.display)
-                .output()
-                .map_err(|_| RenderError::Missing("pvbatch"))?;
-            if out.status.success() {
-                return Ok(());
-            }
-            why = String::from_utf8_lossy(&out.stderr).lines().last().unwrap_or("no message").to_string();
-            eprintln!("pvbatch attempt {attempt} of 3 failed: {why}");
+            why = match pvbatch(&script, xdmf, &scratch, &display) {
+                Ok(()) if std::fs::metadata(&scratch).is_ok_and(|m| m.len() > 0) => {
+                    return std::fs::rename(&scratch, png).map_err(failed)
+                }
+                Ok(()) => RenderError::Failed("pvbatch wrote no picture".into()),
+                Err(missing @ RenderError::Missing(_)) => return Err(missing),
+                Err(e) => e,
+            };
+            eprintln!("pvbatch, attempt {attempt} of 3: {why}");
         }
-        Err(RenderError::Failed(why))
+        Err(why)
     });
     let _ = std::fs::remove_file(&script);
+    let _ = std::fs::remove_file(&scratch);
     outcome
 }

@@ -238,13 +238,20 @@ pub fn paraview_section(run: Option<&Run>, out: &Path) -> Result<String, Error> 
     let Some(r) = run else { return Ok(String::new()) };
     let png = out.join("paraview-case1.png");
     let xdmf = crate::io::export::write_xdmf(&r.file)?;
+    use crate::io::export::RenderError;
     let kept = match crate::io::export::render_last_frame(&xdmf, &png) {
         Ok(()) => String::new(),
-        Err(why) if png.exists() => {
-            eprintln!("ParaView render of {}: {why}; the earlier render is kept", r.id);
-            format!(" The picture is an earlier render; this time {why}.")
+        Err(why) => {
+            eprintln!("ParaView render of {}: {why}", r.id);
+            let why = match why {
+                RenderError::Missing(program) => format!("{program} is not installed here"),
+                RenderError::Failed(_) => "the render failed here (the reason is on stderr)".into(),
+            };
+            if !png.exists() {
+                return Ok(format!("## In ParaView\n\nNo picture: {why}.\n\n"));
+            }
+            format!(" The picture is an earlier render: {why}.")
         }
-        Err(why) => return Ok(format!("## In ParaView\n\nNo render was made: {why}.\n\n")),
     };
     Ok(format!(
         "## In ParaView and OVITO\n\nEvery run writes an XDMF sidecar beside its HDF5 file (`OUT.xdmf`, referencing the datasets in place), \
