@@ -262,7 +262,7 @@ enum Command {
     /// Time magdem against LIGGGHTS and LAMMPS on the same scenes (contact forces alone in packed,
     /// loose and dilute beds of 300–30 000 particles, dipole forces at case-1 parameters), the
     /// paper's physics at 10³–10⁵ particles, the cost per particle against N and the second
-    /// thread; writes reports/performance.md (25–40 minutes on a 2-core machine with the default
+    /// thread; writes reports/performance.md (30–60 minutes on a 2-core machine with the default
     /// repeats, the MPI demonstration included).
     Bench {
         /// Report directory.
