@@ -167,3 +167,32 @@ print("r7", data.particles["Radius"][k])
     }
     assert!((numbers(&out.stdout, "r7 ")[0] - 5.5e-6).abs() < 1e-18);
 }
+
+#[test]
+fn a_render_without_its_programs_exits_1_naming_one_and_keeps_the_earlier_picture() {
+    let (_work, h5) = run();
+    let png = h5.with_extension("png");
+    let earlier = b"an earlier picture".to_vec();
+    std::fs::write(&png, &earlier).unwrap();
+    let empty = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_magdem"))
+        .args(["export", path(&h5), "--format", "png"])
+        .env("PATH", empty.path())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("Xvfb is not installed"), "{stderr}");
+    assert_eq!(std::fs::read(&png).unwrap(), earlier, "the earlier picture is untouched");
+    let scratch: Vec<_> = std::fs::read_dir(h5.parent().unwrap())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|name| name.starts_with('.'))
+        .collect();
+    assert!(scratch.is_empty(), "scratch files left: {scratch:?}");
+    let missing = Command::new(env!("CARGO_BIN_EXE_magdem"))
+        .args(["export", path(&h5.with_file_name("absent.h5")), "--format", "png"])
+        .output()
+        .unwrap();
+    assert_eq!(missing.status.code(), Some(2), "a missing trajectory is bad input");
+}
