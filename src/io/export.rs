@@ -251,7 +251,7 @@ fn virtual_display() -> Result<(Stopped, String), RenderError> {
 /// One pvbatch run of `script` on `display`, stopped after [`PVBATCH_S`] seconds.
 fn pvbatch(script: &Path, xdmf: &Path, png: &Path, display: &str) -> Result<(), RenderError> {
     use std::process::{Command, Stdio};
-    let stderr = tempfile_beside(png, "pvbatch-log")?;
+    let stderr = tempfile_beside(png, "pvbatch-log");
     let log = std::fs::File::create(&stderr).map_err(|e| RenderError::Failed(e.to_string()))?;
     let child = Command::new("pvbatch")
         .arg(script)
@@ -284,11 +284,11 @@ fn pvbatch(script: &Path, xdmf: &Path, png: &Path, display: &str) -> Result<(), 
 
 /// A path beside `path` for a scratch file of this process (`.FILE.PID.K.NAME`, `NAME` last so
 /// that its extension is NAME's).
-fn tempfile_beside(path: &Path, name: &str) -> Result<PathBuf, RenderError> {
+fn tempfile_beside(path: &Path, name: &str) -> PathBuf {
     static FILES: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     let k = FILES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let file = path.file_name().and_then(|f| f.to_str()).unwrap_or("render");
-    Ok(path.with_file_name(format!(".{file}.{}.{k}.{name}", std::process::id())))
+    path.with_file_name(format!(".{file}.{}.{k}.{name}", std::process::id()))
 }
 
 /// Renders the last frame of the trajectory that `xdmf` describes into `png` with
@@ -298,8 +298,8 @@ fn tempfile_beside(path: &Path, name: &str) -> Result<PathBuf, RenderError> {
 /// earlier `png` as it was.
 pub fn render_last_frame(xdmf: &Path, png: &Path) -> Result<(), RenderError> {
     let failed = |e: std::io::Error| RenderError::Failed(e.to_string());
-    let script = tempfile_beside(png, "render.py")?;
-    let scratch = tempfile_beside(png, "png")?;
+    let script = tempfile_beside(png, "render.py");
+    let scratch = tempfile_beside(png, "png");
     std::fs::OpenOptions::new()
         .write(true)
         .create_new(true)
