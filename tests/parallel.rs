@@ -177,7 +177,7 @@ fn the_dipole_sum_does_not_depend_on_when_the_verlet_list_was_built() {
     let (mut fresh, mut aged) = (field(), field());
     let state = scene.initial_state();
     let mut elsewhere = state.clone();
-    for (k, x) in elsewhere.particles.position.iter_mut().enumerate() {
+    for (k, x) in elsewhere.particles.position.write().iter_mut().enumerate() {
         let angle = k as f64 * 2.399_963;
         *x += Vec3::new(angle.cos(), angle.sin(), 0.0) * 0.2 * 11.0e-6;
     }

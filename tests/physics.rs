@@ -750,7 +750,7 @@ fn rpy_refactorisation_every_k_steps_has_a_first_order_error_in_k() {
         );
         let sim = Scene::parse(&text, "sediment").unwrap_or_else(|e| panic!("{e}")).run_to_end().unwrap();
         let fell = -sim.state.particles.position[0].z;
-        (sim.state.particles.position.clone(), fell)
+        (sim.state.particles.position.to_vec(), fell)
     };
     let (exact, fell) = run(1);
     let error = |k| run(k).0.iter().zip(&exact).map(|(x, e)| (x - e).norm()).fold(0.0, f64::max);
@@ -789,7 +789,7 @@ fn drag_coefficients_renewed_every_k_steps_keep_the_terminal_velocity_with_a_fir
         );
         let sim = Scene::parse(&text, "column").unwrap_or_else(|e| panic!("{e}")).run_to_end().unwrap();
         let v = sim.state.particles.velocity.iter().map(|v| -v.z).sum::<f64>() / 2.0;
-        (sim.state.particles.position.clone(), v)
+        (sim.state.particles.position.to_vec(), v)
     };
     let weight = 2.0 * 4.0 / 3.0 * PI * a.powi(3) * (rho - rho_f) * 9.81;
     let mut terminal = weight / (6.0 * PI * mu * a);

@@ -149,8 +149,9 @@ fn print_timings(summary: &RunSummary) {
         }
         match u.range {
             PairRange::Within { range, skin } => println!(
-                "  within {range:.3e} m, skin up to {skin:.3e} m: {} rebuilds, skin in use {:.3e} m, {} candidates, {listed}",
-                u.rebuilds, u.skin_in_use, u.candidates
+                "  within {range:.3e} m, skin up to {skin:.3e} m: {} rebuilds, every particle examined at {} updates \
+                 (the others settled by the drifts' bound), skin in use {:.3e} m, {} candidates, {listed}",
+                u.rebuilds, u.examined, u.skin_in_use, u.candidates
             ),
             PairRange::All => println!("  all pairs: searched at every evaluation, {listed}"),
         }

@@ -43,6 +43,16 @@ impl Domain {
         }
     }
 
+    /// A bound (m) on how far a [`Domain::wrap`] moves a position's minimum image: the rounding of
+    /// lo + (x − lo) mod L, two roundings of numbers below 2 (max(|lo|, |hi|) + L) on each
+    /// periodic axis, each at most half an ulp (ε |y| for |y| below it), summed over the axes.
+    pub fn wrap_rounding(&self) -> f64 {
+        (0..3)
+            .filter(|&k| self.periodic[k])
+            .map(|k| 4.0 * f64::EPSILON * (self.lo[k].abs().max(self.hi[k].abs()) + (self.hi[k] - self.lo[k])))
+            .sum()
+    }
+
     /// Wall faces present (x-lo, x-hi, y-lo, ...), as (face index, axis, is_upper).
     pub fn walls(&self) -> impl Iterator<Item = (u8, usize, bool)> + '_ {
         (0..3usize).filter(|&k| !self.periodic[k]).flat_map(|k| [(2 * k as u8, k, false), (2 * k as u8 + 1, k, true)])

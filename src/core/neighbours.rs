@@ -4,7 +4,7 @@
 use super::domain::Domain;
 use super::parallel::{self, PieceList, Pieced, Pieces};
 use super::renumber::Renumbering;
-use super::state::Vec3;
+use super::state::{Motion, Positions, Vec3};
 use super::timers::PhaseTimers;
 
 /// Pairs in (i, j) order, in the pieces the parallel filter wrote ([`parallel::PieceList`]).
@@ -190,6 +190,8 @@ pub struct VerletList {
     /// `reach[j]`: the lowest row i of a candidate (i, j') with j' ≥ j (`u32::MAX` if none).
     reach: Vec<u32>,
     reference: Vec<Vec3>,
+    /// The positions' motion when `reference` was taken.
+    built_at: Motion,
     built_for: Option<(f64, f64)>,
     /// The skin of the last build (at most the declared one).
     in_use: f64,
@@ -197,6 +199,9 @@ pub struct VerletList {
     since_build: u64,
     /// Rebuilds so far (diagnostic).
     pub rebuilds: u64,
+    /// Updates so far at which every particle was compared with its reference (diagnostic; at the
+    /// others the drifts' bound settled that none had moved far enough, [`settled`]).
+    pub examined: u64,
 }
 
 /// The narrowest skin, as a fraction of the range, to which [`VerletList`] narrows a wider one.
@@ -232,9 +237,14 @@ impl VerletList {
     /// Brings the candidates up to date for `range` and at most `skin` (rebuilt when some
     /// particle has moved more than half the skin in use since the last build); returns the skin
     /// in use if it rebuilt them.
-    pub fn update(&mut self, positions: &[Vec3], domain: &Domain, range: f64, skin: f64) -> Option<f64> {
+    pub fn update(&mut self, positions: &Positions, domain: &Domain, range: f64, skin: f64) -> Option<f64> {
         let stale = self.reference.len() != positions.len() || self.built_for != Some((range, skin));
-        let moved_too_far = stale || moved_farther(positions, &self.reference, domain, 0.5 * self.in_use);
+        let half = 0.5 * self.in_use;
+        let moved_too_far = stale
+            || (!settled(positions, self.built_at, half) && {
+                self.examined += 1;
+                moved_farther(positions, &self.reference, domain, half)
+            });
         if !moved_too_far {
             self.since_build += 1;
             return None;
@@ -244,6 +254,7 @@ impl VerletList {
         self.find_reach(positions.len());
         self.reference.clear();
         self.reference.extend_from_slice(positions);
+        self.built_at = positions.motion();
         self.built_for = Some((range, skin));
         self.since_build = 0;
         self.rebuilds += 1;
@@ -298,7 +309,7 @@ impl VerletList {
     /// Returns the skin in use if the candidates were rebuilt.
     pub fn pairs_within(
         &mut self,
-        positions: &[Vec3],
+        positions: &Positions,
         domain: &Domain,
         range: f64,
         skin: f64,
@@ -345,6 +356,8 @@ struct CloseCandidates {
     pieces: Pieces<(u32, u32)>,
     /// Positions when `list` was taken; empty: not taken for the current Verlet candidates.
     reference: Vec<Vec3>,
+    /// The positions' motion then.
+    taken_at: Motion,
     /// The close skin; 0 before the first build.
     skin: f64,
     /// Whether `list` is in use (its skin narrower than the Verlet skin in use).
@@ -375,7 +388,14 @@ impl CloseCandidates {
     /// Brings the close candidates up to date with the Verlet list `verlet` (rebuilt in this
     /// update if `rebuilt`).
     /// Returns whether the candidates it gives changed (other than by a Verlet rebuild).
-    fn update(&mut self, verlet: &VerletList, rebuilt: bool, positions: &[Vec3], domain: &Domain, range: f64) -> bool {
+    fn update(
+        &mut self,
+        verlet: &VerletList,
+        rebuilt: bool,
+        positions: &Positions,
+        domain: &Domain,
+        range: f64,
+    ) -> bool {
         let outer = verlet.skin_in_use();
         if rebuilt || self.reference.len() != positions.len() {
             // A first build starts at half the Verlet skin; a rebuild tries again below it.
@@ -384,7 +404,8 @@ impl CloseCandidates {
         } else if !self.in_use {
             return false;
         } else {
-            if !moved_farther(positions, &self.reference, domain, 0.5 * self.skin) {
+            let half = 0.5 * self.skin;
+            if settled(positions, self.taken_at, half) || !moved_farther(positions, &self.reference, domain, half) {
                 self.since += 1;
                 return false;
             }
@@ -415,6 +436,7 @@ impl CloseCandidates {
         });
         self.reference.clear();
         self.reference.extend_from_slice(positions);
+        self.taken_at = positions.motion();
         self.builds += 1;
         // Hardly fewer than the Verlet candidates (a near list whose skin already adapts): not
         // worth the upkeep until the next rebuild.
@@ -528,6 +550,14 @@ fn separation(domain: &Domain, periodic: bool, positions: &[Vec3], (i, j): (u32,
     } else {
         a - b
     }
+}
+
+/// Whether the drifts since `taken` (the positions' motion when a reference was taken) bound
+/// every particle's displacement by half of `distance`: then none has moved `distance` from the
+/// reference, and [`moved_farther`] need not look (the other half is margin for the rounding of
+/// the displacements it compares).
+fn settled(positions: &Positions, taken: Motion, distance: f64) -> bool {
+    positions.motion().since(taken).is_some_and(|bound| bound <= 0.5 * distance)
 }
 
 /// Whether some particle has moved farther than `distance` (minimum image) from its `reference`
@@ -673,6 +703,8 @@ pub const DILUTE_CANDIDATES: f64 = 1.0;
 pub struct RangeUsage {
     pub range: PairRange,
     pub rebuilds: u64,
+    /// Updates at which every particle was compared with its reference position.
+    pub examined: u64,
     pub skin_in_use: f64,
     pub candidates: usize,
     /// Pairs in the last listing.
@@ -731,7 +763,7 @@ impl Neighbours {
     /// pairs.
     pub fn update(
         &mut self,
-        positions: &[Vec3],
+        positions: &Positions,
         domain: &Domain,
         wanted: impl Fn(PairRange) -> bool,
         timers: &mut PhaseTimers,
@@ -783,6 +815,7 @@ impl Neighbours {
             .map(|l| RangeUsage {
                 range: l.range,
                 rebuilds: l.verlet.rebuilds,
+                examined: l.verlet.examined,
                 skin_in_use: l.verlet.skin_in_use(),
                 candidates: l.verlet.candidates().len(),
                 listed: l.pairs.len(),
@@ -863,6 +896,53 @@ mod tests {
         }
     }
 
+    /// A list fed drifts with their bounds leaves out the comparison of every particle while the
+    /// bounds allow it, and rebuilds exactly when a list that compares every particle at every
+    /// update does (each update it is handed a clone: another set of positions, whose motion
+    /// says nothing), so the two list the same pairs, those of a brute-force search. A move
+    /// written otherwise, without a bound, is examined at the next update and rebuilds both.
+    #[test]
+    fn drifts_with_their_bounds_give_the_rebuilds_of_examining_every_particle() {
+        let (mut rng, domain, start) = random_box(17, [true, false, true]);
+        let velocity: Vec<Vec3> = start.iter().map(|_| Vec3::from_fn(|_, _| 2.0 * rng.random::<f64>() - 1.0)).collect();
+        let largest = velocity.iter().map(|v| v.norm()).fold(0.0, f64::max);
+        let mut positions = Positions::from(start);
+        let (mut fed, mut examining) = (VerletList::default(), VerletList::default());
+        let (mut listed, mut compared) = (PairList::default(), PairList::default());
+        let pairs = |list: &PairList| list.seq().iter().map(|p| (p.i, p.j)).collect::<Vec<_>>();
+        let updates = 600;
+        for update in 0..updates {
+            fed.pairs_within(&positions, &domain, 0.1, 0.02, &mut listed);
+            examining.pairs_within(&positions.clone(), &domain, 0.1, 0.02, &mut compared);
+            assert_eq!(fed.rebuilds, examining.rebuilds, "update {update}");
+            assert_eq!(pairs(&listed), pairs(&compared), "update {update}");
+            if update % 25 == 0 {
+                assert_eq!(pairs(&listed), brute(&positions, &domain, 0.1), "update {update}");
+            }
+            // Slow, then ten times faster; walls bounce the particles back inside.
+            let speed = if update < 300 { 2e-5 } else { 2e-4 };
+            positions.drift(|x| {
+                for (x, v) in x.iter_mut().zip(&velocity) {
+                    *x += v * speed;
+                    domain.wrap(x);
+                    x.y = x.y.clamp(0.0, domain.hi.y);
+                }
+                largest * speed * (1.0 + 1e-12) + domain.wrap_rounding()
+            });
+            if update == 450 {
+                positions.write()[7].y = (positions[7].y + 0.3) % 0.8;
+            }
+        }
+        assert!(fed.rebuilds >= 5, "the particles moved enough to rebuild: {} rebuilds", fed.rebuilds);
+        assert_eq!(examining.examined, updates - 1, "a clone is examined at every update but the first (a build)");
+        assert!(
+            fed.examined * 2 < examining.examined,
+            "the bounds settled most updates: examined at {} of {updates} against {}",
+            fed.examined,
+            examining.examined
+        );
+    }
+
     #[test]
     fn verlet_list_gives_the_same_pairs_in_ij_order_as_particles_move() {
         // Periodic on two axes, and walled on all three (filtered with a plain subtraction).
@@ -871,7 +951,7 @@ mod tests {
             let mut list = VerletList::default();
             let mut out = PairList::default();
             for _ in 0..40 {
-                list.pairs_within(&pos, &domain, 0.15, 0.03, &mut out);
+                list.pairs_within(&pos.clone().into(), &domain, 0.15, 0.03, &mut out);
                 let got: Vec<(u32, u32)> = out.seq().iter().map(|p| (p.i, p.j)).collect();
                 assert_eq!(got, brute(&pos, &domain, 0.15), "periodic {periodic:?}");
                 for p in out.seq().iter() {
@@ -897,7 +977,7 @@ mod tests {
         let mut layer = Neighbours::new([range]);
         let (mut in_use, mut taken) = (0, 0);
         for step in 0..120 {
-            layer.update(&pos, &domain, |_| true, &mut PhaseTimers::default());
+            layer.update(&pos.clone().into(), &domain, |_| true, &mut PhaseTimers::default());
             let got: Vec<(u32, u32)> = layer.pairs(range).iter().map(|p| (p.i, p.j)).collect();
             assert_eq!(got, brute(&pos, &domain, 0.12), "step {step}");
             for p in layer.pairs(range).iter() {
@@ -938,7 +1018,7 @@ mod tests {
             let mut sums = vec![0.1; n];
             let crossing = pool.install(|| {
                 parallel::with_warm_pool(n, &mut parallel::Balance::default(), || {
-                    layer.update(&pos, &domain, |_| true, &mut PhaseTimers::default());
+                    layer.update(&pos.clone().into(), &domain, |_| true, &mut PhaseTimers::default());
                     let pairs = layer.range_pairs(range);
                     pairs.add_in_order(&mut sums, term, |q| term(q).1);
                     pairs.crossing.map(|c| (c.split, c.pairs.len()))
@@ -968,7 +1048,7 @@ mod tests {
         let (_, domain, pos) = random_box(9, [true, false, true]);
         let mut list = VerletList::default();
         assert_eq!(list.first_row_reaching(150), 0, "before a build, no row is skipped");
-        list.update(&pos, &domain, 0.1, 0.02);
+        list.update(&pos.clone().into(), &domain, 0.1, 0.02);
         let candidates = list.candidates();
         for lo in [1, 17, 150, 299] {
             let first = list.first_row_reaching(lo);
@@ -990,7 +1070,7 @@ mod tests {
         let mut out = PairList::default();
         let mut drift = |list: &mut VerletList, pos: &mut Vec<Vec3>, speed: f64, updates: usize| {
             for _ in 0..updates {
-                list.pairs_within(pos, &domain, range, skin, &mut out);
+                list.pairs_within(&pos.clone().into(), &domain, range, skin, &mut out);
                 let got: Vec<(u32, u32)> = out.seq().iter().map(|p| (p.i, p.j)).collect();
                 assert_eq!(got, brute(pos, &domain, range));
                 for x in pos.iter_mut() {
@@ -1008,7 +1088,7 @@ mod tests {
         // A declared skin at or below the floor is kept.
         let mut narrow = VerletList::default();
         for _ in 0..300 {
-            narrow.pairs_within(&pos, &domain, range, 0.01, &mut out);
+            narrow.pairs_within(&pos.clone().into(), &domain, range, 0.01, &mut out);
             pos.iter_mut().for_each(|x| x.x += 1e-4);
         }
         assert!(narrow.rebuilds > 1);
@@ -1025,7 +1105,7 @@ mod tests {
             let range = PairRange::Within { range: 0.12, skin: 0.03 };
             let mut layer = Neighbours::new([range]);
             for step in 0..30 {
-                layer.update(&pos, &domain, |_| true, &mut PhaseTimers::default());
+                layer.update(&pos.clone().into(), &domain, |_| true, &mut PhaseTimers::default());
                 let listed: Vec<Pair> = layer.pairs(range).iter().copied().collect();
                 let ij: Vec<(u32, u32)> = listed.iter().map(|q| (q.i, q.j)).collect();
                 assert_eq!(ij, brute(&pos, &domain, 0.12), "step {step}, periodic {periodic:?}");

@@ -68,9 +68,12 @@ impl ForceField {
         let started = self.timers.start();
         state.fields.fit(state.particles.len());
         if self.domain.periodic.contains(&true) {
-            let (domain, position) = (&self.domain, &mut state.particles.position[..]);
+            let domain = &self.domain;
             self.timers.time("wrap", || {
-                parallel::for_each_share(position, |_, xs| xs.iter_mut().for_each(|x| domain.wrap(x)))
+                state.particles.position.drift(|position| {
+                    parallel::for_each_share(position, |_, xs| xs.iter_mut().for_each(|x| domain.wrap(x)));
+                    domain.wrap_rounding()
+                })
             });
         }
         let terms = &self.terms;

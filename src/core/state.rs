@@ -249,6 +249,118 @@ impl Sizes {
     }
 }
 
+/// The particles' positions, read as a slice. They change in one of two ways: a drift, which
+/// states a bound on how far it moved any particle, or any other write (placing, restoring,
+/// reading back from a reference code, renumbering), which is counted. From the [`Motion`] a
+/// neighbour list then knows, without looking at the particles, when none can have moved far
+/// enough since its build to need a rebuild. There is no other way to change them: code that
+/// moves particles must say which of the two it does. Each set of positions (a new one, a clone)
+/// has its own identity, so that a motion is never compared with another set's.
+#[derive(Debug)]
+pub struct Positions {
+    x: Vec<Vec3>,
+    motion: Motion,
+}
+
+/// What a set of positions went through so far: the sum of the drifts' bounds and the count of
+/// other writes (see [`Positions`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Motion {
+    /// The set's identity (0: none, the motion of no set).
+    set: u64,
+    travelled: f64,
+    writes: u64,
+}
+
+impl Motion {
+    /// The motion of a new set of positions.
+    fn new() -> Self {
+        static SETS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+        Motion { set: SETS.fetch_add(1, std::sync::atomic::Ordering::Relaxed), travelled: 0.0, writes: 0 }
+    }
+
+    /// A bound on how far (m, minimum image) any particle has moved since `earlier` was taken
+    /// from the same set of positions; `None` if it was taken from another set, or the
+    /// positions were written otherwise since.
+    pub fn since(&self, earlier: Motion) -> Option<f64> {
+        (self.set != 0 && self.set == earlier.set && self.writes == earlier.writes)
+            .then_some(self.travelled - earlier.travelled)
+    }
+}
+
+impl Default for Positions {
+    fn default() -> Self {
+        Vec::new().into()
+    }
+}
+
+/// A clone is another set of positions: a list built from one examines the other's particles.
+impl Clone for Positions {
+    fn clone(&self) -> Self {
+        self.x.clone().into()
+    }
+}
+
+/// Equal positions are equal whatever their motion (a restored state equals the one stored).
+impl PartialEq for Positions {
+    fn eq(&self, other: &Self) -> bool {
+        self.x == other.x
+    }
+}
+
+impl std::ops::Deref for Positions {
+    type Target = [Vec3];
+    fn deref(&self) -> &[Vec3] {
+        &self.x
+    }
+}
+
+impl<'a> IntoIterator for &'a Positions {
+    type Item = &'a Vec3;
+    type IntoIter = std::slice::Iter<'a, Vec3>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.x.iter()
+    }
+}
+
+impl From<Vec<Vec3>> for Positions {
+    fn from(x: Vec<Vec3>) -> Self {
+        Positions { x, motion: Motion::new() }
+    }
+}
+
+impl Positions {
+    pub fn motion(&self) -> Motion {
+        self.motion
+    }
+
+    /// The positions as their vector.
+    pub fn as_vec(&self) -> &Vec<Vec3> {
+        &self.x
+    }
+
+    /// The positions, to be changed otherwise than by a drift: counted as a write, so that every
+    /// neighbour list examines every particle at its next update.
+    pub fn write(&mut self) -> &mut Vec<Vec3> {
+        self.motion.writes += 1;
+        &mut self.x
+    }
+
+    /// A drift: `f` moves the particles and returns a bound on the distance (m, minimum image)
+    /// it moved any of them. The sum of the bounds is rounded up at each addition, so it never
+    /// falls below the true sum (a bound of 0 adds nothing); a bound that is not a finite number
+    /// ≥ 0 counts as a write.
+    pub fn drift(&mut self, f: impl FnOnce(&mut [Vec3]) -> f64) {
+        match f(&mut self.x) {
+            0.0 => {}
+            bound if bound > 0.0 && bound.is_finite() => {
+                self.motion.travelled = (self.motion.travelled + bound).next_up()
+            }
+            _ => self.motion.writes += 1,
+        }
+    }
+}
+
 /// Per-particle arrays (struct of arrays), one slot per particle. Slot k holds the particle whose
 /// id is [`State::ids`]`[k]`: its id until the particles are renumbered.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -263,7 +375,7 @@ pub struct Particles {
     /// One radius and mass for all, or several (kept by [`Particles::push`] and
     /// [`Particles::set_masses`]).
     pub sizes: Sizes,
-    pub position: Vec<Vec3>,
+    pub position: Positions,
     pub velocity: Vec<Vec3>,
     pub angular_velocity: Vec<Vec3>,
     /// Permanent moment, rotated with the particle (zero for purely induced particles).
@@ -296,7 +408,7 @@ impl Particles {
         self.inertia.push(inertia);
         self.inverse_masses.push(self.species.len() - 1, 1.0 / mass, 1.0 / inertia);
         self.sizes.push(radius, mass);
-        self.position.push(position);
+        self.position.write().push(position);
         self.velocity.push(velocity);
         self.angular_velocity.push(Vec3::zeros());
         let permanent = species.permanent_moment.unwrap_or_else(Vec3::zeros);
@@ -462,12 +574,12 @@ pub struct State {
 /// The per-particle vectors of a state by name (see [`State::vectors`]); one body for the shared
 /// and the mutable listing (match ergonomics give `&` or `&mut` bindings).
 macro_rules! state_vectors {
-    ($state:expr) => {{
+    ($state:expr, $position:ident => $access:expr) => {{
         // `ids` are stored as the checkpoint's `id` (and index the fixed properties).
         let State { particles, fields, contacts: _, diagnostics: _, step: _, time: _, next_substep: _, ids: _ } =
             $state;
         let Particles {
-            position,
+            position: $position,
             velocity,
             angular_velocity,
             permanent_moment,
@@ -482,7 +594,7 @@ macro_rules! state_vectors {
         } = particles;
         let Fields { force, torque, slow_force, slow_torque, moment } = fields;
         [
-            ("position", position),
+            ("position", $access),
             ("velocity", velocity),
             ("angular_velocity", angular_velocity),
             ("force", force),
@@ -503,12 +615,12 @@ impl State {
     /// [`Particles`], [`Fields`] or [`State`] does not compile until it is listed here or said
     /// to be stored or rebuilt elsewhere.
     pub fn vectors(&self) -> [(&'static str, &Vec<Vec3>); 9] {
-        state_vectors!(self)
+        state_vectors!(self, position => position.as_vec())
     }
 
     /// [`State::vectors`], writable (a checkpoint restore).
     pub fn vectors_mut(&mut self) -> [(&'static str, &mut Vec<Vec3>); 9] {
-        state_vectors!(self)
+        state_vectors!(self, position => position.write())
     }
 
     /// The names of [`State::vectors`], in order.
@@ -567,9 +679,17 @@ impl State {
             r.permute(inertia);
         }
         let Fields { force, torque, slow_force, slow_torque, moment } = fields;
-        for v in
-            [position, velocity, angular_velocity, permanent_moment, force, torque, slow_force, slow_torque, moment]
-        {
+        for v in [
+            position.write(),
+            velocity,
+            angular_velocity,
+            permanent_moment,
+            force,
+            torque,
+            slow_force,
+            slow_torque,
+            moment,
+        ] {
             r.permute(v);
         }
         contacts.renumber(r);
@@ -619,6 +739,39 @@ pub(crate) fn test_sphere(radius: f64) -> Species {
 mod tests {
     use super::*;
 
+    /// A motion bounds the drifts since an earlier one of the same set of positions, never below
+    /// their sum (many small bounds on a large one are not rounded away); a write, a bound that is
+    /// not a number ≥ 0, or another set (a clone) gives no bound.
+    #[test]
+    fn a_motion_bounds_the_drifts_of_its_own_positions_only() {
+        let mut x = Positions::from(vec![Vec3::zeros(); 3]);
+        let start = x.motion();
+        x.drift(|_| 1e6);
+        let after_large = x.motion();
+        for _ in 0..1000 {
+            x.drift(|x| {
+                x[1].y += 1e-12;
+                1e-12
+            });
+        }
+        let since = x.motion().since(after_large).expect("drifts only");
+        assert!(since >= 1000.0 * 1e-12, "{since}");
+        assert!(x.motion().since(start).unwrap() >= 1e6 + 1e-9);
+        assert_eq!(x.clone().motion().since(start), None, "a clone is another set");
+        let before = x.motion();
+        x.drift(|_| 0.0);
+        assert_eq!(x.motion().since(before), Some(0.0), "a drift bounded by 0 moved nothing");
+        for bad in [f64::NAN, f64::INFINITY, -1.0] {
+            let before = x.motion();
+            x.drift(|_| bad);
+            assert_eq!(x.motion().since(before), None, "a bound of {bad}");
+        }
+        let before = x.motion();
+        x.write()[0].x = 1.0;
+        assert_eq!(x.motion().since(before), None, "a write");
+        assert_eq!(x[0].x, 1.0);
+    }
+
     /// A renumbering followed by its inverse gives the state back bit for bit; in between, each
     /// particle's values moved with it, the springs of swapped pairs are negated and the history
     /// stays sorted.
@@ -649,7 +802,7 @@ mod tests {
         // their springs negated.
         assert_eq!(state.contacts.pairs.iter().copied().collect::<Vec<_>>(), [((0, 2), -spring), ((3, 4), spring)]);
         assert_eq!(state.contacts.walls, [((1, 0), spring)]);
-        assert_eq!(state.in_id_order(&state.particles.position), original.particles.position);
+        assert_eq!(state.in_id_order(&state.particles.position), *original.particles.position);
         let inverse = Renumbering::new((0..5).map(|i| r.to(i)).collect());
         state.renumber(&inverse);
         assert_eq!(state, original);

@@ -54,7 +54,7 @@ pub fn read(engine: Engine, path: &Path, scene: &Scene) -> Result<Vec<State>, Re
             let i = values[id] as usize - 1;
             let v3 = |g: [usize; 3]| Vec3::new(values[g[0]], values[g[1]], values[g[2]]);
             let p = &mut state.particles;
-            p.position[i] = v3(groups[0]);
+            p.position.write()[i] = v3(groups[0]);
             p.velocity[i] = v3(groups[1]);
             p.angular_velocity[i] = v3(groups[2]);
             state.fields.force[i] = v3(groups[3]);

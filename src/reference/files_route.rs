@@ -46,8 +46,9 @@ pub fn magnetic_forces(scene: &Scene, positions: &Path, prefix: &Path) -> Result
     if rows.len() != n {
         return Err(fail(format!("{} atoms in the dump, {n} in the scene", rows.len())));
     }
+    let positions = state.particles.position.write();
     for r in &rows {
-        state.particles.position[r[0] as usize - 1] = Vec3::new(r[1], r[2], r[3]);
+        positions[r[0] as usize - 1] = Vec3::new(r[1], r[2], r[3]);
     }
     let moments = prefix.with_extension("moments");
     let carried = std::fs::read_to_string(&moments).ok().filter(|text| {

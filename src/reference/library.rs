@@ -60,12 +60,13 @@ extern "C" fn magnetic_forces(
         if nlocal as usize != n {
             return Err(format!("the engine passed {nlocal} atoms, the scene has {n} (MPI runs need the files route)"));
         }
+        let positions = coupler.state.particles.position.write();
         for k in 0..n {
             let (id, row) = unsafe { (*ids.add(k) as usize, std::slice::from_raw_parts(*x.add(k), 3)) };
             if id == 0 || id > n {
                 return Err(format!("atom id {id} outside 1..={n}"));
             }
-            coupler.state.particles.position[id - 1] = Vec3::new(row[0], row[1], row[2]);
+            positions[id - 1] = Vec3::new(row[0], row[1], row[2]);
         }
         coupler.field.evaluate(&mut coupler.state, 0.0);
         for k in 0..n {

@@ -322,7 +322,7 @@ fn refactor_section(case2: &Path, tables: &Path) -> Result<String, Error> {
         let t0 = Instant::now();
         let sim = scene.run_to_end()?;
         let wall = t0.elapsed().as_secs_f64();
-        Ok((scene.initial.position.clone(), sim.state.in_id_order(&sim.state.particles.position), wall))
+        Ok((scene.initial.position.to_vec(), sim.state.in_id_order(&sim.state.particles.position), wall))
     };
     let (start, exact, exact_wall) = run(1)?;
     let moved = start.iter().zip(&exact).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);

@@ -22,6 +22,7 @@ pub use super::forces::ForceGroup;
 use super::parallel;
 use super::renumber::Renumbering;
 use super::state::{InverseMasses, Particles, State, Vec3};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Re-evaluates one group of forces and torques for the state as it stands, at the end of a
 /// step of the given length (the contact model integrates its tangential history over it).
@@ -188,89 +189,112 @@ fn phi(x: f64) -> f64 {
 
 /// The one kick/drift kernel of every integrator: a kick, then x += v drift (a zero drift is
 /// skipped), in one parallel loop in which each thread takes its share of the particles through
-/// all of it (a parallel loop per array would hand out and join once per array).
+/// all of it (a parallel loop per array would hand out and join once per array). The drift
+/// states its bound on any particle's displacement to the positions ([`crate::core::state::Positions::drift`]): the
+/// largest change of a coordinate, taken from the positions before and after, times √3.
 fn advance(p: &mut Particles, force: &[Vec3], torque: &[Vec3], kick: Kick, drift: f64) {
-    let (x, v, w) = (&mut p.position[..], &mut p.velocity[..], &mut p.angular_velocity[..]);
+    let (v, w) = (&mut p.velocity[..], &mut p.angular_velocity[..]);
     // A kick before the plain one: another force's, or none (h′ = 0, skipped).
     let ((before_f, before_t, hb), h) = match kick {
         Kick::Plain(h) => ((force, torque, 0.0), h),
         Kick::After { before, h } => (before, h),
         Kick::Exponential { .. } => ((force, torque, 0.0), 0.0),
     };
-    match (kick, &p.inverse_masses) {
-        (Kick::Plain(_) | Kick::After { .. }, InverseMasses::Uniform { mass, inertia }) => {
-            let (c, ci, cb, cbi) = (h * mass, h * inertia, hb * mass, hb * inertia);
-            // Component by component (SIMD across particles).
-            let parts = (x, v, w, (force, torque), (before_f, before_t));
-            parallel::for_each_share(parts, |_, (x, v, w, (f, t), (bf, bt))| {
-                let (x, v, w, f, t) =
-                    (components_mut(x), components_mut(v), components_mut(w), components(f), components(t));
-                let (bf, bt) = (components(bf), components(bt));
-                match (hb != 0.0, h != 0.0, drift != 0.0) {
-                    (true, true, true) => x.iter_mut().zip(v).zip(bf.iter().zip(f)).for_each(|((x, v), (bf, f))| {
-                        *v += bf * cb;
-                        *v += f * c;
-                        *x += *v * drift;
-                    }),
-                    (true, true, false) => v.iter_mut().zip(bf.iter().zip(f)).for_each(|(v, (bf, f))| {
-                        *v += bf * cb;
-                        *v += f * c;
-                    }),
-                    (false, true, true) => x.iter_mut().zip(v).zip(f).for_each(|((x, v), f)| {
-                        *v += f * c;
-                        *x += *v * drift;
-                    }),
-                    (false, true, false) => v.iter_mut().zip(f).for_each(|(v, f)| *v += f * c),
-                    (false, false, true) => x.iter_mut().zip(v).for_each(|(x, v)| *x += *v * drift),
-                    (false, false, false) => {}
-                    (true, false, _) => unreachable!("a kick before the plain one comes with it"),
-                }
-                if hb != 0.0 {
-                    w.iter_mut().zip(bt).for_each(|(w, t)| *w += t * cbi);
-                }
-                if h != 0.0 {
-                    w.iter_mut().zip(t).for_each(|(w, t)| *w += t * ci);
-                }
-            });
-        }
-        (Kick::Plain(_) | Kick::After { .. }, InverseMasses::PerParticle { mass, inertia }) => {
-            let parts = (x, v, w, (force, torque), (before_f, before_t), (&mass[..], &inertia[..]));
-            parallel::for_each_share(parts, |_, (x, v, w, (f, t), (bf, bt), (m, i))| {
-                for (((x, v), w), (((f, t), (bf, bt)), (m, i))) in
-                    x.iter_mut().zip(v).zip(w).zip(f.iter().zip(t).zip(bf.iter().zip(bt)).zip(m.iter().zip(i)))
-                {
+    // The largest |Δx| of a coordinate over the shares, as the bits of a number ≥ 0 (which order
+    // as the numbers do; a NaN orders above infinity and stays).
+    let largest = AtomicU64::new(0);
+    let inverse_masses = &p.inverse_masses;
+    let (mass, inertia) = (&p.mass[..], &p.inertia[..]);
+    p.position.drift(|x| {
+        match (kick, inverse_masses) {
+            (Kick::Plain(_) | Kick::After { .. }, InverseMasses::Uniform { mass, inertia }) => {
+                let (c, ci, cb, cbi) = (h * mass, h * inertia, hb * mass, hb * inertia);
+                // Component by component (SIMD across particles).
+                let parts = (x, v, w, (force, torque), (before_f, before_t));
+                parallel::for_each_share(parts, |_, (x, v, w, (f, t), (bf, bt))| {
+                    let (x, v, w, f, t) =
+                        (components_mut(x), components_mut(v), components_mut(w), components(f), components(t));
+                    let (bf, bt) = (components(bf), components(bt));
+                    let moved = match (hb != 0.0, h != 0.0, drift != 0.0) {
+                        (true, true, true) => {
+                            x.iter_mut().zip(v).zip(bf.iter().zip(f)).fold(0, |m, ((x, v), (bf, f))| {
+                                *v += bf * cb;
+                                *v += f * c;
+                                step(m, x, *v * drift)
+                            })
+                        }
+                        (true, true, false) => {
+                            v.iter_mut().zip(bf.iter().zip(f)).for_each(|(v, (bf, f))| {
+                                *v += bf * cb;
+                                *v += f * c;
+                            });
+                            0
+                        }
+                        (false, true, true) => x.iter_mut().zip(v).zip(f).fold(0, |m, ((x, v), f)| {
+                            *v += f * c;
+                            step(m, x, *v * drift)
+                        }),
+                        (false, true, false) => {
+                            v.iter_mut().zip(f).for_each(|(v, f)| *v += f * c);
+                            0
+                        }
+                        (false, false, true) => x.iter_mut().zip(v).fold(0, |m, (x, v)| step(m, x, *v * drift)),
+                        (false, false, false) => 0,
+                        (true, false, _) => unreachable!("a kick before the plain one comes with it"),
+                    };
                     if hb != 0.0 {
-                        *v += bf * (hb * m);
-                        *w += bt * (hb * i);
+                        w.iter_mut().zip(bt).for_each(|(w, t)| *w += t * cbi);
                     }
                     if h != 0.0 {
-                        *v += f * (h * m);
-                        *w += t * (h * i);
+                        w.iter_mut().zip(t).for_each(|(w, t)| *w += t * ci);
                     }
-                    if drift != 0.0 {
-                        *x += *v * drift;
-                    }
-                }
-            });
-        }
-        (Kick::Exponential { h, gamma, gamma_rotational, fluid_velocity: u }, _) => {
-            let (mass, inertia) = (&p.mass[..], &p.inertia[..]);
-            parallel::for_each_share(
-                (x, v, w, force, torque, (mass, inertia), (gamma, gamma_rotational)),
-                |_, (x, v, w, f, t, (m, i), (g, gr))| {
-                    for k in 0..x.len() {
-                        let e = g[k] * h / m[k];
-                        v[k] = u + (v[k] - u) * (-e).exp() + f[k] * (h / m[k] * phi(e));
-                        let er = gr[k] * h / i[k];
-                        w[k] = w[k] * (-er).exp() + t[k] * (h / i[k] * phi(er));
+                    largest.fetch_max(moved, Ordering::Relaxed);
+                });
+            }
+            (Kick::Plain(_) | Kick::After { .. }, InverseMasses::PerParticle { mass, inertia }) => {
+                let parts = (x, v, w, (force, torque), (before_f, before_t), (&mass[..], &inertia[..]));
+                parallel::for_each_share(parts, |_, (x, v, w, (f, t), (bf, bt), (m, i))| {
+                    let mut moved = 0;
+                    for (((x, v), w), (((f, t), (bf, bt)), (m, i))) in
+                        x.iter_mut().zip(v).zip(w).zip(f.iter().zip(t).zip(bf.iter().zip(bt)).zip(m.iter().zip(i)))
+                    {
+                        if hb != 0.0 {
+                            *v += bf * (hb * m);
+                            *w += bt * (hb * i);
+                        }
+                        if h != 0.0 {
+                            *v += f * (h * m);
+                            *w += t * (h * i);
+                        }
                         if drift != 0.0 {
-                            x[k] += v[k] * drift;
+                            moved = (0..3).fold(moved, |m, k| step(m, &mut x[k], v[k] * drift));
                         }
                     }
-                },
-            );
+                    largest.fetch_max(moved, Ordering::Relaxed);
+                });
+            }
+            (Kick::Exponential { h, gamma, gamma_rotational, fluid_velocity: u }, _) => {
+                parallel::for_each_share(
+                    (x, v, w, force, torque, (mass, inertia), (gamma, gamma_rotational)),
+                    |_, (x, v, w, f, t, (m, i), (g, gr))| {
+                        let mut moved = 0;
+                        for k in 0..x.len() {
+                            let e = g[k] * h / m[k];
+                            v[k] = u + (v[k] - u) * (-e).exp() + f[k] * (h / m[k] * phi(e));
+                            let er = gr[k] * h / i[k];
+                            w[k] = w[k] * (-er).exp() + t[k] * (h / i[k] * phi(er));
+                            if drift != 0.0 {
+                                moved = (0..3).fold(moved, |m, c| step(m, &mut x[k][c], v[k][c] * drift));
+                            }
+                        }
+                        largest.fetch_max(moved, Ordering::Relaxed);
+                    },
+                );
+            }
         }
-    }
+        // √3 rounded up, and the relative rounding of a difference (half an ulp) on top.
+        f64::from_bits(largest.into_inner()) * (1.732_050_807_568_878 * (1.0 + f64::EPSILON))
+    });
     if p.has_permanent_moments && drift != 0.0 {
         let turn = |(m, w): (&mut Vec3, &Vec3)| {
             if *m != Vec3::zeros() {
@@ -279,6 +303,16 @@ fn advance(p: &mut Particles, force: &[Vec3], torque: &[Vec3], kick: Kick, drift
         };
         p.permanent_moment.iter_mut().zip(&p.angular_velocity).for_each(turn);
     }
+}
+
+/// x += dx, folded into `moved`, the bits of the largest |Δx| so far (the change of x as the
+/// positions store it, so that the bound holds for the rounded sum).
+#[inline(always)]
+fn step(moved: u64, x: &mut f64, dx: f64) -> u64 {
+    let new = *x + dx;
+    let change = (new - *x).abs().to_bits();
+    *x = new;
+    moved.max(change)
 }
 
 /// The components of vectors as one slice (x₀, y₀, z₀, x₁, …): a loop over it is SIMD across
@@ -307,8 +341,8 @@ mod tests {
         let vectors =
             |offset: usize| (0..n).map(|i| Vec3::from_fn(|c, _| value(3 * (i + offset * n) + c))).collect::<Vec<_>>();
         let (mut p, mut f) = (Particles::default(), crate::core::state::Fields::default());
-        (p.position, p.velocity, p.angular_velocity, f.force, f.torque) =
-            (vectors(0), vectors(1), vectors(2), vectors(3), vectors(4));
+        (p.velocity, p.angular_velocity, f.force, f.torque) = (vectors(1), vectors(2), vectors(3), vectors(4));
+        p.position = vectors(0).into();
         (f.slow_force, f.slow_torque) = (vectors(5), vectors(6));
         let (inv_m, inv_i) = (3.7e11, 2.9e21);
         p.inverse_masses = if per_particle {
@@ -317,6 +351,44 @@ mod tests {
             InverseMasses::Uniform { mass: inv_m, inertia: inv_i }
         };
         State { particles: p, fields: f, ..State::default() }
+    }
+
+    /// The bound a drift states for the neighbour lists holds every particle's displacement, and
+    /// exceeds the largest by at most √3 (it bounds the norm by the largest component): shared
+    /// and per-particle inverse masses and the exponential kick, below and above the parallel
+    /// threshold. A kick without a drift states nothing.
+    #[test]
+    fn a_drift_bounds_every_displacement() {
+        for n in [7, parallel::MIN_PARALLEL_LEN + 5] {
+            for (case, per_particle) in [("shared", false), ("per particle", true), ("exponential", true)] {
+                let mut state = particles(n, per_particle);
+                state.particles.mass = vec![1e-12; n];
+                state.particles.inertia = vec![1e-22; n];
+                let (gamma, gamma_rotational) = (vec![3e-8; n], vec![2e-19; n]);
+                let before = state.particles.position.to_vec();
+                let motion = state.particles.position.motion();
+                parallel::with_warm_pool(n, &mut parallel::Balance::default(), || {
+                    let kick = match case {
+                        "exponential" => Kick::Exponential {
+                            h: 1e-8,
+                            gamma: &gamma,
+                            gamma_rotational: &gamma_rotational,
+                            fluid_velocity: Vec3::new(1e-3, 0.0, 0.0),
+                        },
+                        _ => Kick::Plain(0.5e-8),
+                    };
+                    let (p, f) = (&mut state.particles, &state.fields);
+                    advance(p, &f.force, &f.torque, kick, 1e-8);
+                });
+                let p = &state.particles;
+                let moved = p.position.iter().zip(&before).map(|(x, x0)| (x - x0).norm()).fold(0.0, f64::max);
+                let bound = p.position.motion().since(motion).expect("a drift, not a write");
+                assert!(moved > 0.0 && bound >= moved && bound <= 1.75 * moved, "{case}, n = {n}: {bound} for {moved}");
+                let still = p.position.motion();
+                kick(&mut state, 1e-8);
+                assert_eq!(state.particles.position.motion().since(still), Some(0.0), "{case}, n = {n}: a kick");
+            }
+        }
     }
 
     /// Two kicks and a drift in one pass give the bits of the passes one after the other, with

@@ -639,7 +639,7 @@ mod tests {
         state.fields.fit(state.particles.len());
         for step in 0..400 {
             let p = &mut state.particles;
-            for (x, v) in p.position.iter_mut().zip(&mut p.velocity) {
+            for (x, v) in p.position.write().iter_mut().zip(&mut p.velocity) {
                 *x += *v;
                 // Back into the box once a particle is half a radius into a wall.
                 for c in 0..3 {
