@@ -190,8 +190,8 @@ pub struct VerletList {
     /// `reach[j]`: the lowest row i of a candidate (i, j') with j' ≥ j (`u32::MAX` if none).
     reach: Vec<u32>,
     reference: Vec<Vec3>,
-    /// The positions' motion when `reference` was taken.
-    built_at: Motion,
+    /// What the list knows of the displacements from `reference`.
+    anchor: Anchor,
     built_for: Option<(f64, f64)>,
     /// The skin of the last build (at most the declared one).
     in_use: f64,
@@ -200,7 +200,7 @@ pub struct VerletList {
     /// Rebuilds so far (diagnostic).
     pub rebuilds: u64,
     /// Updates so far at which every particle was compared with its reference (diagnostic; at the
-    /// others the drifts' bound settled that none had moved far enough, [`settled`]).
+    /// others the drifts' bounds settled that none had moved far enough, [`Anchor::settles`]).
     pub examined: u64,
 }
 
@@ -241,9 +241,9 @@ impl VerletList {
         let stale = self.reference.len() != positions.len() || self.built_for != Some((range, skin));
         let half = 0.5 * self.in_use;
         let moved_too_far = stale
-            || (!settled(positions, self.built_at, half) && {
+            || (!self.anchor.settles(positions, half) && {
                 self.examined += 1;
-                moved_farther(positions, &self.reference, domain, half)
+                moved_farther(positions, &self.reference, &mut self.anchor, domain, half)
             });
         if !moved_too_far {
             self.since_build += 1;
@@ -254,7 +254,7 @@ impl VerletList {
         self.find_reach(positions.len());
         self.reference.clear();
         self.reference.extend_from_slice(positions);
-        self.built_at = positions.motion();
+        self.anchor = Anchor::at(positions);
         self.built_for = Some((range, skin));
         self.since_build = 0;
         self.rebuilds += 1;
@@ -356,8 +356,8 @@ struct CloseCandidates {
     pieces: Pieces<(u32, u32)>,
     /// Positions when `list` was taken; empty: not taken for the current Verlet candidates.
     reference: Vec<Vec3>,
-    /// The positions' motion then.
-    taken_at: Motion,
+    /// What the list knows of the displacements from `reference`.
+    anchor: Anchor,
     /// The close skin; 0 before the first build.
     skin: f64,
     /// Whether `list` is in use (its skin narrower than the Verlet skin in use).
@@ -405,7 +405,8 @@ impl CloseCandidates {
             return false;
         } else {
             let half = 0.5 * self.skin;
-            if settled(positions, self.taken_at, half) || !moved_farther(positions, &self.reference, domain, half) {
+            let (reference, anchor) = (&self.reference, &mut self.anchor);
+            if anchor.settles(positions, half) || !moved_farther(positions, reference, anchor, domain, half) {
                 self.since += 1;
                 return false;
             }
@@ -436,7 +437,7 @@ impl CloseCandidates {
         });
         self.reference.clear();
         self.reference.extend_from_slice(positions);
-        self.taken_at = positions.motion();
+        self.anchor = Anchor::at(positions);
         self.builds += 1;
         // Hardly fewer than the Verlet candidates (a near list whose skin already adapts): not
         // worth the upkeep until the next rebuild.
@@ -552,24 +553,47 @@ fn separation(domain: &Domain, periodic: bool, positions: &[Vec3], (i, j): (u32,
     }
 }
 
-/// Whether the drifts since `taken` (the positions' motion when a reference was taken) bound
-/// every particle's displacement by half of `distance`: then none has moved `distance` from the
-/// reference, and [`moved_farther`] need not look (the other half is margin for the rounding of
-/// the displacements it compares).
-fn settled(positions: &Positions, taken: Motion, distance: f64) -> bool {
-    positions.motion().since(taken).is_some_and(|bound| bound <= 0.5 * distance)
+/// What a list last knew of its particles' displacements from its reference positions: at the
+/// positions' `motion`, none was farther than `within` (m, minimum image) from its reference.
+#[derive(Debug, Clone, Copy, Default)]
+struct Anchor {
+    motion: Motion,
+    within: f64,
+}
+
+impl Anchor {
+    /// At the reference positions themselves.
+    fn at(positions: &Positions) -> Self {
+        Anchor { motion: positions.motion(), within: 0.0 }
+    }
+
+    /// Whether the displacement known then plus the drifts' bounds since keep every particle
+    /// within half of `distance` of its reference: then none has moved `distance`, and
+    /// [`moved_farther`] need not look (the other half is margin for the rounding of the
+    /// displacements it compares).
+    fn settles(&self, positions: &Positions, distance: f64) -> bool {
+        positions.motion().since(self.motion).is_some_and(|bound| self.within + bound <= 0.5 * distance)
+    }
 }
 
 /// Whether some particle has moved farther than `distance` (minimum image) from its `reference`
-/// position. Branch-free over a share, one such loop per share: rayon's element-wise map and
-/// reduce took three times as long on two threads (sparse 30 000 particles: 88–99 against
-/// 32–34 ms per 1 000 steps), more than on one.
-fn moved_farther(positions: &[Vec3], reference: &[Vec3], domain: &Domain, distance: f64) -> bool {
-    let limit = distance * distance;
-    let moved = |(x, x0): (&Vec3, &Vec3)| domain.displacement(x, x0).norm_squared() > limit;
-    parallel::any_share((positions, reference), |(xs, x0s)| {
-        xs.iter().zip(x0s).fold(false, |any, pair| any | moved(pair))
-    })
+/// position; the anchor moves to the positions now, with the largest displacement found. The
+/// largest squared displacement, branch-free over a share, one such loop per share (rayon's
+/// element-wise map and reduce took three times as long on two threads: sparse 30 000
+/// particles, 88–99 against 32–34 ms per 1 000 steps), compared as each one was before.
+fn moved_farther(
+    positions: &Positions,
+    reference: &[Vec3],
+    anchor: &mut Anchor,
+    domain: &Domain,
+    distance: f64,
+) -> bool {
+    let squared = |(x, x0): (&Vec3, &Vec3)| domain.displacement(x, x0).norm_squared();
+    let largest = parallel::max_over_shares((&positions[..], reference), |(xs, x0s)| {
+        xs.iter().zip(x0s).map(squared).fold(0.0, |largest, d| if d > largest { d } else { largest })
+    });
+    *anchor = Anchor { motion: positions.motion(), within: largest.sqrt() };
+    largest > distance * distance
 }
 
 /// The pairs a force term needs from the neighbour layer.
@@ -929,8 +953,12 @@ mod tests {
                 }
                 largest * speed * (1.0 + 1e-12) + domain.wrap_rounding()
             });
-            if update == 450 {
-                positions.write()[7].y = (positions[7].y + 0.3) % 0.8;
+            match update {
+                // Written without moving (as a renumbering writes them): examined once, then
+                // settled again from the displacement found.
+                200 => _ = positions.write(),
+                450 => positions.write()[7].y = (positions[7].y + 0.3) % 0.8,
+                _ => {}
             }
         }
         assert!(fed.rebuilds >= 5, "the particles moved enough to rebuild: {} rebuilds", fed.rebuilds);

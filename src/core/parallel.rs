@@ -482,6 +482,16 @@ pub fn any_share<S: Split>(parts: S, test: impl Fn(S) -> bool + Sync + Send) -> 
     shares(parts).into_par_iter().map(|(_, piece)| test(piece)).reduce(|| false, |a, b| a | b)
 }
 
+/// The largest of `f` over the shares of `parts`, at least 0 (an exact reduction: the same
+/// answer serially).
+pub fn max_over_shares<S: Split>(parts: S, f: impl Fn(S) -> f64 + Sync + Send) -> f64 {
+    use rayon::prelude::*;
+    if !worth_it(parts.len()) {
+        return f(parts).max(0.0);
+    }
+    shares(parts).into_par_iter().map(|(_, piece)| f(piece)).reduce(|| 0.0, f64::max)
+}
+
 /// Σ over the pairs k (sorted by i, with i < j) of `both(k).0` into `out[i]` and `both(k).1`
 /// into `out[j]`, each particle's terms added in pair order, as the loop
 /// `for k { let (a, b) = both(k); out[i] += a; out[j] += b }` adds them, bit for bit. In shares
