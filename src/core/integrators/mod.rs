@@ -190,8 +190,10 @@ fn phi(x: f64) -> f64 {
 /// The one kick/drift kernel of every integrator: a kick, then x += v drift (a zero drift is
 /// skipped), in one parallel loop in which each thread takes its share of the particles through
 /// all of it (a parallel loop per array would hand out and join once per array). The drift
-/// states its bound on any particle's displacement to the positions ([`crate::core::state::Positions::drift`]): the
-/// largest change of a coordinate, taken from the positions before and after, times √3.
+/// states its bound on any particle's displacement ([`Positions::drift`]): the largest change of
+/// a coordinate, taken from the positions before and after, times √3.
+///
+/// [`Positions::drift`]: crate::core::state::Positions::drift
 fn advance(p: &mut Particles, force: &[Vec3], torque: &[Vec3], kick: Kick, drift: f64) {
     let (v, w) = (&mut p.velocity[..], &mut p.angular_velocity[..]);
     // A kick before the plain one: another force's, or none (h′ = 0, skipped).
