@@ -579,8 +579,8 @@ impl Anchor {
 /// Whether some particle has moved farther than `distance` (minimum image) from its `reference`
 /// position; the anchor moves to the positions now, with the largest displacement found. The
 /// largest squared displacement is taken branch-free over a share, one such loop per share
-/// (rayon's element-wise map and reduce took three times as long on two threads: sparse 30 000
-/// particles, 88–99 against 32–34 ms per 1 000 steps), and compared with `distance`².
+/// (not rayon's element-wise map and reduce: see `reports/performance-history.md`), and compared
+/// with `distance`².
 fn moved_farther(
     positions: &Positions,
     reference: &[Vec3],
