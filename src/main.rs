@@ -80,6 +80,12 @@ enum Report {
         /// Wall time of the run that produced the trajectories (s), quoted in the report.
         #[arg(long)]
         wall_time: Option<f64>,
+        /// The hydrodynamics study's experiment files (case 2's twenty-seed ensemble).
+        #[arg(long, default_value = "experiments/hydrodynamics")]
+        hydrodynamics_experiments: PathBuf,
+        /// The hydrodynamics report directory, whose digests/ hold that study's runs.
+        #[arg(long, default_value = "reports/hydrodynamics")]
+        hydrodynamics: PathBuf,
     },
     /// The paper's shielded-area drag against Stokes flow with hydrodynamic interactions (RPY):
     /// chain drag, the mobility's cost and refactorisation error (computed here, about three
@@ -339,15 +345,23 @@ fn main() -> ExitCode {
             let (experiments, dir) = (PathBuf::from("experiments").join(name), PathBuf::from("reports").join(name));
             cli::report::digests(&experiments, &dir.join("digests"), gap)
         }
-        Command::Report(Report::Paper { experiments, reference, out, gap, wall_time }) => {
-            cli::report::paper(&magdem::report::paper::PaperReportOptions {
-                experiments,
-                reference,
-                out,
-                gap,
-                wall_time,
-            })
-        }
+        Command::Report(Report::Paper {
+            experiments,
+            reference,
+            out,
+            gap,
+            wall_time,
+            hydrodynamics_experiments,
+            hydrodynamics,
+        }) => cli::report::paper(&magdem::report::paper::PaperReportOptions {
+            experiments,
+            reference,
+            out,
+            gap,
+            wall_time,
+            hydrodynamics_experiments,
+            hydrodynamics,
+        }),
         Command::Report(Report::Hydrodynamics { experiments, case2_scene, reference, out, gap }) => {
             cli::report::hydrodynamics(&magdem::report::hydrodynamics::HydrodynamicsReportOptions {
                 experiments,

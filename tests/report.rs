@@ -80,6 +80,8 @@ fn paper_report(experiments: &Path, out: &Path, wall_time: Option<f64>) -> PathB
         out: out.to_path_buf(),
         gap: 1e-3,
         wall_time,
+        hydrodynamics_experiments: experiments.join("no-hydrodynamics"),
+        hydrodynamics: out.join("no-hydrodynamics"),
     })
     .unwrap()
 }
@@ -90,7 +92,18 @@ fn report_tables_are_the_analysis_of_the_runs() {
     let out = work.path().join("report");
     let report = |wall_time| paper_report(&experiments, &out, wall_time);
     let readme = report(Some(12.0));
-    let text = std::fs::read_to_string(&readme).unwrap();
+    // The body and its appendices, as one text.
+    let whole = |readme: &Path| {
+        let dir = readme.parent().unwrap();
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+            .filter(|n| n.ends_with(".md"))
+            .collect();
+        names.sort();
+        names.iter().map(|n| std::fs::read_to_string(dir.join(n)).unwrap()).collect::<Vec<_>>().join("\n")
+    };
+    let text = whole(&readme);
     let measured = |out: &Path| {
         let m =
             ParquetReader::new(std::fs::File::open(out.join("tables/measurement.parquet")).unwrap()).finish().unwrap();
@@ -152,14 +165,16 @@ fn report_tables_are_the_analysis_of_the_runs() {
         assert!(text.contains(&format!("({figure})")), "{figure} linked");
     }
     assert!(text.contains("No completed case-2 runs"), "missing studies are said to be missing");
-    assert!(text.contains("wrote this report took 12 s"));
+    assert!(text.contains("spent 12 s of wall time"), "the main job's wall time is stated");
+    let reproduce = read_csv(&out.join("tables/reproduce.csv"));
+    assert_eq!(reproduce.column("experiments_wall_time_s").unwrap().f64().unwrap().get(0), Some(12.0));
 
     // A damaged run file is marked and the report goes on with the others.
     let damaged = runs.join("case1-c0.563__seed-3.h5");
     let bytes = std::fs::read(&damaged).unwrap();
     std::fs::write(&damaged, &bytes[..bytes.len() / 3]).unwrap();
     let readme = report(None);
-    let text = std::fs::read_to_string(&readme).unwrap();
+    let text = whole(&readme);
     assert!(
         text.contains("Unreadable run files") && text.contains("case1-c0.563__seed-3.h5"),
         "the damaged run is named"
@@ -176,8 +191,8 @@ fn report_tables_are_the_analysis_of_the_runs() {
     std::fs::remove_file(&damaged).unwrap();
     std::fs::remove_file(runs.join("case1-c0.563__seed-2.h5")).unwrap();
     let readme = report(None);
-    let text = std::fs::read_to_string(&readme).unwrap();
-    assert!(text.contains("1 runs read there, 2 from the report's"), "provenance stated");
+    let text = whole(&readme);
+    assert!(text.contains("trajectories in `runs/`: 1.") && text.contains("digests/): 2."), "provenance stated");
     let parquet = ParquetReader::new(std::fs::File::open(out.join("tables/table3.parquet")).unwrap()).finish().unwrap();
     assert_eq!(parquet.column("runs").unwrap().cast(&DataType::UInt64).unwrap().u64().unwrap().get(row), Some(3));
     assert_eq!(parquet.column("magdem_mean_length_um").unwrap().f64().unwrap().get(row), Some(reported));

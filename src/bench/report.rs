@@ -924,11 +924,12 @@ fn scaling_figure(path: &Path, rows: &[Measurement]) -> Result<(), Error> {
     .map_err(|e| e.to_string().into())
 }
 
-/// The `make reproduce` wall time quoted by the committed paper report, if any.
+/// The wall time of the `make reproduce` runs, as the paper report recorded it in its tables.
 fn reproduce_wall_time() -> Option<u64> {
-    let text = std::fs::read_to_string("reports/paper/README.md").ok()?;
-    let at = text.find(" s of wall time")?;
-    text[..at].rsplit(' ').next()?.parse().ok()
+    let path = Path::new("reports/paper/tables").join(format!("{}.csv", crate::report::paper::REPRODUCE_TABLE));
+    let table = crate::report::tables::read_csv(&path).ok()?;
+    let seconds = crate::report::tables::floats(&table, "experiments_wall_time_s").ok()?;
+    seconds.first().filter(|s| s.is_finite()).map(|s| s.round() as u64)
 }
 
 /// What mutual induction changes in case 1 at 2.25 mg/ml, from the committed paper report's

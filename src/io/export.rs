@@ -117,7 +117,8 @@ pub fn write_lammps_dump(h5: &Path, out: &Path) -> Result<(), Error> {
 
 /// A pvbatch script (arguments: XDMF file, PNG file) that renders a trajectory's last frame:
 /// the particles as spheres of their radius, coloured by the moment along x (one colour where all
-/// moments are equal), seen along −z (the field along x lies in the picture).
+/// moments are equal), seen along −z (the field along x lies in the picture), the view fitted to
+/// the particles with the colour bar on its right.
 /// [`render_last_frame`] runs it.
 pub const PARAVIEW_RENDER: &str = r#"
 import sys
@@ -155,14 +156,32 @@ else:
 outline = Show(Outline(Input=reader), view)
 outline.DiffuseColor = [0, 0, 0]
 outline.AmbientColor = [0, 0, 0]
-view.CameraPosition = [0, 0, 1]
-view.CameraFocalPoint = [0, 0, 0]
+# A view fitted to the particles (centres plus the largest radius and a small margin), seen along
+# -z, with room on the right for the colour bar: no empty border around the picture.
+x0, x1, y0, y1, z0, z1 = reader.GetDataInformation().GetBounds()
+pad = reader.PointData["radius"].GetRange()[1] + 0.02 * max(x1 - x0, y1 - y0)
+width, height = x1 - x0 + 2 * pad, y1 - y0 + 2 * pad
+pixels = 1000
+bar_pixels = 220 if high > low else 0
+picture = [int(pixels * width / height) + bar_pixels, pixels]
+per_pixel = height / pixels
+view.ViewSize = picture
+# The first render resets the camera to the scene's bounding sphere; the fitted view comes after.
+Render(view)
+cx, cy, cz = 0.5 * (x0 + x1) + 0.5 * bar_pixels * per_pixel, 0.5 * (y0 + y1), 0.5 * (z0 + z1)
+view.CameraPosition = [cx, cy, cz + 10 * max(width, height, z1 - z0)]
+view.CameraFocalPoint = [cx, cy, cz]
 view.CameraViewUp = [0, 1, 0]
 view.CameraParallelProjection = 1
-view.ResetCamera()
-view.OrientationAxesVisibility = 1
+view.CameraParallelScale = 0.5 * height
+view.OrientationAxesVisibility = 0
+if high > low:
+    bar.WindowLocation = "Any Location"
+    bar.Orientation = "Vertical"
+    bar.Position = [1.0 - 0.9 * bar_pixels / picture[0], 0.1]
+    bar.ScalarBarLength = 0.8
 Render(view)
-SaveScreenshot(sys.argv[2], view, ImageResolution=[1400, 1000])
+SaveScreenshot(sys.argv[2], view, ImageResolution=picture)
 "#;
 
 /// Why [`render_last_frame`] made no picture.

@@ -3,11 +3,13 @@
 //! measurement would make of them, and a ranking of why the paper, the experiment and magdem
 //! differ. Every number comes from the runs; a section whose runs do not exist says so.
 
+use super::paper::Inputs;
 use super::runs::Run;
-use super::tables::{col, markdown, same, scol, write};
+use super::tables::{col, frame, markdown, same, scol, ucol, write};
 use crate::analysis::stats::{ci95_half_width, slope_ci95, summary};
 use crate::core::magnetisation::MU0;
 use crate::plot::{chart, palette, Legend, RGBColor, Scale, Series, SeriesLabelPosition};
+use minijinja::{context, Value};
 use polars::prelude::DataFrame;
 use rand::{RngExt, SeedableRng};
 use std::collections::BTreeMap;
@@ -26,7 +28,7 @@ pub struct Targets {
 }
 
 /// A mean over independent runs and its 95 % confidence half-width.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, serde::Serialize)]
 pub struct Estimate {
     pub n: usize,
     pub mean: f64,
@@ -70,14 +72,13 @@ pub enum Explanation {
     Shielding,
     Restitution,
     Integration,
-    PaperPipeline,
     /// Not a cause: the statistical uncertainty of magdem's mean, which the others must clear.
     Seeds,
 }
 
 impl Explanation {
     /// Every explanation; each concentration's block names those it has no measurement of.
-    pub const ALL: [Explanation; 10] = [
+    pub const ALL: [Explanation; 9] = [
         Explanation::Box,
         Explanation::StoppingTime,
         Explanation::Magnetisation,
@@ -86,7 +87,6 @@ impl Explanation {
         Explanation::Shielding,
         Explanation::Restitution,
         Explanation::Integration,
-        Explanation::PaperPipeline,
         Explanation::Seeds,
     ];
 
@@ -101,7 +101,6 @@ impl Explanation {
             Explanation::Shielding => "shielding",
             Explanation::Restitution => "restitution",
             Explanation::Integration => "integration",
-            Explanation::PaperPipeline => "the paper's pipeline",
             Explanation::Seeds => "seeds",
         }
     }
@@ -200,22 +199,109 @@ pub fn respa_runs(runs: &[Run], c: f64) -> Vec<&Run> {
     here
 }
 
+/// Bulk magnetite's saturation magnetisation at room temperature, ≈ 4.8e5 A/m (about 92 A·m²/kg
+/// at 5 200 kg/m³; Cornell & Schwertmann, *The Iron Oxides*, Wiley-VCH, 2nd ed., 2003): the most
+/// a bead of magnetite can hold, and the top of the magnetisation sweep.
+pub const BULK_MAGNETITE_MS: f64 = 4.8e5;
+
+/// The magnetisation sweep's variant at [`BULK_MAGNETITE_MS`], and its unsaturated linear law.
+const SATURATED_VARIANT: &str = "ms-4.8e5";
+const LINEAR_VARIANT: &str = "linear";
+
+/// The paper's stopping time (s): every case-1 length is read there unless stated.
+pub const PAPER_TIME: f64 = 5e-3;
+
+/// Growth exponents are fitted from this time on (s): before it most particles are still single.
+pub const GROWTH_FROM: f64 = 1e-3;
+
+/// Room temperature for the dipolar coupling constant λ (K).
+pub const ROOM_TEMPERATURE: f64 = 293.15;
+
+/// Boltzmann's constant (J/K).
+const BOLTZMANN: f64 = 1.380649e-23;
+
+/// The seed counts at which the seeds table gives the CI95 of the Table 3 mean (besides all).
+pub const SEED_SUBSETS: [usize; 2] = [5, 10];
+
+/// The concentration at which the magnetisation sweep's curves are set against t/τ (mg/ml).
+pub const COLLAPSE_CONCENTRATION: f64 = 2.25;
+
+/// Published growth exponents of field-induced chaining, with where they are stated (their
+/// abstracts; the tables of those works were not checked).
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct GrowthLiterature {
+    /// Smoluchowski kinetics for chains whose diffusivity falls as 1/s.
+    pub smoluchowski_z: f64,
+    pub smoluchowski_source: &'static str,
+    /// Ising dipolar particles under thermal noise: z where the attraction dominates, and where
+    /// diffusion does.
+    pub dipolar_z_attraction: f64,
+    pub dipolar_z_diffusion: f64,
+    pub dipolar_source: &'static str,
+    /// Floating millimetre dipoles (deterministic motion): Vicsek–Family scaling.
+    pub floating_source: &'static str,
+    /// Experiments on Brownian paramagnetic colloids, whose exponents are not quoted.
+    pub colloid_sources: &'static str,
+}
+
+pub const GROWTH_EXPONENTS: GrowthLiterature = GrowthLiterature {
+    smoluchowski_z: 0.5,
+    smoluchowski_source: "a microflows text of Springer's Interdisciplinary Applied Mathematics series, \
+                          chapter 13, on chains of paramagnetic beads",
+    dipolar_z_attraction: 0.2,
+    dipolar_z_diffusion: 0.5,
+    dipolar_source: "Suzuki, Kun & Ito, Phys. Rev. E, 2009",
+    floating_source: "Pál, Kun, Varga, Sohler & Sun, Phys. Rev. E 83, 061504, 2011",
+    colloid_sources: "Fermigier & Gast 1992; Promislow, Gast & Fermigier 1995",
+};
+
+/// A number of a run's scene (`integration.dt`, `species.0.diameter`, `field.b0.0`), NaN where
+/// the scene has none.
+pub(crate) fn scene_number(r: &Run, key: &str) -> f64 {
+    let Ok(table) = toml::from_str::<toml::Table>(&r.scene_text) else { return f64::NAN };
+    let mut value = toml::Value::Table(table);
+    for part in key.split('.') {
+        let next = match value {
+            toml::Value::Table(mut t) => t.remove(part),
+            toml::Value::Array(mut a) => part.parse::<usize>().ok().filter(|&k| k < a.len()).map(|k| a.swap_remove(k)),
+            _ => None,
+        };
+        let Some(next) = next else { return f64::NAN };
+        value = next;
+    }
+    match value {
+        toml::Value::Float(x) => x,
+        toml::Value::Integer(k) => k as f64,
+        _ => f64::NAN,
+    }
+}
+
+/// The first finite value of `key` over `runs`' scenes.
+fn scene_number_of(runs: &[&Run], key: &str) -> f64 {
+    runs.iter().map(|r| scene_number(r, key)).find(|x| x.is_finite()).unwrap_or(f64::NAN)
+}
+
+/// The experiments the seeds section reads: Table 3 and the r-RESPA runs of its scenes.
+pub const SEEDS_EXPERIMENTS: [&str; 4] = [TABLE3[0], TABLE3[1], "paper-magnetisation", "paper-sensitivity"];
+
+/// One concentration of the seeds table.
+#[derive(serde::Serialize)]
+struct SeedsRow {
+    c: f64,
+    /// The Verlet mean (µm) over its seeds.
+    length: Estimate,
+    /// r-RESPA against Verlet, paired by seed (%).
+    bias: Estimate,
+}
+
 /// Seeds and integration: the Table 3 mean's confidence against the number of seeds, and
 /// r-RESPA's paired bias against velocity Verlet.
-pub fn seeds_section(runs: &[Run], t: &Targets, tables: &Path, effects: &mut Vec<Effect>) -> Result<String, Error> {
-    let mut md = String::from("## Seeds and integration\n\n");
-    let (
-        mut c_col,
-        mut n_col,
-        mut m_col,
-        mut ci_col,
-        mut rel5,
-        mut rel10,
-        mut rel_all,
-        mut bias,
-        mut bias_ci,
-        mut bias_n,
-    ) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
+pub fn seeds(inp: &Inputs) -> Result<Value, Error> {
+    let (runs, t) = (inp.runs, inp.targets);
+    let mut effects = inp.effects.borrow_mut();
+    let (mut rel_a, mut rel_b, mut rel_all) = (vec![], vec![], vec![]);
+    let mut rows = vec![];
+    let (mut verlet_all, mut respa_all) = (vec![], vec![]);
     for &c in &t.concentration {
         let verlet = table3_runs(runs, c);
         if verlet.is_empty() {
@@ -225,17 +311,11 @@ pub fn seeds_section(runs: &[Run], t: &Targets, tables: &Path, effects: &mut Vec
         let e = Estimate::of(&l);
         let rel =
             |n: usize| if l.len() >= n { 100.0 * ci95_half_width(&l[..n]) / summary(&l[..n]).mean } else { f64::NAN };
-        let b = paired(&verlet, &respa_runs(runs, c), |r| r.mean_length_um());
-        c_col.push(c);
-        n_col.push(l.len() as f64);
-        m_col.push(e.mean);
-        ci_col.push(e.ci95);
-        rel5.push(rel(5));
-        rel10.push(rel(10));
+        let respa = respa_runs(runs, c);
+        let b = paired(&verlet, &respa, |r| r.mean_length_um());
+        rel_a.push(rel(SEED_SUBSETS[0]));
+        rel_b.push(rel(SEED_SUBSETS[1]));
         rel_all.push(100.0 * e.ci95 / e.mean);
-        bias.push(b.mean);
-        bias_ci.push(b.ci95);
-        bias_n.push(b.n as f64);
         effects.push(Effect {
             concentration: c,
             explanation: Explanation::Seeds,
@@ -246,40 +326,45 @@ pub fn seeds_section(runs: &[Run], t: &Targets, tables: &Path, effects: &mut Vec
             effects.push(Effect {
                 concentration: c,
                 explanation: Explanation::Integration,
-                what: format!("r-RESPA K = 10 against velocity Verlet, paired over {} seeds", b.n),
+                what: format!(
+                    "r-RESPA K = {:.0} against velocity Verlet, paired over {} seeds",
+                    scene_number_of(&respa, "integration.slow_every"),
+                    b.n
+                ),
                 change: b,
             });
         }
+        verlet_all.extend(verlet);
+        respa_all.extend(respa);
+        rows.push(SeedsRow { c, length: e, bias: b });
     }
-    if c_col.is_empty() {
-        return Ok(md + "No Table 3 runs.\n\n");
+    if rows.is_empty() {
+        return Ok(context! { ran => false });
     }
-    let mut df = DataFrame::new(vec![
-        col("concentration_mg_per_ml", c_col),
-        col("seeds", n_col),
-        col("mean_length_um", m_col),
-        col("ci95_um", ci_col),
-        col("ci95_percent_5_seeds", rel5),
-        col("ci95_percent_10_seeds", rel10),
+    let column = |f: &dyn Fn(&SeedsRow) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
+    let mut df = frame(vec![
+        col("concentration_mg_per_ml", column(&|r| r.c)),
+        col("seeds", column(&|r| r.length.n as f64)),
+        col("mean_length_um", column(&|r| r.length.mean)),
+        col("ci95_um", column(&|r| r.length.ci95)),
+        col(&format!("ci95_percent_{}_seeds", SEED_SUBSETS[0]), rel_a),
+        col(&format!("ci95_percent_{}_seeds", SEED_SUBSETS[1]), rel_b),
         col("ci95_percent_all_seeds", rel_all),
-        col("respa_paired_bias_percent", bias),
-        col("respa_bias_ci95_percent", bias_ci),
-        col("respa_bias_seeds", bias_n),
+        col("respa_paired_bias_percent", column(&|r| r.bias.mean)),
+        col("respa_bias_ci95_percent", column(&|r| r.bias.ci95)),
+        col("respa_bias_seeds", column(&|r| r.bias.n as f64)),
     ])?;
-    write(&mut df, tables, "seeds_and_integration")?;
-    md += "Table 3 is integrated with velocity Verlet at dt = 1e-8 s (magnetic forces every step: unbiased, the accuracy \
-           study's converged reference). The CI95 of the mean over seeds, as a share of the mean, shrinks as the seeds grow; \
-           r-RESPA (magnetic forces every 10 steps, the integration of the opt-in sweeps) is compared seed by seed with the same \
-           scenes under Verlet: its bias is each seed's difference over the Verlet mean, mean ± CI95 over the seeds both ran.\n\n";
-    md += &markdown(
+    write(&mut df, &inp.tables, "seeds_and_integration")?;
+    let (first, second) = (format!("CI95 % ({} seeds)", SEED_SUBSETS[0]), format!("CI95 % ({})", SEED_SUBSETS[1]));
+    let table = markdown(
         &df,
         &[
             "c (mg/ml)",
             "seeds",
             "mean length (µm)",
             "± CI95",
-            "CI95 % (5 seeds)",
-            "CI95 % (10)",
+            &first,
+            &second,
             "CI95 % (all)",
             "r-RESPA bias (%)",
             "± CI95",
@@ -287,9 +372,16 @@ pub fn seeds_section(runs: &[Run], t: &Targets, tables: &Path, effects: &mut Vec
         ],
         &[3, 0, 1, 1, 1, 1, 1, 1, 1, 0],
     )?;
-    md += "\nThe opt-in sweeps below (magnetisation, box size, time) use r-RESPA; its paired bias here is the *integration* row \
-           of the ranking of explanations, against which their effects can be read.\n\n";
-    Ok(md)
+    Ok(context! {
+        ran => true,
+        table => table,
+        dt => scene_number_of(&verlet_all, "integration.dt"),
+        respa_dt => scene_number_of(&respa_all, "integration.dt"),
+        slow_every => scene_number_of(&respa_all, "integration.slow_every"),
+        subsets => SEED_SUBSETS,
+        paired => rows.iter().any(|r| r.bias.n > 0),
+        rows => rows,
+    })
 }
 
 /// `x{f}-periodic` → f.
@@ -297,15 +389,145 @@ fn box_factor(variant: &str) -> Option<f64> {
     variant.strip_prefix('x')?.strip_suffix("-periodic")?.parse().ok()
 }
 
-/// Finite size: the mean length at 5 ms against the particle count at equal concentration.
-pub fn finite_size_section(
-    runs: &[Run],
-    t: &Targets,
-    out: &Path,
-    tables: &Path,
-    effects: &mut Vec<Effect>,
-) -> Result<String, Error> {
-    let mut md = String::from("## Finite size: box against the chains\n\n");
+/// One box size of the finite-size study at one concentration.
+#[derive(serde::Serialize)]
+struct SizeRow {
+    factor: u64,
+    particles: f64,
+    /// Mean length over seeds (µm).
+    length: Estimate,
+    box_limited: f64,
+    /// Percolating aggregates summed over the seeds.
+    percolating: usize,
+}
+
+/// What the next size of the series would cost per run, at the largest size's fastest wall time
+/// per particle, taken as linear in the particles.
+#[derive(serde::Serialize)]
+struct NextSize {
+    factor: u64,
+    particles: f64,
+    hours: f64,
+    /// The size whose fastest run sets the rate, its wall time (s) and particles.
+    from_factor: u64,
+    from_wall_s: f64,
+    from_particles: f64,
+    ms_per_particle: f64,
+}
+
+/// One concentration's finite-size law L ∝ N^β.
+#[derive(serde::Serialize)]
+struct SizeLaw {
+    c: f64,
+    /// β ± CI95 over every run (n: the runs).
+    beta: Estimate,
+    from: u64,
+    to: u64,
+    particles_from: f64,
+    particles_to: f64,
+    sizes: Vec<SizeRow>,
+    percolating: usize,
+    /// The largest size against the one below it (%, unpaired), and their factors.
+    largest: Estimate,
+    below: u64,
+    /// The two largest sizes agree within their CI95 and β's CI95 includes 0.
+    converged: bool,
+    /// Periodic side faces against walls at the paper's size (%, paired over seeds).
+    walls: Estimate,
+    next: Option<NextSize>,
+}
+
+/// The finite-size series' sizes (multiples of the paper's particle count).
+const SIZE_SERIES: [u64; 9] = [1, 2, 4, 10, 30, 100, 300, 1000, 3000];
+
+/// The size law at concentration `c` from its runs by size factor; pushes the box effect for the
+/// ranking where the law is converged (the paired change from the paper's walled box to the
+/// largest periodic box with two seeds or more).
+fn size_law(runs: &[Run], c: f64, by_factor: &BTreeMap<u64, Vec<&Run>>, effects: &mut Vec<Effect>) -> Option<SizeLaw> {
+    let points: Vec<(f64, f64)> = by_factor
+        .values()
+        .flatten()
+        .map(|r| (r.particles as f64, r.mean_length_um()))
+        .filter(|&(n, l)| n > 0.0 && l > 0.0 && l.is_finite())
+        .map(|(n, l)| (n.ln(), l.ln()))
+        .collect();
+    let (beta, beta_ci) = slope_ci95(&points);
+    let beta = Estimate { n: points.len(), mean: beta, ci95: beta_ci };
+    let sizes: Vec<SizeRow> = by_factor
+        .iter()
+        .map(|(&f, group)| SizeRow {
+            factor: f,
+            particles: mean_over(group, |r| r.particles as f64),
+            length: Estimate::of(&lengths(group)),
+            box_limited: box_limited(group),
+            percolating: group.iter().map(|r| r.percolating()).sum(),
+        })
+        .collect();
+    let groups: Vec<(&u64, &Vec<&Run>)> = by_factor.iter().collect();
+    let (&f_max, largest) = *groups.last()?;
+    let (below, largest_change) = match groups.len() {
+        n if n >= 2 => (*groups[n - 2].0, unpaired(&lengths(groups[n - 2].1), &lengths(largest))),
+        _ => (f_max, Estimate { n: 0, mean: f64::NAN, ci95: f64::NAN }),
+    };
+    let within = |e: &Estimate| e.ci95.is_finite() && e.mean.abs() <= e.ci95;
+    let converged = within(&largest_change) && within(&beta);
+    let walls = by_factor.get(&1).map_or(Estimate { n: 0, mean: f64::NAN, ci95: f64::NAN }, |x1| {
+        paired(&respa_runs(runs, c), x1, |r| r.mean_length_um())
+    });
+    if converged {
+        // The largest box with a CI (two seeds or more), so that the ranking has one.
+        let (f_big, big) = groups.iter().rev().find(|(_, g)| g.len() >= 2).copied().unwrap_or((&f_max, largest));
+        let change = paired_change(&respa_runs(runs, c), big);
+        effects.push(Effect {
+            concentration: c,
+            explanation: Explanation::Box,
+            what: format!(
+                "periodic {f_big}× the particles against the paper's box with walls, paired over {} seeds",
+                change.n
+            ),
+            change,
+        });
+    }
+    let particles = mean_over(largest, |r| r.particles as f64);
+    let next = largest
+        .iter()
+        .filter(|r| r.wall_time.is_finite() && r.particles > 0)
+        .min_by(|a, b| (a.wall_time / a.particles as f64).total_cmp(&(b.wall_time / b.particles as f64)))
+        .map(|fastest| {
+            let factor = SIZE_SERIES.into_iter().find(|&f| f > f_max).unwrap_or(3 * f_max);
+            let rate = fastest.wall_time / fastest.particles as f64;
+            let next_particles = particles * factor as f64 / f_max as f64;
+            NextSize {
+                factor,
+                particles: next_particles,
+                hours: rate * next_particles / 3600.0,
+                from_factor: f_max,
+                from_wall_s: fastest.wall_time,
+                from_particles: fastest.particles as f64,
+                ms_per_particle: 1e3 * rate,
+            }
+        });
+    Some(SizeLaw {
+        c,
+        beta,
+        from: *groups[0].0,
+        to: f_max,
+        particles_from: sizes[0].particles,
+        particles_to: particles,
+        percolating: sizes.iter().map(|s| s.percolating).sum(),
+        sizes,
+        largest: largest_change,
+        below,
+        converged,
+        walls,
+        next,
+    })
+}
+
+/// Finite size: the mean length at the paper's time against the particle count at equal
+/// concentration, and the size law L ∝ N^β at each concentration; figure `finite-size.png`.
+pub fn finite_size(inp: &Inputs) -> Result<Value, Error> {
+    let (runs, t) = (inp.runs, inp.targets);
     let mine = |r: &&Run| {
         r.completed()
             && (r.experiment.starts_with("paper-finite-size-c") || r.experiment.ends_with("-x100"))
@@ -313,17 +535,18 @@ pub fn finite_size_section(
     };
     let sized: Vec<&Run> = runs.iter().filter(mine).collect();
     if sized.is_empty() {
-        return Ok(md
-            + "Not run: `experiments/paper/opt-in/finite-size-*.toml` and `x100-*.toml` (periodic side faces, 1× to 100× the \
-               paper's particles at equal concentration) enter here when their runs exist.\n\n");
+        return Ok(context! { ran => false });
     }
+    let mut effects = inp.effects.borrow_mut();
     let (mut c_col, mut f_col, mut p_col, mut n_col, mut m_col, mut ci_col, mut cap_col, mut perc_col, mut wall_col) =
         (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
     let mut threads_col = vec![];
     let mut series = vec![];
-    let mut findings = vec![];
+    let mut laws = vec![];
+    // The x range of the data, over every concentration: the experiment's levels span it.
+    let counts = sized.iter().map(|r| r.particles as f64).filter(|&n| n > 0.0);
+    let x_range = (counts.clone().fold(f64::INFINITY, f64::min), counts.fold(0.0, f64::max));
     for (k, (&c, &exp)) in t.concentration.iter().zip(&t.experiment).enumerate() {
-        let (mut x_lo, mut x_hi) = (f64::INFINITY, 0.0_f64);
         let mut by_factor: BTreeMap<u64, Vec<&Run>> = BTreeMap::new();
         for r in sized.iter().filter(|r| same(r.concentration, c)) {
             by_factor.entry(box_factor(&r.variant).unwrap_or(0.0) as u64).or_default().push(r);
@@ -331,9 +554,7 @@ pub fn finite_size_section(
         if by_factor.is_empty() {
             continue;
         }
-        let mut pts = vec![];
-        let mut errs = vec![];
-        let mut edge = vec![];
+        let (mut pts, mut errs, mut edge) = (vec![], vec![], vec![]);
         for (&f, group) in &by_factor {
             let e = Estimate::of(&lengths(group));
             let particles = mean_over(group, |r| r.particles as f64);
@@ -350,16 +571,13 @@ pub fn finite_size_section(
             pts.push((particles, e.mean));
             errs.push(e.ci95);
             edge.push((particles, 1e6 * mean_over(group, |r| r.box_extent)));
-            (x_lo, x_hi) = (x_lo.min(particles), x_hi.max(particles));
         }
-        series
-            .push(Series::markers(format!("{c} mg/ml (mean ± CI95 over seeds)"), pts, palette(k), 6).with_errors(errs));
-        series.push(Series::line(format!("box edge along the field, {c} mg/ml"), edge, palette(k)));
-        series.push(level(format!("experiment, {c} mg/ml"), exp, (x_lo.min(300.0), x_hi.max(3.0e4)), palette(k)));
-        findings.extend(box_findings(runs, c, &by_factor, effects));
-        findings.extend(size_trend(c, &by_factor));
+        series.push(Series::markers(format!("{c} mg/ml"), pts, palette(k), 6).with_errors(errs));
+        series.push(Series::line("", edge, palette(k)));
+        series.push(level("", exp, x_range, palette(k)));
+        laws.extend(size_law(runs, c, &by_factor, &mut effects));
     }
-    let mut df = DataFrame::new(vec![
+    let mut df = frame(vec![
         col("concentration_mg_per_ml", c_col),
         col("particle_factor", f_col),
         col("particles", p_col),
@@ -371,17 +589,19 @@ pub fn finite_size_section(
         col("wall_time_per_run_s", wall_col),
         scol("threads_per_run", threads_col),
     ])?;
-    write(&mut df, tables, "finite_size")?;
-    md += "The paper's box scaled by f^(1/3) per side at equal concentration (f times the particles), side faces x and y \
-           periodic (the field lies along x), walls at top and bottom, r-RESPA, t = 5 ms. `box-limited` is the share of \
-           aggregates whose extent along the field reaches 90 % of the box's or that wrap through a periodic face onto \
-           themselves (percolating: no finite length, left out of the mean, which is then a lower bound). Wall time per run \
-           as run, two runs at a time when each had one thread, with other work on the machine at times; `threads` as each run \
-           recorded it (– for runs made before the count was recorded: those ran on one thread, two at a time, except the \
-           2.25 mg/ml 100× runs, one at a time on two threads). Seeds 2 and 3 of the 30× and 100× boxes number their \
-           particles along a Morton curve, which makes their steps faster.\n\n";
-    md += &markdown(
-        &df,
+    write(&mut df, &inp.tables, "finite_size")?;
+    let shown = df.select([
+        "concentration_mg_per_ml",
+        "particle_factor",
+        "particles",
+        "seeds",
+        "mean_length_um",
+        "ci95_um",
+        "box_limited_fraction",
+        "percolating_aggregates",
+    ])?;
+    let table = markdown(
+        &shown,
         &[
             "c (mg/ml)",
             "× particles",
@@ -391,30 +611,37 @@ pub fn finite_size_section(
             "± CI95",
             "box-limited",
             "percolating (all seeds)",
-            "wall time/run (s)",
-            "threads",
         ],
-        &[3, 0, 0, 0, 1, 1, 3, 0, 0, 0],
+        &[3, 0, 0, 0, 1, 1, 3, 0],
     )?;
-    if !findings.is_empty() {
-        md += &format!("\n{}.\n", findings.join("; "));
-    }
-    if let Some(held) = held_drag_at_scale(runs) {
-        md += &format!("\n{held}\n");
-    }
-    let legend = Legend { position: SeriesLabelPosition::UpperLeft, headroom: 0.6 };
     chart(
-        &out.join("finite-size.png"),
-        "Case 1 at 5 ms: mean length against the particle count",
+        &inp.out.join("finite-size.png"),
+        "Case 1: mean length against the particle count",
         ("particles (log)", "mean length (µm, log)"),
         &series,
-        legend,
+        Legend::above_data(0.3),
         (Scale::Log, Scale::Log),
     )?;
-    md += "\n![Finite size](finite-size.png)\n\nMarks: magdem, mean ± CI95 over seeds; solid lines: the box edge along the field \
-           (a chain cannot be longer without percolating); dotted lines: the experiment's mean (about 10⁶ particles; its own \
-           spread is not a CI and is not drawn).\n\n";
-    Ok(md)
+    let end = scene_number_of(&sized, "integration.end_time");
+    let (table_numerics, held, renumbered) = numerics_at_scale(runs)?;
+    let values = context! {
+        ran => true,
+        table => table,
+        end_ms => 1e3 * end,
+        box_limited_percent => 100.0 * crate::analysis::aggregates::BOX_LIMITED_FRACTION,
+        edge_exponent => 1.0 / 3.0,
+        slow_every => scene_number_of(&sized, "integration.slow_every"),
+        unconverged => laws.iter().filter(|l| !l.converged).map(|l| l.c).collect::<Vec<_>>(),
+        laws => laws,
+        numerics => context! {
+            table => table_numerics,
+            held => HELD_DRAG_X100,
+            renumbered => RENUMBERED_X100,
+            refactor_every => held,
+            renumber_every => renumbered,
+        },
+    };
+    Ok(values)
 }
 
 /// The distinct thread counts of a group's runs ("1", "1, 2"; "–" where not recorded).
@@ -440,172 +667,75 @@ pub const RENUMBERED_X100: &str = "paper-box-c2.25-x100-renumbered";
 /// The 100× experiments that change the numerics, not the box (kept out of the box study).
 pub const NUMERICAL_X100: [&str; 2] = [HELD_DRAG_X100, RENUMBERED_X100];
 
-/// The 100× runs with the shielded drag held over each outer step
-/// (`x100-c2.25-drag-held.toml`) against the every-step 100× run of the same seed: mean length
-/// and wall time.
-fn held_drag_at_scale(runs: &[Run]) -> Option<String> {
-    let held: Vec<&Run> = runs.iter().filter(|r| r.completed() && r.experiment == HELD_DRAG_X100).collect();
-    let lines: Vec<String> = held
-        .iter()
-        .filter_map(|h| {
-            let every = runs.iter().find(|r| {
-                r.completed() && r.experiment == "paper-box-c2.25-x100" && r.variant == "x100-periodic" && r.seed == h.seed
-            })?;
-            let (a, b) = (h.mean_length_um(), every.mean_length_um());
-            Some(format!(
-                "seed {}: {a:.0} µm against {b:.0} µm ({:+.1} %), {:.0} min against {:.0} min of wall time as run (two threads; other work on the machine included)",
-                h.seed,
-                100.0 * (a / b - 1.0),
-                h.wall_time / 60.0,
-                every.wall_time / 60.0
-            ))
-        })
-        .collect();
-    let renumbered: Vec<String> = runs
-        .iter()
-        .filter(|r| r.completed() && r.experiment == RENUMBERED_X100)
-        .filter_map(|n| {
-            let held = held.iter().find(|h| h.seed == n.seed)?;
-            let (a, b) = (n.mean_length_um(), held.mean_length_um());
-            // Wall times of two builds also differ by the solver's changes between them.
-            let short = |build: &str| build.chars().take(7).collect::<String>();
-            let builds = match (n.build.as_str(), held.build.as_str()) {
-                (x, y) if x.is_empty() || y.is_empty() => String::new(),
-                (x, y) if x == y => format!("; build {}", short(x)),
-                (x, y) => format!(
-                    "; builds {} and {}: the difference includes the solver's changes between them, \
-                     `reports/performance-history.md`",
-                    short(x),
-                    short(y)
-                ),
-            };
-            Some(format!(
-                "seed {}: {a:.0} µm against {b:.0} µm ({:+.1} %), {:.0} s against {:.0} s of wall time ({:+.1} %{builds})",
-                n.seed,
-                100.0 * (a / b - 1.0),
-                n.wall_time,
-                held.wall_time,
-                100.0 * (n.wall_time / held.wall_time - 1.0)
-            ))
-        })
-        .collect();
-    let mut md = vec![];
-    if !lines.is_empty() {
-        md.push(format!(
-            "The 2.25 mg/ml 100× box with the shielded drag's coefficients renewed once per outer step \
-             (`forces.drag.refactor_every = 10`, `x100-c2.25-drag-held.toml`) against the every-step run of the same seed: {}. \
-             Wall times as run are summed over resumed pieces, with the machine shared at times, and the two runs were not \
-             always made on the same machine; the held scene run again alone, start to end, is timed in \
-             `reports/performance-history.md`. One seed of a chaotic system: the paired change \
-             at the paper's size over ten seeds is the sensitivity study's `drag-held` row.",
-            lines.join("; ")
-        ));
-    }
-    if !renumbered.is_empty() {
-        md.push(format!(
-            "The same drag-held scene with the particles renumbered along a Morton curve every 1 000 steps \
-             (`integration.renumber_every = 1000`, `x100-c2.25-renumbered.toml`) against the drag-held run of the same seed: {} (both alone on one machine, two threads). \
-             Renumbering changes the order of the force sums only (the same run to round-off); the two runs part as any two \
-             realisations of a chaotic system do, and the paired change at the paper's size over ten seeds is the \
-             sensitivity study's `renumbered` row.",
-            renumbered.join("; ")
-        ));
-    }
-    (!md.is_empty()).then(|| md.join("\n\n"))
-}
+/// The experiments the finite-size section reads: the size series, the 100× boxes and the
+/// paper's box under r-RESPA ([`respa_runs`]).
+pub const FINITE_SIZE_EXPERIMENTS: [&str; 14] = [
+    "paper-finite-size-c0.563",
+    "paper-finite-size-c1.125",
+    "paper-finite-size-c2.25",
+    "paper-finite-size-c2.25-x10",
+    "paper-finite-size-c2.25-x30",
+    "paper-finite-size-c4.5",
+    "paper-finite-size-c4.5-x10",
+    "paper-finite-size-c4.5-x30",
+    "paper-box-c2.25-x100",
+    "paper-box-c4.5-x100",
+    HELD_DRAG_X100,
+    RENUMBERED_X100,
+    "paper-magnetisation",
+    "paper-sensitivity",
+];
 
-/// The mean length's trend against the particle count at concentration `c`, L ∝ N^β fitted
-/// over every run (a chain capped by the box grows with its edge, β = 1/3; a converged length has
-/// β = 0), and what the next size of the 1-2-4-10-30-100 series would cost at the largest size's
-/// fastest measured wall time, taken as linear in the particles.
-fn size_trend(c: f64, by_factor: &BTreeMap<u64, Vec<&Run>>) -> Option<String> {
-    let points: Vec<(f64, f64)> = by_factor
-        .values()
-        .flatten()
-        .map(|r| (r.particles as f64, r.mean_length_um()))
-        .filter(|&(n, l)| n > 0.0 && l > 0.0 && l.is_finite())
-        .map(|(n, l)| (n.ln(), l.ln()))
-        .collect();
-    let (beta, ci) = slope_ci95(&points);
-    let (f_max, largest) = by_factor.iter().next_back()?;
-    let particles = mean_over(largest, |r| r.particles as f64);
-    let fastest =
-        largest.iter().copied().filter(|r| r.wall_time.is_finite()).min_by(|a, b| a.wall_time.total_cmp(&b.wall_time));
-    let factor = [1, 2, 4, 10, 30, 100, 300, 1000, 3000].into_iter().find(|&f| f > *f_max).unwrap_or(3 * f_max);
-    let next = factor as f64 / *f_max as f64;
-    let trend = if beta.is_finite() {
-        format!(
-            "{c} mg/ml: L ∝ N^β with β = {beta:.2} ± {ci:.2} (CI95, {} runs from {}× to {f_max}×; the box edge grows as N^0.33)",
-            points.len(),
-            by_factor.keys().next()?
-        )
-    } else {
-        format!("{c} mg/ml: too few runs for a trend")
+/// The 100× runs that change the numerics against the run of the same seed they change: the
+/// drag held over each outer step against every step, and the renumbered drag-held run against
+/// the drag-held one. Returns the Markdown table (empty without such runs), the drag's
+/// `refactor_every` and the `renumber_every` of those runs.
+fn numerics_at_scale(runs: &[Run]) -> Result<(String, f64, f64), Error> {
+    fn done<'a>(runs: &'a [Run], experiment: &'a str) -> impl Iterator<Item = &'a Run> {
+        runs.iter().filter(move |r| r.completed() && r.experiment == experiment)
+    }
+    let (mut what, mut against, mut seed, mut a_col, mut b_col, mut change) =
+        (vec![], vec![], vec![], vec![], vec![], vec![]);
+    let mut pair = |x: &Run, y: &Run| {
+        let (a, b) = (x.mean_length_um(), y.mean_length_um());
+        what.push(x.experiment.clone());
+        against.push(y.experiment.clone());
+        seed.push(x.seed);
+        a_col.push(a);
+        b_col.push(b);
+        change.push(100.0 * (a / b - 1.0));
     };
-    let Some(fastest) = fastest else { return Some(trend) };
-    let (wall, slowest) = (fastest.wall_time, largest.iter().map(|r| r.wall_time).fold(f64::NAN, f64::max));
-    let threads =
-        if fastest.threads.is_finite() { format!(" on {:.0} thread(s)", fastest.threads) } else { String::new() };
-    let range = if largest.len() > 1 {
-        format!(" (the {f_max}× runs took {wall:.0}–{slowest:.0} s)")
-    } else {
-        String::new()
-    };
-    Some(format!(
-        "{trend}; the next size, {:.0} particles ({factor}× the paper's), would take about {:.1} h of wall time per run at \
-         the fastest {f_max}× run's {wall:.0} s for {particles:.0} particles{threads}{range}",
-        next * particles,
-        next * wall / 3600.0,
-    ))
-}
-
-/// The two largest boxes' agreement at concentration `c`, and the walls-to-periodic change at
-/// the paper's box (recorded in `effects` for the ranking).
-fn box_findings(runs: &[Run], c: f64, by_factor: &BTreeMap<u64, Vec<&Run>>, effects: &mut Vec<Effect>) -> Vec<String> {
-    let mut findings = vec![];
-    let sizes: Vec<(&u64, &Vec<&Run>)> = by_factor.iter().collect();
-    if sizes.len() >= 2 {
-        let (fa, a) = sizes[sizes.len() - 2];
-        let (fb, b) = sizes[sizes.len() - 1];
-        let d = unpaired(&lengths(a), &lengths(b));
-        // Agreement within 5 % needs the whole CI95 inside ±5 %, not only the mean.
-        let verdict = if !d.ci95.is_finite() {
-            "cannot be compared to 5 % until each has two seeds"
-        } else if d.mean.abs() + d.ci95 <= 5.0 {
-            "agree within 5 %"
-        } else if d.mean.abs() - d.ci95 > 5.0 {
-            "differ by more than 5 %"
-        } else {
-            "are not resolved to 5 % at these seeds"
-        };
-        findings.push(format!(
-            "{c} mg/ml: {fb}× against {fa}× the particles {} % — the two largest boxes {verdict} ({} and {} seeds)",
-            d.signed_cell(1),
-            b.len(),
-            a.len()
-        ));
-        if let Some(x1) = by_factor.get(&1) {
-            // The largest box with a CI (two seeds or more), so that the ranking has one.
-            let (f_big, big) = sizes.iter().rev().find(|(_, g)| g.len() >= 2).copied().unwrap_or((fb, b));
-            effects.push(Effect {
-                concentration: c,
-                explanation: Explanation::Box,
-                what: format!(
-                    "periodic {f_big}× the particles ({} seeds) against the paper's box with walls",
-                    big.len()
-                ),
-                change: unpaired(&lengths(&respa_runs(runs, c)), &lengths(big)),
-            });
-            let walls = paired(&respa_runs(runs, c), x1, |r| r.mean_length_um());
-            findings.push(format!(
-                "{c} mg/ml, the paper's box: periodic side faces against walls {} % (paired over {} seed{})",
-                walls.signed_cell(1),
-                walls.n,
-                if walls.n == 1 { "" } else { "s" }
-            ));
+    for h in done(runs, HELD_DRAG_X100) {
+        let every = done(runs, "paper-box-c2.25-x100").find(|r| r.variant == "x100-periodic" && r.seed == h.seed);
+        if let Some(every) = every {
+            pair(h, every);
         }
     }
-    findings
+    for n in done(runs, RENUMBERED_X100) {
+        if let Some(held) = done(runs, HELD_DRAG_X100).find(|h| h.seed == n.seed) {
+            pair(n, held);
+        }
+    }
+    let held: Vec<&Run> = done(runs, HELD_DRAG_X100).chain(done(runs, RENUMBERED_X100)).collect();
+    let (refactor, renumber) =
+        (scene_number_of(&held, "forces.drag.refactor_every"), scene_number_of(&held, "integration.renumber_every"));
+    if what.is_empty() {
+        return Ok((String::new(), refactor, renumber));
+    }
+    let df = frame(vec![
+        scol("experiment", what.iter().map(|w| format!("`{w}`")).collect()),
+        scol("against", against.iter().map(|w| format!("`{w}`")).collect()),
+        ucol("seed", seed),
+        col("mean length (µm)", a_col),
+        col("against (µm)", b_col),
+        col("change (%)", change),
+    ])?;
+    let table = markdown(
+        &df,
+        &["experiment", "against", "seed", "mean length (µm)", "against (µm)", "change (%)"],
+        &[0, 0, 0, 0, 0, 1],
+    )?;
+    Ok((table, refactor, renumber))
 }
 
 /// Least-squares slope of ln L against ln t over the frames with `from ≤ t ≤ to` (s).
@@ -625,7 +755,7 @@ fn length_at(r: &Run, t: f64) -> f64 {
     r.times.iter().position(|&x| x >= t - 1e-12).map_or(f64::NAN, |k| r.mean_length[k] * 1e6)
 }
 
-/// One concentration's row of the growth table (NaN where the runs end at 5 ms).
+/// One concentration's row of the growth table (NaN where the runs end at the paper's time).
 struct GrowthRow {
     c: f64,
     seeds: f64,
@@ -643,14 +773,15 @@ struct GrowthRow {
 }
 
 /// The growth row of the runs `here` at concentration `c` (experiment's mean `exp`, runs ending
-/// at `end`), and the paired growth after 5 ms (%).
+/// at `end`), and the paired growth after the paper's time (%).
 fn growth_row(here: &[&Run], c: f64, exp: f64, end: f64) -> (GrowthRow, Estimate) {
     let z = |a: f64, b: f64| Estimate::of(&here.iter().map(|r| growth_exponent(r, a, b)).collect::<Vec<_>>());
-    // Quantities after 5 ms exist only for runs that go on past it.
-    let later = |v: f64| if end > 5.5e-3 { v } else { f64::NAN };
-    let zz = z(1e-3, end);
-    let g =
-        Estimate::of(&here.iter().map(|r| 100.0 * (length_at(r, end) / length_at(r, 5e-3) - 1.0)).collect::<Vec<_>>());
+    // Quantities after the paper's time exist only for runs that go on past it.
+    let later = |v: f64| if end > 1.1 * PAPER_TIME { v } else { f64::NAN };
+    let zz = z(GROWTH_FROM, end);
+    let g = Estimate::of(
+        &here.iter().map(|r| 100.0 * (length_at(r, end) / length_at(r, PAPER_TIME) - 1.0)).collect::<Vec<_>>(),
+    );
     let crossing = mean_series(here).iter().find(|p| p.1 >= exp).map_or(f64::NAN, |p| p.0 * 1e3);
     let cap_at = |time: f64| {
         Estimate::of(
@@ -666,55 +797,43 @@ fn growth_row(here: &[&Run], c: f64, exp: f64, end: f64) -> (GrowthRow, Estimate
         seeds: here.len() as f64,
         z_all: zz.mean,
         z_all_ci: zz.ci95,
-        z_early: z(1e-3, 5e-3).mean,
-        z_late: later(z(5e-3, end).mean),
-        l5: Estimate::of(&here.iter().map(|r| length_at(r, 5e-3)).collect::<Vec<_>>()).mean,
+        z_early: z(GROWTH_FROM, PAPER_TIME).mean,
+        z_late: later(z(PAPER_TIME, end).mean),
+        l5: Estimate::of(&here.iter().map(|r| length_at(r, PAPER_TIME)).collect::<Vec<_>>()).mean,
         lend: later(Estimate::of(&here.iter().map(|r| length_at(r, end)).collect::<Vec<_>>()).mean),
         growth: later(g.mean),
         growth_ci: later(g.ci95),
-        cap5: cap_at(5e-3),
+        cap5: cap_at(PAPER_TIME),
         capend: later(cap_at(end)),
         reach: crossing,
     };
     (row, g)
 }
 
-/// What is published on growth exponents, and why magdem's z belongs to another class.
-const GROWTH_LITERATURE: &str = "\nPublished growth exponents for field-induced chaining are not universal. For chains whose diffusivity falls as \
-           1/s, Smoluchowski kinetics give z = 1/2, a reference value that experiments on Brownian paramagnetic colloids have \
-           not strictly matched (a microflows text of Springer's Interdisciplinary Applied Mathematics series, its chapter 13 on \
-           chains of paramagnetic beads). Simulations of Ising \
-           dipolar particles under thermal noise find z from 0.2, where the dipolar attraction dominates, to 0.5, where \
-           diffusion does (Suzuki, Kun & Ito, Phys. Rev. E, 2009). magdem's particles are not Brownian: 11 µm beads at \
-           λ = μ0 m²/(2π d³ kT) ~ 10⁹, so their aggregation is deterministic and driven by the attraction, the low end of \
-           that range. The closest experimental analogue, millimetre dipoles floating on water whose motion is deterministic, \
-           follows Vicsek–Family dynamic scaling with exponents that change with concentration (Pál, Kun, Varga, Sohler & Sun, \
-           Phys. Rev. E 83, 061504, 2011); this report quotes only what those works' abstracts state, not their tables. The \
-           exponents of the experiments on Brownian paramagnetic colloids (Fermigier & Gast 1992; Promislow, Gast & Fermigier \
-           1995) are not quoted, since their values were not checked here. Neither the paper nor the experiment states when \
-           the experiment's images were taken, so the report puts no experiment time on 5 ms: the dotted lines in the figure \
-           are the experiment's means at an unknown time.\n\n";
+/// The dipolar coupling constant λ = μ0 m²/(2π d³ kT) of one of `runs`' beads at room temperature
+/// (m = M π d³/6), with the bead diameter (m).
+fn dipolar_coupling(runs: &[&Run]) -> (f64, f64) {
+    let d = scene_number_of(runs, "species.0.diameter");
+    let m_field = runs.iter().map(|r| r.magnetisation).find(|m| m.is_finite()).unwrap_or(f64::NAN);
+    let moment = m_field * std::f64::consts::PI * d.powi(3) / 6.0;
+    let lambda = MU0 * moment * moment / (2.0 * std::f64::consts::PI * d.powi(3) * BOLTZMANN * ROOM_TEMPERATURE);
+    (lambda, d)
+}
 
-/// Stopping time: L(t) to 20 ms on log–log axes and its growth exponent.
-pub fn growth_section(
-    runs: &[Run],
-    t: &Targets,
-    out: &Path,
-    tables: &Path,
-    effects: &mut Vec<Effect>,
-) -> Result<String, Error> {
-    let mut md = String::from("## Stopping time: how the chains grow\n\n");
+/// Stopping time: L(t) to the runs' end on log–log axes and its growth exponent; figure
+/// `length-vs-time.png`.
+pub fn growth(inp: &Inputs) -> Result<Value, Error> {
+    let (runs, t) = (inp.runs, inp.targets);
     let mut long: Vec<&Run> = runs.iter().filter(|r| r.experiment == "paper-long" && r.completed()).collect();
-    let source = if long.is_empty() {
-        long = runs.iter().filter(|r| TABLE3.contains(&r.experiment.as_str()) && r.completed()).collect();
-        "The Table 3 ensemble (velocity Verlet; the opt-in `experiments/paper/opt-in/long.toml` continues the scenes to 20 ms)"
-    } else {
-        "`experiments/paper/opt-in/long.toml` (r-RESPA)"
-    };
+    let from_long = !long.is_empty();
     if long.is_empty() {
-        return Ok(md + "No runs.\n\n");
+        long = runs.iter().filter(|r| TABLE3.contains(&r.experiment.as_str()) && r.completed()).collect();
+    }
+    if long.is_empty() {
+        return Ok(context! { ran => false });
     }
     let end = long.iter().filter_map(|r| r.times.last().copied()).fold(f64::INFINITY, f64::min);
+    let mut effects = inp.effects.borrow_mut();
     let mut rows: Vec<GrowthRow> = vec![];
     let mut series = vec![];
     for (k, (&c, &exp)) in t.concentration.iter().zip(&t.experiment).enumerate() {
@@ -723,22 +842,22 @@ pub fn growth_section(
             continue;
         }
         let (row, paired) = growth_row(&here, c, exp, end);
-        if end > 5.5e-3 {
+        if end > 1.1 * PAPER_TIME {
             effects.push(Effect {
                 concentration: c,
                 explanation: Explanation::StoppingTime,
-                what: format!("{:.0} ms against 5 ms, paired over {} seeds", end * 1e3, paired.n),
+                what: format!("{:.0} ms against {:.0} ms, paired over {} seeds", end * 1e3, PAPER_TIME * 1e3, paired.n),
                 change: paired,
             });
         }
         let pts: Vec<(f64, f64)> =
             mean_series(&here).iter().filter(|p| p.0 > 0.0).map(|&(t, l)| (t * 1e3, l)).collect();
-        series.push(Series::line(format!("{c} mg/ml, mean of {} seeds", here.len()), pts, palette(k)));
+        series.push(Series::line(format!("{c} mg/ml"), pts, palette(k)));
         series.push(level("", exp, (0.05, end * 1e3), palette(k)));
         rows.push(row);
     }
     let column = |f: fn(&GrowthRow) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
-    let mut df = DataFrame::new(vec![
+    let mut df = frame(vec![
         col("concentration_mg_per_ml", column(|r| r.c)),
         col("seeds", column(|r| r.seeds)),
         col("z_1ms_to_end", column(|r| r.z_all)),
@@ -753,47 +872,52 @@ pub fn growth_section(
         col("box_limited_end", column(|r| r.capend)),
         col("time_reaching_experiment_ms", column(|r| r.reach)),
     ])?;
-    write(&mut df, tables, "growth")?;
-    md += &format!(
-        "{source}: the case-1 scenes to {:.0} ms (the paper's walled box). The growth \
-         exponent z of L ∝ t^z is the least-squares slope of ln L against ln t over each run's frames, mean ± CI95 over \
-         seeds, from 1 ms (before it most particles are still single, and L is the diameter) to the end, and over the two \
-         halves 1–5 ms and 5 ms–end. The last column is when the seeds' mean L(t) first reaches the experiment's mean \
-         (–: not by the end).\n\n",
-        end * 1e3
-    );
-    md += &markdown(
+    write(&mut df, &inp.tables, "growth")?;
+    let (from, paper) = (format!("{:.0} ms", GROWTH_FROM * 1e3), format!("{:.0} ms", PAPER_TIME * 1e3));
+    let headers = [
+        "c (mg/ml)".to_string(),
+        "seeds".into(),
+        format!("z ({from}–end)"),
+        "± CI95".into(),
+        format!("z ({:.0}–{paper})", GROWTH_FROM * 1e3),
+        format!("z ({paper}–end)"),
+        format!("L at {paper} (µm)"),
+        "L at end (µm)".into(),
+        format!("growth after {paper} (%)"),
+        "± CI95".into(),
+        format!("box-limited at {paper}"),
+        "at end".into(),
+        "reaches experiment (ms)".into(),
+    ];
+    let table = markdown(
         &df,
-        &[
-            "c (mg/ml)",
-            "seeds",
-            "z (1 ms–end)",
-            "± CI95",
-            "z (1–5 ms)",
-            "z (5 ms–end)",
-            "L at 5 ms (µm)",
-            "L at end (µm)",
-            "growth after 5 ms (%)",
-            "± CI95",
-            "box-limited at 5 ms",
-            "at end",
-            "reaches experiment (ms)",
-        ],
+        &headers.iter().map(String::as_str).collect::<Vec<_>>(),
         &[3, 0, 2, 2, 2, 2, 1, 1, 0, 0, 3, 3, 2],
     )?;
-    md += GROWTH_LITERATURE;
     let legend = Legend { position: SeriesLabelPosition::UpperLeft, headroom: 0.35 };
     chart(
-        &out.join("length-vs-time.png"),
+        &inp.out.join("length-vs-time.png"),
         "Case 1: mean aggregate length against time",
         ("time (ms, log)", "mean length (µm, log)"),
         &series,
         legend,
         (Scale::Log, Scale::Log),
     )?;
-    md += "![Mean length against time](length-vs-time.png)\n\nLines: magdem, the mean over seeds of each run's mean length; dotted lines: \
-           the experiment's mean (observation time not stated) in the same colour.\n\n";
-    Ok(md)
+    let (lambda, diameter) = dipolar_coupling(&long);
+    Ok(context! {
+        ran => true,
+        long => from_long,
+        table => table,
+        end_ms => 1e3 * end,
+        from_ms => 1e3 * GROWTH_FROM,
+        paper_ms => 1e3 * PAPER_TIME,
+        slow_every => scene_number_of(&long, "integration.slow_every"),
+        literature => GROWTH_EXPONENTS,
+        lambda => lambda,
+        lambda_decade => lambda.log10().floor(),
+        diameter_um => 1e6 * diameter,
+        temperature => ROOM_TEMPERATURE,
+    })
 }
 
 /// Log–log linear interpolation of x where the curve (x, y) (sorted by x) reaches `target`.
@@ -849,20 +973,23 @@ fn bound(m: f64, (m0, m1): (f64, f64)) -> String {
     }
 }
 
+/// One concentration's mean length at one magnetisation variant.
+#[derive(serde::Serialize)]
+struct AtVariant {
+    c: f64,
+    length: Estimate,
+}
+
 /// Magnetisation: the mean length against M at every concentration, the M that meets each
-/// target, and whether the lengths collapse against t/τ, τ = μ/(μ0 M²).
-pub fn magnetisation_section(
-    runs: &[Run],
-    t: &Targets,
-    out: &Path,
-    tables: &Path,
-    effects: &mut Vec<Effect>,
-) -> Result<String, Error> {
-    let mut md = String::from("## Magnetisation\n\n");
+/// target, and how far the lengths collapse against t/τ, τ = μ/(μ0 M²); figures
+/// `magnetisation.png` and `magnetisation-collapse.png`.
+pub fn magnetisation(inp: &Inputs) -> Result<Value, Error> {
+    let (runs, t) = (inp.runs, inp.targets);
     let sweep: Vec<&Run> = runs.iter().filter(|r| r.experiment == "paper-magnetisation" && r.completed()).collect();
     if sweep.is_empty() {
-        return Ok(md + "Not run: `experiments/paper/opt-in/magnetisation.toml` enters here when its runs exist.\n\n");
+        return Ok(context! { ran => false });
     }
+    let mut effects = inp.effects.borrow_mut();
     let mut variants: Vec<(String, f64)> = vec![];
     for r in &sweep {
         if !variants.iter().any(|v| v.0 == r.variant) {
@@ -870,10 +997,13 @@ pub fn magnetisation_section(
         }
     }
     variants.sort_by(|a, b| a.1.total_cmp(&b.1));
+    let m_of = |name: &str| variants.iter().find(|v| v.0 == name).map_or(f64::NAN, |v| v.1);
+    let (linear_m, bulk_m) = (m_of(LINEAR_VARIANT), m_of(SATURATED_VARIANT));
     let (mut v_col, mut m_col, mut c_col, mut n_col, mut l_col, mut ci_col, mut cap_col) =
         (vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
+    let mut inferred = Inferred::default();
+    let (mut at_bulk, mut at_linear) = (vec![], vec![]);
     let mut series = vec![];
-    let mut inferred = String::from("| c (mg/ml) | target | length (µm) | M that meets it (A/m) | 95 % interval (bootstrap over seeds) |\n|---|---|---|---|---|\n");
     for (k, (&c, (&exp, &paper))) in t.concentration.iter().zip(t.experiment.iter().zip(&t.paper)).enumerate() {
         let mut points = vec![];
         let (mut pts, mut errs) = (vec![], vec![]);
@@ -893,28 +1023,33 @@ pub fn magnetisation_section(
             points.push((*m, lengths(&here), name.clone()));
             pts.push((*m, e.mean));
             errs.push(e.ci95);
+            if name == SATURATED_VARIANT {
+                at_bulk.push(AtVariant { c, length: e });
+            }
+            if name == LINEAR_VARIANT {
+                at_linear.push(AtVariant { c, length: e });
+            }
         }
         if points.is_empty() {
             continue;
         }
-        inferred += &inferred_rows(&points, c, exp, paper);
-        if let (Some(bulk), Some(linear)) =
-            (variants.iter().find(|v| v.0 == "ms-4.8e5"), variants.iter().find(|v| v.0 == "linear"))
-        {
-            let a = select(runs, &["paper-magnetisation"], &linear.0, c);
-            let b = select(runs, &["paper-magnetisation"], &bulk.0, c);
+        inferred_rows(&mut inferred, &points, c, exp, paper);
+        let (a, b) = (
+            select(runs, &["paper-magnetisation"], LINEAR_VARIANT, c),
+            select(runs, &["paper-magnetisation"], SATURATED_VARIANT, c),
+        );
+        if !a.is_empty() && !b.is_empty() {
             effects.push(Effect {
                 concentration: c,
                 explanation: Explanation::Magnetisation,
-                what: "Ms = 4.8e5 A/m (bulk magnetite) against the linear 7.5e5, paired".into(),
+                what: format!("Ms = {bulk_m:.1e} A/m (bulk magnetite) against the linear law's {linear_m:.1e}, paired"),
                 change: paired(&a, &b, |r| r.mean_length_um()),
             });
         }
-        series
-            .push(Series::markers(format!("{c} mg/ml (mean ± CI95 over seeds)"), pts, palette(k), 6).with_errors(errs));
+        series.push(Series::markers(format!("{c} mg/ml"), pts, palette(k), 6).with_errors(errs));
         series.push(level("", exp, (variants[0].1, variants[variants.len() - 1].1), palette(k)));
     }
-    let mut df = DataFrame::new(vec![
+    let mut df = frame(vec![
         scol("variant", v_col),
         col("magnetisation_a_per_m", m_col),
         col("concentration_mg_per_ml", c_col),
@@ -923,38 +1058,74 @@ pub fn magnetisation_section(
         col("ci95_um", ci_col),
         col("box_limited_fraction", cap_col),
     ])?;
-    write(&mut df, tables, "magnetisation")?;
-    md += "`experiments/paper/opt-in/magnetisation.toml`: the case-1 scenes with the saturation magnetisation Ms capping the \
-           paper's linear law, from 5e4 A/m to bulk magnetite's 4.8e5, the Fröhlich–Kennelly law at Ms = 4.8e5, and the \
-           unsaturated linear law (7.5e5 A/m); r-RESPA, t = 5 ms, the paper's walled box. M is an isolated bead's \
-           magnetisation in the applied 0.4 T (mutual induction adds to it near neighbours, up to Ms).\n\n";
-    md += &markdown(
+    write(&mut df, &inp.tables, "magnetisation")?;
+    let table = markdown(
         &df,
         &["variant", "M (A/m)", "c (mg/ml)", "seeds", "mean length (µm)", "± CI95", "box-limited"],
         &[0, 0, 3, 0, 1, 1, 3],
     )?;
-    md += "\nThe M at which the mean length at 5 ms meets each target, interpolated log-linearly between the swept saturation \
-           values (the Fröhlich–Kennelly point is another law and is left out of the curve):\n\n";
-    md += &inferred;
+    let mut inferred_df = frame(vec![
+        col("concentration_mg_per_ml", inferred.c),
+        scol("target", inferred.target),
+        col("target_length_um", inferred.length),
+        scol("magnetisation_a_per_m", inferred.m),
+        scol("interval_95", inferred.interval),
+    ])?;
+    write(&mut inferred_df, &inp.tables, "magnetisation_inferred")?;
+    let inferred_table = markdown(
+        &inferred_df,
+        &["c (mg/ml)", "target", "length (µm)", "M that meets it (A/m)", "95 % interval (bootstrap over seeds)"],
+        &[3, 0, 0, 0, 0],
+    )?;
     chart(
-        &out.join("magnetisation.png"),
-        "Case 1 at 5 ms: mean length against magnetisation",
+        &inp.out.join("magnetisation.png"),
+        "Case 1: mean length against magnetisation",
         ("M (A/m, log)", "mean length (µm, log)"),
         &series,
         Legend { position: SeriesLabelPosition::UpperLeft, headroom: 0.5 },
         (Scale::Log, Scale::Log),
     )?;
-    md += "\n![Mean length against magnetisation](magnetisation.png)\n\nMarks: magdem, mean ± CI95 over seeds; dotted lines: the \
-           experiment's mean in the same colour.\n\n";
-    md += &collapse(runs, &variants, out)?;
-    Ok(md)
+    let saturation: Vec<f64> = variants
+        .iter()
+        .filter(|(name, _)| name.starts_with("ms-"))
+        .filter_map(|(name, _)| name.strip_prefix("ms-")?.parse().ok())
+        .collect();
+    let field = scene_number_of(&sweep, "field.b0.0");
+    Ok(context! {
+        ran => true,
+        table => table,
+        inferred => inferred_table,
+        end_ms => 1e3 * scene_number_of(&sweep, "integration.end_time"),
+        slow_every => scene_number_of(&sweep, "integration.slow_every"),
+        ms_from => saturation.iter().copied().fold(f64::INFINITY, f64::min),
+        ms_to => saturation.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        fk_m => m_of("fk-4.8e5"),
+        linear_m => linear_m,
+        bulk_variant_m => bulk_m,
+        bulk_ms => BULK_MAGNETITE_MS,
+        linear_over_bulk => linear_m / BULK_MAGNETITE_MS,
+        field_t => field,
+        relative_permeability => scene_number_of(&sweep, "species.0.relative_permeability"),
+        at_bulk => at_bulk,
+        at_linear => at_linear,
+        collapse => collapse(runs, &variants, inp.out)?,
+    })
+}
+
+/// The inferred-M table's columns.
+#[derive(Default)]
+struct Inferred {
+    c: Vec<f64>,
+    target: Vec<String>,
+    length: Vec<f64>,
+    m: Vec<String>,
+    interval: Vec<String>,
 }
 
 /// The rows of the inferred-M table at concentration `c`: the saturation-cap curve of `points`
 /// (magnetisation, the seeds' lengths, variant) met at the paper's and the experiment's means; the
 /// Fröhlich–Kennelly point is another law, shown but not interpolated through.
-fn inferred_rows(points: &[(f64, Vec<f64>, String)], c: f64, exp: f64, paper: f64) -> String {
-    let mut rows = String::new();
+fn inferred_rows(rows: &mut Inferred, points: &[(f64, Vec<f64>, String)], c: f64, exp: f64, paper: f64) {
     let by_m: Vec<(f64, Vec<f64>)> = {
         let mut p: Vec<(f64, Vec<f64>)> =
             points.iter().filter(|(_, _, name)| !name.starts_with("fk-")).map(|(m, l, _)| (*m, l.clone())).collect();
@@ -969,17 +1140,30 @@ fn inferred_rows(points: &[(f64, Vec<f64>, String)], c: f64, exp: f64, paper: f6
             || if below { format!("below {:.1e}", range.0) } else { format!("above {:.1e}", range.1) },
             |m| format!("{m:.2e}"),
         );
-        let _ =
-            writeln!(rows, "| {c} | {label} | {target:.0} | {cell} | {} to {} |", bound(lo, range), bound(hi, range));
+        rows.c.push(c);
+        rows.target.push(label.into());
+        rows.length.push(target);
+        rows.m.push(cell);
+        rows.interval.push(format!("{} to {}", bound(lo, range), bound(hi, range)));
     }
-    rows
 }
 
-/// L(t) of each magnetisation at one concentration against t/τ, τ = μ/(μ0 M²): the
+/// Two neighbouring magnetisations' curves against t/τ: the mean distance between them over the
+/// t/τ both cover (%), NaN without a common range.
+#[derive(serde::Serialize)]
+struct Overlap {
+    m_a: f64,
+    m_b: f64,
+    percent: f64,
+    from: f64,
+    to: f64,
+}
+
+/// L(t) of each magnetisation at [`COLLAPSE_CONCENTRATION`] against t/τ, τ = μ/(μ0 M²): the
 /// overdamped time for dipoles to close a gap of one diameter, up to a constant (the dipole force
-/// ∝ μ0 M² d², the drag ∝ μ d, the distance ∝ d). Returns the section's text.
-fn collapse(runs: &[Run], variants: &[(String, f64)], out: &Path) -> Result<String, Error> {
-    let c = 2.25;
+/// ∝ μ0 M² d², the drag ∝ μ d, the distance ∝ d). Writes `magnetisation-collapse.png`.
+fn collapse(runs: &[Run], variants: &[(String, f64)], out: &Path) -> Result<Value, Error> {
+    let c = COLLAPSE_CONCENTRATION;
     let mut curves: Vec<(f64, Vec<(f64, f64)>)> = vec![];
     let mut series = vec![];
     for (k, (name, m)) in variants.iter().enumerate() {
@@ -995,7 +1179,7 @@ fn collapse(runs: &[Run], variants: &[(String, f64)], out: &Path) -> Result<Stri
         curves.push((*m, pts));
     }
     if curves.len() < 2 {
-        return Ok(String::new());
+        return Ok(context! { ran => false, c => c });
     }
     // Neighbouring magnetisations: mean |ln(L_a/L_b)| over the t/τ both cover.
     let mut overlaps = vec![];
@@ -1007,18 +1191,13 @@ fn collapse(runs: &[Run], variants: &[(String, f64)], out: &Path) -> Result<Stri
             let ((x0, y0), (x1, y1)) = (curve[k - 1], curve[k]);
             (y0.ln() + (x.ln() - x0.ln()) / (x1.ln() - x0.ln()) * (y1.ln() - y0.ln())).exp()
         };
-        if lo < hi {
+        let percent = if lo < hi {
             let xs: Vec<f64> = (0..=20).map(|k| lo * (hi / lo).powf(k as f64 / 20.0)).collect();
-            let d = xs.iter().map(|&x| (at(a, x) / at(b, x)).ln().abs()).sum::<f64>() / xs.len() as f64;
-            overlaps.push(format!(
-                "{:.1e} and {:.1e} A/m: {:.0} % over t/τ = {lo:.2e}–{hi:.2e}",
-                w[0].0,
-                w[1].0,
-                100.0 * d.exp_m1()
-            ));
+            100.0 * (xs.iter().map(|&x| (at(a, x) / at(b, x)).ln().abs()).sum::<f64>() / xs.len() as f64).exp_m1()
         } else {
-            overlaps.push(format!("{:.1e} and {:.1e} A/m: no common t/τ", w[0].0, w[1].0));
-        }
+            f64::NAN
+        };
+        overlaps.push(Overlap { m_a: w[0].0, m_b: w[1].0, percent, from: lo, to: hi });
     }
     chart(
         &out.join("magnetisation-collapse.png"),
@@ -1028,28 +1207,21 @@ fn collapse(runs: &[Run], variants: &[(String, f64)], out: &Path) -> Result<Stri
         SeriesLabelPosition::UpperLeft,
         (Scale::Log, Scale::Log),
     )?;
-    Ok(format!(
-        "Does the magnetisation only set the clock? In the overdamped limit, with a linear law and no induction, the dipole \
-         force scales as μ0 M² d², the drag as μ d, and distances as d, so that L(t) would depend on t/τ alone, \
-         τ = μ/(μ0 M²). The curves at {c} mg/ml (means over seeds) against t/τ, and the mean distance between neighbouring \
-         magnetisations over the t/τ both cover: {}. Saturation with induction, contact, inertia and gravity all break the \
-         scaling; how far the curves sit apart measures by how much.\n\n![Collapse](magnetisation-collapse.png)\n\n",
-        overlaps.join("; ")
-    ))
+    let largest = overlaps.iter().map(|o| o.percent).filter(|p| p.is_finite()).fold(f64::NAN, f64::max);
+    Ok(context! { ran => true, c => c, overlaps => overlaps, largest => largest })
 }
 
+/// The measures of the measurement table, by name (as its column headers give them).
+const MEASURES: [&str; 6] = ["3-D, all", "3-D, 2+", "projected, all", "projected, 2+", "image, all", "image, 2+"];
+
 /// The experiment's length measurement emulated on the Table 3 runs' last frames.
-pub fn measurement_section(
-    runs: &[Run],
-    t: &Targets,
-    tables: &Path,
-    effects: &mut Vec<Effect>,
-) -> Result<String, Error> {
-    let mut md = String::from("## Measurement: what an image of the same chains gives\n\n");
-    let names = ["3-D, all", "3-D, 2+", "projected, all", "projected, 2+", "image, all", "image, 2+"];
+pub fn measurement(inp: &Inputs) -> Result<Value, Error> {
+    let (runs, t) = (inp.runs, inp.targets);
+    let mut effects = inp.effects.borrow_mut();
     let mut table: Vec<Vec<Estimate>> = vec![];
     let mut done = vec![];
     let mut unimaged = 0;
+    let mut imaged: Vec<&Run> = vec![];
     for (&c, &exp) in t.concentration.iter().zip(&t.experiment) {
         // The runs imaged where their trajectories were read (here, or where a digest was made).
         let (here, missing): (Vec<&Run>, Vec<&Run>) = table3_runs(runs, c).into_iter().partition(|r| r.image.is_some());
@@ -1068,61 +1240,41 @@ pub fn measurement_section(
             what: "each run's mean projected MajorAxisLength against its mean 3-D length, mean over runs".into(),
             change,
         });
+        imaged.extend(here);
     }
-    let left_out = if unimaged > 0 {
-        format!(
-            "{unimaged} completed Table 3 runs are left out, read from digests made before the image measures were kept \
-             (running their experiment files again with `magdem experiment --no-digests` adds the measures)"
-        )
-    } else {
-        String::new()
-    };
     if done.is_empty() {
-        return Ok(md + &format!("No Table 3 runs with image measures. {left_out}\n\n"));
+        return Ok(context! { ran => false, unimaged => unimaged });
     }
     let mut columns = vec![
         col("concentration_mg_per_ml", done.iter().map(|d| d.0).collect()),
         col("runs", done.iter().map(|d| d.2 as f64).collect()),
     ];
-    for (k, name) in names.iter().enumerate() {
+    let mut cells = vec![
+        col("concentration_mg_per_ml", done.iter().map(|d| d.0).collect()),
+        ucol("runs", done.iter().map(|d| d.2 as u64).collect()),
+    ];
+    for (k, name) in MEASURES.iter().enumerate() {
         let key = name.replace([',', '+'], "").replace(' ', "_").replace("__", "_");
         columns.push(col(&format!("{key}_um"), table.iter().map(|row| row[k].mean).collect()));
         columns.push(col(&format!("{key}_ci95_um"), table.iter().map(|row| row[k].ci95).collect()));
+        cells.push(scol(&key, table.iter().map(|row| row[k].cell(1)).collect()));
     }
     columns.push(col("experiment_um", done.iter().map(|d| d.1).collect()));
-    let mut df = DataFrame::new(columns)?;
-    write(&mut df, tables, "measurement")?;
-    md += "The experiment measured a \"major axis length\" on microscope images. magdem's length is the 3-D extent of an \
-           aggregate's centres along its principal axis plus one diameter. Emulated here on the Table 3 runs at 5 ms, \
-           with the imaging plane x–y (the field, along x, lies in it; the view is along gravity, as a microscope looks \
-           down on a sample), pixels of 0.5 µm, and MATLAB regionprops' MajorAxisLength (the ellipse with the same second \
-           moments as the pixels; for a straight chain of n it is 4√(d²(n²−1)/12 + d²/16), which tends to 1.155 n d):\n\n\
-           - *3-D*: magdem's length;\n\
-           - *projected*: each 3-D aggregate imaged alone, which is perfect segmentation;\n\
-           - *image*: every particle projected through the whole depth and labelled into 8-connected regions, so that \
-           chains overlapping in projection merge. This is the limit of a depth of field as deep as the sample, which \
-           the experiment's is not. The truth lies between *projected* and *image*;\n\
-           - *all* counts single particles and *2+* leaves them out.\n\n\
-           Mean over seeds of each run's mean, ± CI95 over seeds (µm)";
-    if unimaged > 0 {
-        md += &format!("; {left_out}");
-    }
-    md += ":\n\n";
-    let _ = write!(
-        md,
-        "| c (mg/ml) | runs | {} | experiment |\n|---|---|{}---|\n",
-        names.join(" | "),
-        "---|".repeat(names.len())
-    );
-    for ((c, exp, n), row) in done.iter().zip(&table) {
-        let _ = writeln!(
-            md,
-            "| {c} | {n} | {} | {exp:.0} |",
-            row.iter().map(|e| e.cell(1)).collect::<Vec<_>>().join(" | ")
-        );
-    }
-    md += "\n";
-    Ok(md)
+    cells.push(col("experiment_um", done.iter().map(|d| d.1).collect()));
+    let mut df = frame(columns)?;
+    write(&mut df, &inp.tables, "measurement")?;
+    let headers: Vec<&str> = ["c (mg/ml)", "runs"].into_iter().chain(MEASURES).chain(["experiment"]).collect();
+    let md = markdown(&frame(cells)?, &headers, &[3, 0, 1, 1, 1, 1, 1, 1, 0])?;
+    let imaging = super::runs::IMAGING;
+    Ok(context! {
+        ran => true,
+        table => md,
+        unimaged => unimaged,
+        paper_ms => 1e3 * scene_number_of(&imaged, "integration.end_time"),
+        pixel_um => 1e6 * imaging.pixel,
+        // MajorAxisLength of a long straight chain over n d.
+        chain_limit => crate::analysis::image::chain_major_axis(1_000_000, 1.0) / 1e6,
+    })
 }
 
 /// The six measures of one run's last frame (µm): 3-D, projected and image lengths, each over

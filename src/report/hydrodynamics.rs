@@ -1,17 +1,23 @@
 //! `magdem report hydrodynamics`: the paper's shielded-area drag (A_eff) held against Stokes flow
 //! with hydrodynamic interactions (the RPY mobility), in `reports/hydrodynamics/README.md`: the
 //! drag of straight chains, the cost of the dense mobility, the error of refactorising it every K
-//! steps, and case 2 under each drag model from the runs of `experiments/hydrodynamics/*.toml`.
+//! steps, and case 1 and case 2 under each drag model from the runs of
+//! `experiments/hydrodynamics/*.toml`. The numbers, tables and figures are computed here; the words
+//! are `templates/hydrodynamics/README.md`.
 
 use super::runs::{experiment_files, load_runs_digested, Run};
 use super::tables::{col, floats, frame, markdown, read_csv, scol, write};
+use super::template::render;
+use crate::analysis::aggregates::BOX_LIMITED_FRACTION;
 use crate::analysis::stats::{ci95_half_width, summary};
 use crate::core::forces::hydrodynamics::Resistance;
-use crate::core::forces::wall_drag::PlaneWall;
+use crate::core::forces::wall_drag::{parallel_factor, PlaneWall};
 use crate::core::state::Vec3;
 use crate::plot::{chart, palette, Legend, RGBColor, Scale, Series, SeriesLabelPosition};
 use crate::scene::Scene;
 use crate::study::timed;
+use minijinja::{context, Value};
+use serde::Serialize;
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
@@ -50,63 +56,153 @@ const MODELS: [(&str, &str); 13] = [
     ("cv-20", "A_eff, diameters with cv 20 %"),
 ];
 
+/// The free-fluid, equal-diameter drag models of case 2 (the first rows of [`MODELS`]).
+const FREE_FLUID: usize = 3;
+
+/// Chains: spheres of this diameter (m) translating at this speed (m/s) in water, up to the
+/// longest of these chains.
+const CHAIN_DIAMETER: f64 = 5.5e-6;
+const CHAIN_SPEED: f64 = 1.0e-5;
+const CHAIN_SIZES: [usize; 9] = [1, 2, 3, 4, 5, 7, 10, 15, 20];
+const WATER: (f64, f64) = (1000.0, 1.0e-3);
+/// Stimson & Jeffery's exact drag on each of two touching spheres moving along their line of
+/// centres, as a fraction of a lone sphere's Stokes drag.
+const STIMSON_JEFFERY: f64 = 0.6452;
+/// The gap a sphere resting on the substrate keeps, as a fraction of its radius (the wall drag's
+/// `min_gap`).
+const WALL_GAP: f64 = 0.01;
+/// The cost study: particle counts, timing repeats (fewer above [`COST_FEW_ABOVE`] particles), and
+/// the renewal intervals of the per-step cost.
+const COST_SIZES: [usize; 3] = [55, 300, 1000];
+const COST_REPEATS: (usize, usize, usize) = (3, 7, 15);
+const COST_FEW_ABOVE: usize = 500;
+const COST_RENEWALS: [f64; 2] = [10.0, 1000.0];
+/// Particles of the quoted per-step cost (the case-1 scale).
+const COST_QUOTED: usize = 300;
+/// Memory of the dense mobility and resistance: two 3N × 3N matrices of f64.
+const BYTES_PER_PAIR: f64 = 2.0 * 9.0 * 8.0;
+/// The refactorisation study: case 2 with RPY under r-RESPA, for this long, at these intervals.
+const REFACTOR_END: f64 = 1.0e-2;
+const REFACTOR_SLOW_EVERY: u64 = 10;
+const REFACTOR_INTERVALS: [u64; 4] = [1, 10, 100, 1000];
+/// Case 1's early-growth comparison is at the frame nearest this time (s).
+const EARLY: f64 = 1.0e-3;
+/// Velocity classes: aggregates of at least this many particles are "large".
+const LARGE: usize = 5;
+/// Sizes with fewer aggregates than this (pooled over seeds) are left out of the fit of α.
+const MIN_AGGREGATES: usize = 3;
+/// The spread variants draw diameters from a normal law truncated at this many σ.
+const TRUNCATION_SIGMAS: f64 = 3.0;
+/// Case 1's concentration in the drag study (mg/ml), its row of the paper's Table 3.
+const CASE1_CONCENTRATION: f64 = 2.25;
+/// A run's scale for a report that estimates case 1 under RPY before its runs exist: steps of a
+/// case-1 run (5 ms at 1e-8 s) and the renewal interval.
+const CASE1_STEPS: f64 = 5.0e5;
+
+/// The source of the wall's screening of the flow a sphere drives along it.
+const BLAKE: &str = "Blake 1971";
+
+/// Schiller–Naumann's correction to Stokes drag, `0.15 Re^0.687`.
+fn schiller_naumann_correction(re: f64) -> f64 {
+    0.15 * re.powf(0.687)
+}
+
+/// What the report quotes of a scene.
+#[derive(Serialize)]
+struct SceneFacts {
+    particles: usize,
+    diameter_um: f64,
+    b0: f64,
+    gradient: f64,
+    end_time: f64,
+    dt: f64,
+    scheme: &'static str,
+    slow_every: u64,
+    box_um: f64,
+    seed: u64,
+    fluid_density: f64,
+    viscosity: f64,
+}
+
+fn scene_facts(scene: &Scene) -> SceneFacts {
+    let spec = &scene.spec;
+    let field = spec.field.as_ref();
+    let fluid = spec.fluid.as_ref();
+    let scheme = spec.integration.scheme.to_string();
+    SceneFacts {
+        particles: scene.initial.position.len(),
+        diameter_um: 1e6 * spec.species.first().map_or(f64::NAN, |s| s.diameter),
+        b0: field.map_or(f64::NAN, |f| f.b0.iter().map(|b| b * b).sum::<f64>().sqrt()),
+        gradient: field.map_or(f64::NAN, |f| f.gradient[0][0]),
+        end_time: spec.integration.end_time,
+        dt: spec.integration.dt,
+        scheme: match scheme.as_str() {
+            "respa" => "r-RESPA",
+            "velocity-verlet" => "velocity Verlet",
+            _ => "another scheme",
+        },
+        slow_every: spec.integration.slow_every,
+        box_um: 1e6 * (spec.domain.hi[0] - spec.domain.lo[0]),
+        seed: spec.seed,
+        fluid_density: fluid.map_or(f64::NAN, |f| f.density),
+        viscosity: fluid.map_or(f64::NAN, |f| f.viscosity),
+    }
+}
+
+/// The scene of the first of `runs` with `variant`, parsed.
+fn scene_of(runs: &[&Run], variant: &str) -> Result<Option<Scene>, Error> {
+    match runs.iter().find(|r| r.variant == variant) {
+        Some(r) => Ok(Some(Scene::parse(&r.scene_text, &r.id)?)),
+        None => Ok(None),
+    }
+}
+
+/// A variant override's value (`key = value`) among the runs of `variant`.
+fn override_of<'a>(runs: &[&'a Run], variant: &str, key: &str) -> Option<&'a str> {
+    let prefix = format!("{key} = ");
+    runs.iter()
+        .filter(|r| r.variant == variant)
+        .find_map(|r| r.variant_overrides.iter().find_map(|o| o.strip_prefix(prefix.as_str())))
+}
+
 pub fn write_report(options: &HydrodynamicsReportOptions) -> Result<PathBuf, Error> {
     let out = &options.out;
     std::fs::create_dir_all(out)?;
     let tables = out.join("tables");
     let files = experiment_files(&options.experiments, true)?;
     let runs = load_runs_digested(&files, options.gap, &out.join("digests"))?;
-    let mut md = format!(
-        "# Hydrodynamic interactions and the paper's shielded-area drag\n\n\
-         Generated by `magdem report hydrodynamics` (magdem {}, commit {}) from the runs of {} and from computations made \
-         while writing it (chain drag, cost, refactorisation error). Tables are also in [`tables/`](tables/) as CSV and \
-         Parquet. Reproduce: `magdem experiment FILE` for each experiment file, then `magdem report hydrodynamics`.\n\n\
-         The paper gives a sphere in the wake of a touching upstream neighbour a reduced area A_eff, so that a chain moving \
-         along its axis feels the drag of its leading sphere only. Both of its cases run at Re ≈ 1e-5 … 1e-2, where there \
-         is no wake: the flow is Stokes flow, in which every sphere slows its neighbours' fluid without hiding them. magdem's \
-         `forces.drag.law = \"rpy\"` gives that physics in the Rotne–Prager–Yamakawa approximation (docs/model.md §7).\n\n",
-        env!("CARGO_PKG_VERSION"),
-        env!("MAGDEM_GIT_COMMIT"),
-        files.iter().map(|f| format!("`{}`", f.display())).collect::<Vec<_>>().join(", "),
-    );
-    md += &chain_section(out, &tables)?;
-    let (cost, per_step_300) = cost_section(&tables)?;
-    md += &cost;
-    md += &refactor_section(&options.case2_scene, &tables)?;
-    md += &case2_section(&runs, &options.reference.join("table2_case2.csv"), out, &tables)?;
-    md += &case1_section(&runs, &options.reference.join("table3_case1_lengths.csv"), out, &tables)?;
+    let chain = chain_section(out, &tables)?;
+    let cost = cost_section(&tables)?;
+    let refactor = refactor_section(&options.case2_scene, &tables)?;
+    let case2 = case2_section(&runs, &options.reference.join("table2_case2.csv"), out, &tables)?;
+    let case1 = case1_section(&runs, &options.reference.join("table3_case1_lengths.csv"), out, &tables)?;
     let ran = |variant: &str| {
         runs.iter().any(|r| r.completed() && r.experiment.starts_with("hydro-case2") && r.variant == variant)
     };
-    md += "## Not in this report\n\n";
-    if !ran("a-eff-wall") {
-        md += "- Case 2 with the substrate's drag: the correction is built and tested (`[forces.drag.wall]`, docs/model.md §7) \
-               and its experiment is `experiments/hydrodynamics/opt-in/case2-wall.toml` (a 1 % gap, f = 3.38, M re-derived: \
-               material χ = 28.09, dt = 2.5e-8 s: at the scene's 5e-8 s every run became unstable); its runs are not made \
-               yet.\n";
-    }
-    if !ran("rpy-wall") {
-        md += "- Case 2 under RPY above the substrate (the Rotne–Prager–Blake mobility, docs/model.md §7): the \
-               `rpy-wall` variant of `experiments/hydrodynamics/opt-in/case2-wall.toml` (M re-derived: χ = 3.3675); its \
-               runs are not made yet.\n";
-    }
-    if !ran("cv-10") {
-        md +=
-            "- Case 2 with spread diameters: polydisperse species are built and tested (`species.size`, docs/model.md \
-               §2.1) and the sweep of cv 0 / 5 / 10 / 20 % is `experiments/hydrodynamics/opt-in/case2-cv.toml` (the \
-               experiment's spread is not given; the lid raised to the largest diameter, gravity on, dt = 2.5e-8 s); its \
-               runs are not made yet.\n";
-    }
-    if !runs.iter().any(|r| r.completed() && r.experiment == "hydro-case1") {
-        md += &format!(
-            "- Case 1 under each drag model: `experiments/hydrodynamics/case1-drag.toml` (2.25 mg/ml, ten seeds); at 300 \
-             particles an RPY step with the factor renewed every 1000 steps costs about {:.2} ms here (cost section), a 5 ms \
-             run about {:.0} minutes of one core; its runs are not made yet.\n",
-            1e3 * per_step_300,
-            5e5 * per_step_300 / 60.0,
-        );
-    }
-    md += "\n";
+    let per_step = cost.per_step_quoted;
+    let md = render(
+        "hydrodynamics/README.md",
+        &context! {
+            version => env!("CARGO_PKG_VERSION"),
+            commit => env!("MAGDEM_GIT_COMMIT"),
+            blake => BLAKE,
+            files => files.iter().map(|f| f.display().to_string()).collect::<Vec<_>>(),
+            chain => chain,
+            cost => cost.value,
+            refactor => refactor,
+            case2 => case2,
+            case1 => case1,
+            missing => context! {
+                wall => !ran("a-eff-wall"),
+                rpy_wall => !ran("rpy-wall"),
+                spread => !ran("cv-10"),
+                case1 => !runs.iter().any(|r| r.completed() && r.experiment == "hydro-case1"),
+                case1_per_step_ms => 1e3 * per_step,
+                case1_run_minutes => CASE1_STEPS * per_step / 60.0,
+                case1_steps => CASE1_STEPS,
+            },
+        },
+    )?;
     let path = out.join("README.md");
     std::fs::write(&path, md)?;
     Ok(path)
@@ -129,7 +225,7 @@ fn chain_scene(n: usize, d: f64, u: Vec3, drag: &str) -> String {
 /// Drag per sphere of a chain of `n` touching spheres moving along (`axis` 0) or across it, as
 /// a fraction of a lone sphere's Stokes drag, through magdem's scene and force field.
 fn chain_drag(n: usize, axis: usize, drag: &str) -> Result<f64, Error> {
-    let (d, mu, speed) = (5.5e-6, 1.0e-3, 1.0e-5);
+    let (d, mu, speed) = (CHAIN_DIAMETER, WATER.1, CHAIN_SPEED);
     let mut u = Vec3::zeros();
     u[axis] = speed;
     let scene = Scene::parse(&chain_scene(n, d, u, drag), "chain")?;
@@ -140,20 +236,28 @@ fn chain_drag(n: usize, axis: usize, drag: &str) -> Result<f64, Error> {
 }
 
 /// The axial drag per sphere of a chain of `n` touching spheres resting on a wall (along it, at
-/// the 1 % gap) under RPY above the wall, as a fraction of a lone sphere's there.
-fn wall_chain_drag(n: usize) -> Result<f64, Error> {
-    let (a, mu, speed) = (2.75e-6, 1.0e-3, 1.0e-5);
-    let wall = PlaneWall { axis: 2, position: 0.0, side: 1.0, min_gap: 0.01 };
-    let along = |n: usize| -> Result<f64, Error> {
-        let x: Vec<Vec3> = (0..n).map(|i| Vec3::new(2.0 * a * i as f64, 0.0, a)).collect();
-        let r = Resistance::new(&x, &vec![a; n], mu, Some(&wall))?;
-        Ok(-r.drag(&vec![Vec3::new(speed, 0.0, 0.0); n], Vec3::zeros()).iter().map(|f| f.x).sum::<f64>() / n as f64)
-    };
-    Ok(along(n)? / along(1)?)
+/// the [`WALL_GAP`]) under RPY above the wall (N).
+fn wall_chain_axial(n: usize) -> Result<f64, Error> {
+    let (a, mu, speed) = (0.5 * CHAIN_DIAMETER, WATER.1, CHAIN_SPEED);
+    let wall = PlaneWall { axis: 2, position: 0.0, side: 1.0, min_gap: WALL_GAP };
+    let x: Vec<Vec3> = (0..n).map(|i| Vec3::new(2.0 * a * i as f64, 0.0, a)).collect();
+    let r = Resistance::new(&x, &vec![a; n], mu, Some(&wall))?;
+    Ok(-r.drag(&vec![Vec3::new(speed, 0.0, 0.0); n], Vec3::zeros()).iter().map(|f| f.x).sum::<f64>() / n as f64)
 }
 
-fn chain_section(out: &Path, tables: &Path) -> Result<String, Error> {
-    let sizes = [1usize, 2, 3, 4, 5, 7, 10, 15, 20];
+/// The axial drag per sphere of a chain of `n` touching spheres resting on a wall under RPY above
+/// the wall, as a fraction of a lone sphere's there.
+fn wall_chain_drag(n: usize) -> Result<f64, Error> {
+    Ok(wall_chain_axial(n)? / wall_chain_axial(1)?)
+}
+
+/// A lone sphere's drag along the wall under RPY above it, as a fraction of its free Stokes drag.
+fn rpy_wall_factor() -> Result<f64, Error> {
+    Ok(wall_chain_axial(1)? / (3.0 * PI * WATER.1 * CHAIN_DIAMETER * CHAIN_SPEED))
+}
+
+fn chain_section(out: &Path, tables: &Path) -> Result<Value, Error> {
+    let sizes = CHAIN_SIZES;
     let (rpy, stokes_paper) = ("law = \"rpy\"\nshielding = \"none\"", "law = \"stokes\"\nshielding = \"paper\"");
     let mut cols: [Vec<f64>; 5] = Default::default();
     for &n in &sizes {
@@ -174,6 +278,7 @@ fn chain_section(out: &Path, tables: &Path) -> Result<String, Error> {
     ])?;
     write(&mut df, tables, "chain_drag")?;
     let at = |v: &[f64], n: usize| v[sizes.iter().position(|&s| s == n).expect("listed size")];
+    let longest = sizes[sizes.len() - 1];
     let series = vec![
         Series::line("RPY, along the axis", n_col.iter().copied().zip(cols[0].clone()).collect(), palette(1)),
         Series::line("RPY, broadside", n_col.iter().copied().zip(cols[1].clone()).collect(), palette(5)),
@@ -184,7 +289,7 @@ fn chain_section(out: &Path, tables: &Path) -> Result<String, Error> {
             n_col.iter().copied().zip(cols[4].clone()).collect(),
             palette(2),
         ),
-        Series::markers("Stimson & Jeffery, exact (n = 2, axial)", vec![(2.0, 0.6452)], RGBColor(0, 0, 0), 5),
+        Series::markers("Stimson & Jeffery, exact (n = 2, axial)", vec![(2.0, STIMSON_JEFFERY)], RGBColor(0, 0, 0), 5),
     ];
     chart(
         &out.join("chain-drag.png"),
@@ -194,35 +299,7 @@ fn chain_section(out: &Path, tables: &Path) -> Result<String, Error> {
         SeriesLabelPosition::LowerLeft,
         (Scale::Log, Scale::Log),
     )?;
-    let mut md = String::from("## The drag of a chain\n\n");
-    md += &format!(
-        "A straight chain of n touching spheres (d = 5.5 µm, water) translating at 10 µm/s, its drag per sphere as a \
-         fraction of a lone sphere's 3π μ d U, from magdem's own force field: RPY (`law = \"rpy\"`) and the paper's A_eff \
-         (`law = \"stokes\"`, `shielding = \"paper\"`; Schiller–Naumann gives the same at these Reynolds numbers). \
-         tests/physics.rs checks the RPY column against an independent dense solve and the pair values against their \
-         closed forms.\n\n\
-         Along its axis a chain of 20 feels {:.3} of a lone sphere's drag per sphere under RPY and {:.3} under A_eff: \
-         A_eff removes {:.1}× too much drag. Two touching spheres moving along their line of centres feel {:.3} each under \
-         RPY against Stimson & Jeffery's exact 0.6452 (RPY {:.1} % low); A_eff gives {:.3}. Broadside, A_eff hides nothing \
-         ({:.3} per sphere at any n) while RPY still lowers the drag to {:.3} at n = 20. A chain's total drag under RPY \
-         grows with n (n × {:.3} = {:.2} lone-sphere drags at n = 20, roughly n / ln n as slender-body theory has it); \
-         under A_eff it stays one sphere's along the axis. Resting on the substrate (RPY above a no-slip wall, the \
-         Rotne–Prager–Blake mobility, at a 1 % gap), a chain of 20 moving along its axis keeps {:.3} of a lone resting \
-         sphere's drag per sphere ({:.3} for two): the wall screens the spheres' flows from each other.\n\n",
-        at(&cols[0], 20),
-        at(&cols[2], 20),
-        at(&cols[0], 20) / at(&cols[2], 20),
-        at(&cols[0], 2),
-        100.0 * (1.0 - at(&cols[0], 2) / 0.6452),
-        at(&cols[2], 2),
-        at(&cols[3], 20),
-        at(&cols[1], 20),
-        at(&cols[0], 20),
-        20.0 * at(&cols[0], 20),
-        at(&cols[4], 20),
-        at(&cols[4], 2),
-    );
-    md += &markdown(
+    let table = markdown(
         &df,
         &[
             "n",
@@ -234,8 +311,28 @@ fn chain_section(out: &Path, tables: &Path) -> Result<String, Error> {
         ],
         &[0, 3, 3, 3, 3, 3],
     )?;
-    md += "\n![Chain drag](chain-drag.png)\n\n";
-    Ok(md)
+    let re = WATER.0 * CHAIN_SPEED * CHAIN_DIAMETER / WATER.1;
+    Ok(context! {
+        diameter_um => 1e6 * CHAIN_DIAMETER,
+        speed_um => 1e6 * CHAIN_SPEED,
+        re => re,
+        sn_correction => schiller_naumann_correction(re),
+        longest => longest,
+        rpy_axial => at(&cols[0], longest),
+        a_eff_axial => at(&cols[2], longest),
+        excess => at(&cols[0], longest) / at(&cols[2], longest),
+        rpy_broadside => at(&cols[1], longest),
+        a_eff_broadside => at(&cols[3], longest),
+        rpy_total => longest as f64 * at(&cols[0], longest),
+        pair_rpy => at(&cols[0], 2),
+        pair_a_eff => at(&cols[2], 2),
+        stimson_jeffery => STIMSON_JEFFERY,
+        pair_rpy_low => 100.0 * (1.0 - at(&cols[0], 2) / STIMSON_JEFFERY),
+        wall_longest => at(&cols[4], longest),
+        wall_pair => at(&cols[4], 2),
+        wall_gap => 100.0 * WALL_GAP,
+        table => table,
+    })
 }
 
 /// Spheres of diameter `d` on a jittered cubic lattice of spacing 2d (no overlaps).
@@ -250,31 +347,36 @@ fn lattice(n: usize, d: f64) -> Vec<Vec3> {
         .collect()
 }
 
-/// The cost section, and the measured cost per step (s) at 300 particles with the factor renewed
-/// every 10 steps.
-fn cost_section(tables: &Path) -> Result<(String, f64), Error> {
-    let (d, mu) = (5.5e-6, 1.0e-3);
+/// The cost section, and the measured cost per step (s) at [`COST_QUOTED`] particles with the
+/// factor renewed every 1000 steps.
+struct Cost {
+    value: Value,
+    per_step_quoted: f64,
+}
+
+fn cost_section(tables: &Path) -> Result<Cost, Error> {
+    let (d, mu) = (CHAIN_DIAMETER, WATER.1);
     let mut rows: [Vec<f64>; 6] = Default::default();
-    for n in [55usize, 300, 1000] {
+    for n in COST_SIZES {
         let x = lattice(n, d);
         let radii = vec![0.5 * d; n];
         let velocity: Vec<Vec3> = (0..n).map(|k| Vec3::new(1e-5, 1e-6 * (k % 3) as f64, 0.0)).collect();
-        let repeats = if n > 500 { 3 } else { 7 };
+        let repeats = if n > COST_FEW_ABOVE { COST_REPEATS.0 } else { COST_REPEATS.1 };
         let factor = timed(repeats, || {
             std::hint::black_box(Resistance::new(&x, &radii, mu, None).expect("RPY is positive definite"));
         })
         .1;
         let r = Resistance::new(&x, &radii, mu, None)?;
-        let solve = timed(15, || {
+        let solve = timed(COST_REPEATS.2, || {
             std::hint::black_box(r.drag(&velocity, Vec3::zeros()));
         })
         .1;
         rows[0].push(n as f64);
         rows[1].push(1e3 * factor);
         rows[2].push(1e3 * solve);
-        rows[3].push(1e3 * (solve + factor / 10.0));
-        rows[4].push(1e3 * (solve + factor / 1000.0));
-        rows[5].push(144.0 * (n * n) as f64 / 1e6);
+        rows[3].push(1e3 * (solve + factor / COST_RENEWALS[0]));
+        rows[4].push(1e3 * (solve + factor / COST_RENEWALS[1]));
+        rows[5].push(BYTES_PER_PAIR * (n * n) as f64 / 1e6);
     }
     let mut df = frame(vec![
         col("particles", rows[0].clone()),
@@ -285,49 +387,56 @@ fn cost_section(tables: &Path) -> Result<(String, f64), Error> {
         col("memory_mb", rows[5].clone()),
     ])?;
     write(&mut df, tables, "rpy_cost")?;
-    let mut md = String::from("## Cost of the dense mobility\n\n");
-    md += "Building the 3N × 3N RPY mobility, its Cholesky factor and the resistance R = M⁻¹, and one drag R·U, on one \
-           thread of this machine beside whatever else it runs (medians of 3–15 repeats, spheres on a jittered lattice). \
-           Per step with the factor renewed every K steps (`refactor_every = K`): one drag plus 1/K of a renewal (the \
-           experiments below renew every 1000 steps). The renewal grows as N³, the drag as N², the memory (matrix and resistance) as 144 N² bytes.\n\n";
-    md += &markdown(
+    let table = markdown(
         &df,
         &[
             "particles",
             "build, factorise, invert (ms)",
             "drag R·U (ms)",
-            "per step, K = 10 (ms)",
-            "per step, K = 1000 (ms)",
+            &format!("per step, K = {} (ms)", COST_RENEWALS[0]),
+            &format!("per step, K = {} (ms)", COST_RENEWALS[1]),
             "memory (MB)",
         ],
         &[0, 3, 3, 3, 3, 1],
     )?;
-    md += "\n";
-    Ok((md, 1e-3 * rows[4][1]))
+    let quoted = COST_SIZES.iter().position(|&n| n == COST_QUOTED).expect("a listed size");
+    let per_step_quoted = 1e-3 * rows[4][quoted];
+    let value = context! {
+        table => table,
+        repeats_min => COST_REPEATS.0,
+        repeats_max => COST_REPEATS.2,
+        bytes_per_pair => BYTES_PER_PAIR,
+        renewal => COST_RENEWALS[1],
+        quoted => COST_QUOTED,
+        per_step_quoted_ms => 1e3 * per_step_quoted,
+    };
+    Ok(Cost { value, per_step_quoted })
 }
 
-/// Case 2 with RPY for `end_time` at each refactorisation interval: the largest position error
-/// against refactorising every step, and the wall time.
-fn refactor_section(case2: &Path, tables: &Path) -> Result<String, Error> {
+/// Case 2 with RPY for [`REFACTOR_END`] at each refactorisation interval: the largest position
+/// error against refactorising every step, and the wall time.
+fn refactor_section(case2: &Path, tables: &Path) -> Result<Value, Error> {
     let base = std::fs::read_to_string(case2)?;
-    let end_time = 1.0e-2;
-    let run = |k: u64| -> Result<(Vec<Vec3>, Vec<Vec3>, f64), Error> {
-        let text = base
-            .replace("shielding = \"paper\"", &format!("shielding = \"none\"\nrefactor_every = {k}"))
+    let end_time = REFACTOR_END;
+    let text_for = |k: u64| {
+        base.replace("shielding = \"paper\"", &format!("shielding = \"none\"\nrefactor_every = {k}"))
             .replace("law = \"schiller-naumann\"", "law = \"rpy\"")
-            .replace("scheme = \"velocity-verlet\"", "scheme = \"respa\"\nslow_every = 10")
+            .replace("scheme = \"velocity-verlet\"", &format!("scheme = \"respa\"\nslow_every = {REFACTOR_SLOW_EVERY}"))
             .replace("end_time = 1.25", &format!("end_time = {end_time:e}"))
-            .replace("interval = 1.0e-2", "interval = 1.0e-3");
-        let scene = Scene::parse(&text, "case 2, RPY")?;
+            .replace("interval = 1.0e-2", "interval = 1.0e-3")
+    };
+    let run = |k: u64| -> Result<(Vec<Vec3>, Vec<Vec3>, f64), Error> {
+        let scene = Scene::parse(&text_for(k), "case 2, RPY")?;
         let t0 = Instant::now();
         let sim = scene.run_to_end()?;
         let wall = t0.elapsed().as_secs_f64();
         Ok((scene.initial.position.to_vec(), sim.state.in_id_order(&sim.state.particles.position), wall))
     };
+    let facts = scene_facts(&Scene::parse(&text_for(1), "case 2, RPY")?);
     let (start, exact, exact_wall) = run(1)?;
     let moved = start.iter().zip(&exact).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
     let mut cols: [Vec<f64>; 4] = Default::default();
-    for k in [1u64, 10, 100, 1000] {
+    for k in REFACTOR_INTERVALS {
         let (positions, wall) = if k == 1 { (exact.clone(), exact_wall) } else { run(k).map(|r| (r.1, r.2))? };
         let error = positions.iter().zip(&exact).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
         cols[0].push(k as f64);
@@ -349,40 +458,33 @@ fn refactor_section(case2: &Path, tables: &Path) -> Result<String, Error> {
         scol("relative", sci(&cols[2])),
         col("wall", cols[3].clone()),
     ])?;
-    let mut md = String::from("## Refactorising the mobility every K steps\n\n");
-    md += &format!(
-        "The mobility depends on the positions only, which change slowly against the time step: in case 2 the fastest \
-         sphere moves {:.2e} m in the first {} s ({:.0} steps of {:.0e} s). With `refactor_every = K` the factor is renewed at \
-         every outer step that starts on a multiple of K, and every step multiplies its own velocities by it. Case 2 (55 particles, \
-         r-RESPA with magnetic forces every 10 steps, RPY, seed 1) for {} s, the largest position error against K = 1 and \
-         the run's wall time on one thread (tests/physics.rs asserts the error's first order in K − 1 on a sedimenting \
-         pair):\n\n",
-        moved,
-        end_time,
-        end_time / 5.0e-8,
-        5.0e-8,
-        end_time
-    );
-    md += &markdown(
+    let table = markdown(
         &shown,
         &["K", "largest position error (m)", "÷ largest displacement", "wall time (s)"],
         &[0, 0, 0, 1],
     )?;
-    md += "\nWall times are of one thread beside whatever else the machine runs; the errors are exact (the runs are \
-           deterministic).\n\n";
-    Ok(md)
+    let last = cols[2].len() - 1;
+    Ok(context! {
+        moved => moved,
+        end_time => end_time,
+        steps => end_time / facts.dt,
+        scene => facts,
+        table => table,
+        largest_interval => cols[0][last],
+        largest_relative => cols[2][last],
+    })
 }
 
 /// Per run: the mean size of its last frame's aggregates, and the tracked velocities (µm/s) of
 /// the free ones (no x wall holding them) with their sizes.
-fn sizes_and_velocities(r: &Run) -> (f64, Vec<(usize, f64)>) {
+pub(crate) fn sizes_and_velocities(r: &Run) -> (f64, Vec<(usize, f64)>) {
     let size = summary(&r.last.iter().map(|a| a.size() as f64).collect::<Vec<_>>()).mean;
     let free = r.last.iter().filter(|a| !a.at_x_wall).map(|a| (a.size, a.tracked_vx * 1e6)).collect();
     (size, free)
 }
 
 /// Least-squares slope of ln v against ln n over the per-size means (sizes with ≥ 3 aggregates).
-fn log_slope(by_size: &BTreeMap<usize, Vec<f64>>) -> f64 {
+pub(crate) fn log_slope(by_size: &BTreeMap<usize, Vec<f64>>) -> f64 {
     let pts: Vec<(f64, f64)> = by_size
         .iter()
         .filter(|(_, v)| v.len() >= 3)
@@ -402,12 +504,22 @@ fn log_slope(by_size: &BTreeMap<usize, Vec<f64>>) -> f64 {
     sxy / sxx
 }
 
-fn case2_section(runs: &[Run], reference: &Path, out: &Path, tables: &Path) -> Result<String, Error> {
-    let mut md = String::from("## Case 2 under each drag model\n\n");
+/// One drag model of case 2 in words' reach: α, and where its aggregates of [`LARGE`]+ fall
+/// against the experiment's band (`overlapping`, `clear` or `unknown` without a CI).
+#[derive(Serialize)]
+struct ModelVerdict {
+    name: String,
+    alpha: f64,
+    fitted: bool,
+    large: f64,
+    large_ci: f64,
+    band: &'static str,
+}
+
+fn case2_section(runs: &[Run], reference: &Path, out: &Path, tables: &Path) -> Result<Value, Error> {
     let here: Vec<&Run> = runs.iter().filter(|r| r.experiment.starts_with("hydro-case2") && r.completed()).collect();
     if here.is_empty() {
-        md += "No completed runs of `experiments/hydrodynamics/case2-drag.toml` yet.\n\n";
-        return Ok(md);
+        return Ok(context! { present => false });
     }
     // The experiment is the first row of the paper's Table 2.
     let table2 = read_csv(reference)?;
@@ -430,7 +542,8 @@ fn case2_section(runs: &[Run], reference: &Path, out: &Path, tables: &Path) -> R
             summary(&run.1.iter().filter(|p| keep(p.0)).map(|p| p.1).collect::<Vec<_>>()).mean
         };
         let singles: Vec<f64> = per_run.iter().map(|r| class_mean(r, &|n| n == 1)).filter(|v| v.is_finite()).collect();
-        let large: Vec<f64> = per_run.iter().map(|r| class_mean(r, &|n| n >= 5)).filter(|v| v.is_finite()).collect();
+        let large: Vec<f64> =
+            per_run.iter().map(|r| class_mean(r, &|n| n >= LARGE)).filter(|v| v.is_finite()).collect();
         let mut by_size: BTreeMap<usize, Vec<f64>> = BTreeMap::new();
         for (n, v) in per_run.iter().flat_map(|r| r.1.iter().copied()) {
             by_size.entry(n).or_default().push(v);
@@ -448,7 +561,7 @@ fn case2_section(runs: &[Run], reference: &Path, out: &Path, tables: &Path) -> R
         cols[8].push(ci95_half_width(&large));
         cols[9].push(log_slope(&by_size));
         let classes: Vec<(usize, &Vec<f64>)> =
-            by_size.iter().filter(|(_, v)| v.len() >= 3).map(|(&n, v)| (n, v)).collect();
+            by_size.iter().filter(|(_, v)| v.len() >= MIN_AGGREGATES).map(|(&n, v)| (n, v)).collect();
         // The figure shows the drag models and their substrate variants with M re-derived (six
         // marks); the substrate with the scene's M and the spreads are in the table.
         if variant.starts_with("cv-") || variant.ends_with("-scene-m") {
@@ -466,8 +579,11 @@ fn case2_section(runs: &[Run], reference: &Path, out: &Path, tables: &Path) -> R
     }
     let largest = series.iter().flat_map(|s| s.points.iter().map(|p| p.0)).fold(1.0, f64::max);
     for (band, label) in [
-        (exp_velocity + exp_velocity_std, "experiment 7.5 ± 1 µm/s (its std over aggregates)"),
-        (exp_velocity - exp_velocity_std, ""),
+        (
+            exp_velocity + exp_velocity_std,
+            format!("experiment {exp_velocity} ± {exp_velocity_std} µm/s (its std over aggregates)"),
+        ),
+        (exp_velocity - exp_velocity_std, String::new()),
     ] {
         series.push(Series::line(label, vec![(1.0, band), (largest, band)], RGBColor(0, 0, 0)));
     }
@@ -495,28 +611,8 @@ fn case2_section(runs: &[Run], reference: &Path, out: &Path, tables: &Path) -> R
         ],
     )?;
     write(&mut df, tables, "case2_drag_models")?;
-    let rpy_every = here
-        .iter()
-        .filter(|r| r.variant == "rpy")
-        .find_map(|r| r.variant_overrides.iter().find_map(|o| o.strip_prefix("forces.drag.refactor_every = ")))
-        .unwrap_or("1");
-    md += &format!(
-        "`experiments/hydrodynamics/case2-drag.toml`: the paper's case 2 (`experiments/scenes/case2.toml`: 55 spheres of \
-         5.5 µm, 0.005 T and 1.4 T/m, 1.25 s, r-RESPA with magnetic forces every 10 steps) under three drag models (RPY renewing its \
-         factor every {rpy_every} steps). The magnetisation is the scene's, derived so that a single sphere moves at the measured 7.5 µm/s under Stokes drag: \
-         a lone sphere's drag is the same 3π μ d U under all three models (Schiller–Naumann's correction is 1e-4 at Re ≈ \
-         1e-5), so re-deriving it per model gives the same value, and the paper gives none of its own. Size: the mean \
-         over a run's aggregates (single particles included), ± CI95 over seeds. Velocity: tracked along x over the last \
-         tenth of the run for the aggregates no x wall holds (as in the paper report), the mean over a run's aggregates, \
-         ± CI95 over seeds; `5+` is the mean over aggregates of five or more. The slope is the least-squares exponent α \
-         of v ∝ n^α over the sizes with at least three aggregates (pooled over seeds): 0 is the experiment's size \
-         independence, 1 a chain that keeps one sphere's drag. Experiment (Vartholomeos & Mavroidis, the paper's Table 2): \
-         size {exp_size:.0} particles, velocity {exp_velocity:.1} ± {exp_velocity_std:.1} µm/s (std over aggregates). \
-         Converged against: the RPY factor's renewal interval (section above). Not converged against: the box (the \
-         paper's 192 µm walled monolayer, one size), the stopping time (1.25 s, the paper's; the experiment's is not given), \
-         the time step and integrator (r-RESPA at dt = 5e-8 s, not varied here), and seeds beyond those shown.\n\n"
-    );
-    md += &markdown(
+    let rpy_every = override_of(&here, "rpy", "forces.drag.refactor_every").unwrap_or("1").to_string();
+    let table = markdown(
         &df,
         &[
             "drag model",
@@ -527,17 +623,95 @@ fn case2_section(runs: &[Run], reference: &Path, out: &Path, tables: &Path) -> R
             "velocity (µm/s)",
             "± CI95",
             "singles",
-            "5+",
+            &format!("{LARGE}+"),
             "± CI95",
             "slope α",
         ],
         &[0, 0, 1, 2, 2, 2, 2, 2, 2, 2, 2],
     )?;
-    md += "\n![Velocity by size](case2-velocity-by-size.png)\n\n";
-    md += &verdict(&names, &cols, exp_velocity, exp_velocity_std);
-    md += &variations(&variants, &cols);
-    md += &spread_against_the_gap(&variants, &cols, exp_size);
-    Ok(md)
+    let verdicts: Vec<ModelVerdict> = names
+        .iter()
+        .enumerate()
+        .map(|(k, name)| {
+            let (v, ci) = (cols[7][k], cols[8][k]);
+            let overlaps = v - ci <= exp_velocity + exp_velocity_std && v + ci >= exp_velocity - exp_velocity_std;
+            ModelVerdict {
+                name: name.clone(),
+                alpha: cols[9][k],
+                fitted: cols[9][k].is_finite(),
+                large: v,
+                large_ci: ci,
+                band: if !ci.is_finite() {
+                    "unknown"
+                } else if overlaps {
+                    "overlapping"
+                } else {
+                    "clear"
+                },
+            }
+        })
+        .collect();
+    // The scene as the paper's model runs it (the a-eff variant) and its Reynolds numbers: a lone
+    // sphere at the calibrated velocity, and the fastest tracked aggregate of any case-2 run.
+    let scene = scene_of(&here, "a-eff")?.or(scene_of(&here, variants[0])?).expect("a case-2 run");
+    let facts = scene_facts(&scene);
+    let reynolds = |v_um: f64| facts.fluid_density * 1e-6 * v_um * 1e-6 * facts.diameter_um / facts.viscosity;
+    let fastest = here
+        .iter()
+        .flat_map(|r| r.last.iter().map(|a| 1e6 * a.tracked_vx.abs()))
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max);
+    let free: Vec<&ModelVerdict> = verdicts
+        .iter()
+        .zip(&variants)
+        .filter(|(_, v)| MODELS[..FREE_FLUID].iter().any(|(m, _)| m == *v))
+        .map(|(m, _)| m)
+        .collect();
+    let rpy = variants.iter().position(|v| *v == "rpy");
+    let alone = variants.iter().position(|v| *v == "no-shielding");
+    let together = match (rpy, alone) {
+        (Some(r), Some(a)) => Some(context! {
+            rpy => cols[6][r],
+            alone => cols[6][a],
+            ratio => cols[6][r] / cols[6][a],
+            particles => facts.particles,
+        }),
+        _ => None,
+    };
+    let closest = free.iter().min_by(|a, b| a.alpha.abs().total_cmp(&b.alpha.abs())).map(|m| m.name.clone());
+    let dt_of =
+        |variant: &str| -> Result<Option<f64>, Error> { Ok(scene_of(&here, variant)?.map(|s| s.spec.integration.dt)) };
+    let (gap_value, variations_list) =
+        (spread_against_the_gap(&variants, &cols, exp_size), variations(&variants, &cols));
+    Ok(context! {
+        present => true,
+        scene => facts,
+        rpy_every => rpy_every,
+        experiment => context! { size => exp_size, velocity => exp_velocity, std => exp_velocity_std },
+        table => table,
+        models => &verdicts,
+        free => free,
+        closest => closest,
+        together => together,
+        reynolds => context! {
+            lone => reynolds(exp_velocity),
+            lone_correction => schiller_naumann_correction(reynolds(exp_velocity)),
+            fastest_velocity => fastest,
+            fastest => reynolds(fastest),
+        },
+        large => LARGE,
+        min_aggregates => MIN_AGGREGATES,
+        variations => variations_list,
+        wall => context! {
+            gap => 100.0 * WALL_GAP,
+            factor => parallel_factor(1.0 + WALL_GAP),
+            rpy_factor => rpy_wall_factor()?,
+            dt => dt_of("a-eff-wall")?,
+            spread_dt => dt_of("cv-0")?,
+            sigmas => TRUNCATION_SIGMAS,
+        },
+        gap => gap_value,
+    })
 }
 
 /// One row per drag model: its name, then the named columns.
@@ -557,26 +731,49 @@ const CASE1_MODELS: [(&str, &str); 3] = [
     ("rpy", "RPY (hydrodynamic interactions)"),
 ];
 
-/// Case 1 at 2.25 mg/ml under each drag model: the mean aggregate length at 5 ms (Table 3's
-/// number) per model, its paired change against A_eff by seed, and L(t).
-fn case1_section(runs: &[Run], reference: &Path, out: &Path, tables: &Path) -> Result<String, Error> {
+/// One case-1 drag model against A_eff: its paired change at the end and early, each ± CI95 over
+/// seeds, and whether the CI95 excludes zero.
+#[derive(Serialize)]
+struct Case1Verdict {
+    name: String,
+    seeds: f64,
+    mean: f64,
+    mean_ci: f64,
+    change: f64,
+    change_ci: f64,
+    moved: bool,
+    early: f64,
+    early_ci: f64,
+    grows: bool,
+}
+
+/// Case 1 at [`CASE1_CONCENTRATION`] under each drag model: the mean aggregate length at the end
+/// (Table 3's number) per model, its paired change against A_eff by seed, and L(t).
+fn case1_section(runs: &[Run], reference: &Path, out: &Path, tables: &Path) -> Result<Value, Error> {
     let here: Vec<&Run> = runs.iter().filter(|r| r.experiment == "hydro-case1" && r.completed()).collect();
     if here.is_empty() {
-        return Ok(String::new());
+        return Ok(context! { present => false });
     }
-    let mut md = String::from("## Case 1 under each drag model\n\n");
     let table3 = read_csv(reference)?;
-    let row = floats(&table3, "concentration_mg_per_ml")?.iter().position(|c| (c - 2.25).abs() < 1e-9).unwrap_or(2);
+    let row = floats(&table3, "concentration_mg_per_ml")?
+        .iter()
+        .position(|c| (c - CASE1_CONCENTRATION).abs() < 1e-9)
+        .unwrap_or(2);
     let at = |key: &str| floats(&table3, key).map(|v| v.get(row).copied().unwrap_or(f64::NAN));
     let (paper, paper_std, exp, exp_std) =
         (at("sim_mean_length_um")?, at("sim_std_um")?, at("exp_mean_length_um")?, at("exp_std_um")?);
     let base: Vec<&Run> = here.iter().copied().filter(|r| r.variant == "a-eff").collect();
     let (mut names, mut cols): (Vec<String>, [Vec<f64>; 10]) = (vec![], Default::default());
-    // Early growth: the frame nearest 1 ms (runs of one scene share their frame times).
+    // Early growth: the frame nearest EARLY (runs of one scene share their frame times).
     let early = base.first().map_or(0, |r| {
-        (0..r.times.len()).min_by(|&a, &b| (r.times[a] - 1e-3).abs().total_cmp(&(r.times[b] - 1e-3).abs())).unwrap_or(0)
+        (0..r.times.len())
+            .min_by(|&a, &b| (r.times[a] - EARLY).abs().total_cmp(&(r.times[b] - EARLY).abs()))
+            .unwrap_or(0)
     });
     let at_early = |r: &Run| r.mean_length.get(early).copied().unwrap_or(f64::NAN);
+    let scene = scene_of(&here, "a-eff")?.or(scene_of(&here, CASE1_MODELS[0].0)?).expect("a case-1 run");
+    let facts = scene_facts(&scene);
+    let end_ms = 1e3 * facts.end_time;
     let mut series = vec![];
     for (k, (variant, label)) in CASE1_MODELS.iter().enumerate() {
         let group: Vec<&Run> = here.iter().copied().filter(|r| r.variant == *variant).collect();
@@ -624,13 +821,13 @@ fn case1_section(runs: &[Run], reference: &Path, out: &Path, tables: &Path) -> R
     }
     for (value, label, grey) in [
         (exp, format!("experiment {exp:.0} µm (Table 3; its time is not given)"), 0),
-        (paper, format!("paper's simulation {paper:.1} µm at 5 ms"), 140),
+        (paper, format!("paper's simulation {paper:.1} µm at {end_ms} ms"), 140),
     ] {
-        series.push(Series::line(label, vec![(0.0, value), (5.0, value)], RGBColor(grey, grey, grey)));
+        series.push(Series::line(label, vec![(0.0, value), (end_ms, value)], RGBColor(grey, grey, grey)));
     }
     chart(
         &out.join("case1-length-vs-time.png"),
-        "Case 1, 2.25 mg/ml: mean aggregate length under each drag model",
+        &format!("Case 1, {CASE1_CONCENTRATION} mg/ml: mean aggregate length under each drag model"),
         ("time (ms)", "mean aggregate length (µm)"),
         &series,
         Legend::above_data(0.45),
@@ -652,21 +849,8 @@ fn case1_section(runs: &[Run], reference: &Path, out: &Path, tables: &Path) -> R
         ],
     )?;
     write(&mut df, tables, "case1_drag_models")?;
-    md += &format!(
-        "`experiments/hydrodynamics/case1-drag.toml`: the paper's case 1 at 2.25 mg/ml (`experiments/scenes/case1-c2.25.toml`: \
-         336 spheres of 11 µm in the paper's 484 µm walled box, 0.4 T and its gradient, the paper's induction, velocity Verlet \
-         at dt = 1e-8 s to 5 ms) under three drag models, the same seeds for each (RPY renewing its factor every 1000 \
-         steps). Mean length: each run's mean over its aggregates at 5 ms (single particles included, as Table 3), then the \
-         mean over seeds ± CI95 over seeds; the within-run spread is the population std over a run's aggregates, averaged \
-         over seeds (a different spread: the width of the length distribution, comparable with the paper's ± {paper_std:.1} \
-         and the experiment's ± {exp_std:.0} µm). Paired change: each seed's length against the same seed under A_eff, mean \
-         ± CI95 over seeds. Box-limited: the share of aggregates whose extent along the field is at least 0.9 of the box \
-         edge. The paired change at 1 ms compares each seed's mean length at the frame nearest 1 ms, where chains grow \
-         fastest. Wall times are medians over a model's runs, made beside other runs on the same cores. Paper's Table 3 at 2.25 mg/ml: simulation {paper:.1} µm, experiment {exp:.0} µm. Converged against: the RPY \
-         renewal interval (the case-2 study above). Not converged against: the box (the paper's, which caps chains: see \
-         the paper report's finite-size section), the stopping time (5 ms; chains still grow), seeds beyond those shown.\n\n"
-    );
-    md += &markdown(
+    let early_ms = base.first().and_then(|r| r.times.get(early)).map_or(f64::NAN, |t| 1e3 * t);
+    let table = markdown(
         &df,
         &[
             "drag model",
@@ -677,101 +861,75 @@ fn case1_section(runs: &[Run], reference: &Path, out: &Path, tables: &Path) -> R
             "box-limited",
             "paired change vs A_eff (%)",
             "± CI95",
-            "paired change at 1 ms (%)",
+            &format!("paired change at {} ms (%)", (early_ms * 1e3).round() / 1e3),
             "± CI95",
             "wall time/run (s)",
         ],
         &[0, 0, 1, 1, 1, 3, 1, 1, 1, 1, 0],
     )?;
-    md += "\n![Case 1 length against time](case1-length-vs-time.png)\n\n";
-    md += &case1_verdict(&names, &cols);
-    Ok(md)
-}
-
-/// Whether the drag model moves Table 3: each model's paired change against A_eff, and whether
-/// its CI95 excludes zero.
-fn case1_verdict(names: &[String], cols: &[Vec<f64>; 10]) -> String {
-    let mut md = String::new();
-    for k in 1..names.len() {
-        let (change, ci) = (cols[5][k], cols[6][k]);
-        let moved = if change.abs() > ci { "moves the length" } else { "does not move the length measurably" };
-        let (early, early_ci) = (cols[8][k], cols[9][k]);
-        let grows = if early.abs() > early_ci { "grows measurably differently" } else { "grows alike" };
-        md += &format!(
-            "- {}: {moved} at 5 ms against A_eff, {change:+.1} ± {ci:.1} % (paired over {} seeds), mean {:.1} ± {:.1} µm; \
-             at 1 ms it {grows}, {early:+.1} ± {early_ci:.1} %.\n",
-            names[k], cols[0][k], cols[1][k], cols[2][k]
-        );
-    }
-    md + "\n"
-}
-
-/// What each model's velocities say against the experiment, in words: the exponent, where its
-/// aggregates of five or more fall against the experiment's band (their CI95 overlapping it or
-/// not), and how fast RPY's single particles move against the lone-sphere value.
-/// α to two decimals, or why there is none (fewer than two sizes with three aggregates).
-fn slope(alpha: f64) -> String {
-    if alpha.is_finite() {
-        format!("{alpha:.2}")
-    } else {
-        "not yet fitted (too few sizes with three aggregates)".to_string()
-    }
-}
-
-fn verdict(names: &[String], cols: &[Vec<f64>; 10], exp: f64, exp_std: f64) -> String {
-    let (singles, large, large_ci, slopes) = (&cols[6], &cols[7], &cols[8], &cols[9]);
-    let mut text = String::from("Which drag model gives the measured size independence: ");
-    let parts: Vec<String> = (0..names.len())
-        .map(|k| {
-            let (v, ci) = (large[k], large_ci[k]);
-            let overlaps = v - ci <= exp + exp_std && v + ci >= exp - exp_std;
-            format!(
-                "{}: α = {}, aggregates of 5+ at {v:.1} ± {ci:.1} µm/s ({} the experiment's {:.1}–{:.1} µm/s)",
-                names[k],
-                slope(slopes[k]),
-                if !ci.is_finite() {
-                    "not yet comparable with"
-                } else if overlaps {
-                    "overlapping"
-                } else {
-                    "clear of"
-                },
-                exp - exp_std,
-                exp + exp_std
-            )
+    let verdicts: Vec<Case1Verdict> = (1..names.len())
+        .map(|k| Case1Verdict {
+            name: names[k].clone(),
+            seeds: cols[0][k],
+            mean: cols[1][k],
+            mean_ci: cols[2][k],
+            change: cols[5][k],
+            change_ci: cols[6][k],
+            moved: cols[5][k].abs() > cols[6][k],
+            early: cols[8][k],
+            early_ci: cols[9][k],
+            grows: cols[8][k].abs() > cols[9][k],
         })
         .collect();
-    text += &parts.join("; ");
-    text += ".\n\n";
-    if let (Some(rpy), Some(alone)) = (
-        names.iter().position(|n| n.contains("RPY")),
-        names.iter().position(|n| n.contains("every sphere its own drag")),
-    ) {
-        text += &format!(
-            "Under RPY even the single particles move at {:.1} µm/s, {:.1}× their {:.1} µm/s without hydrodynamic \
-             interactions: all 55 spheres are pushed the same way by the gradient, and in an unbounded fluid each carries \
-             the others along (the collective drift of a sedimenting cloud). In the experiment's closed cell the fluid \
-             they push must flow back, and the substrate holds it; free-space RPY has neither, so it too makes groups \
-             move faster than lone spheres do.\n\n",
-            singles[rpy],
-            singles[rpy] / singles[alone],
-            singles[alone]
-        );
+    Ok(context! {
+        present => true,
+        concentration => CASE1_CONCENTRATION,
+        scene => facts,
+        end_ms => end_ms,
+        early_ms => early_ms,
+        rpy_every => override_of(&here, "rpy", "forces.drag.refactor_every").unwrap_or("1"),
+        paper => context! { mean => paper, std => paper_std },
+        experiment => context! { mean => exp, std => exp_std },
+        box_fraction => BOX_LIMITED_FRACTION,
+        table => table,
+        stokes => verdicts.iter().find(|v| v.name == CASE1_MODELS[1].1),
+        verdicts => &verdicts,
+    })
+}
+
+/// A difference of independent means ± the two CI95 in quadrature; `changed` when it exceeds
+/// them, `measured` when the CI is defined.
+#[derive(Serialize, Debug)]
+struct Change {
+    d: f64,
+    ci: f64,
+    measured: bool,
+    changed: bool,
+}
+
+impl Change {
+    fn of(d: f64, ci: f64) -> Self {
+        Change { d, ci, measured: ci.is_finite(), changed: ci.is_finite() && d.abs() > ci }
     }
-    text +=
-        "What the free-fluid models leave out: the monolayer rests on its substrate, where every sphere's own drag \
-             along the wall is several times the free one and the flow one sphere drives along the wall decays with \
-             distance as r⁻³, not r⁻¹ (Blake 1971), so a chain's spheres carry each other along far less than in an \
-             unbounded fluid and each keeps nearly its own drag. Both push towards a velocity independent of size. The \
-             substrate-drag variants (opt-in) test the first; the RPY variant above the substrate (the \
-             Rotne–Prager–Blake mobility, opt-in) tests both.\n\n";
-    text
+}
+
+/// One opt-in variant against the run it varies.
+#[derive(Serialize, Debug)]
+struct Variation {
+    label: &'static str,
+    variant: &'static str,
+    base: &'static str,
+    seeds: f64,
+    size: Change,
+    velocity: Change,
+    alpha: f64,
+    base_alpha: f64,
 }
 
 /// The substrate-drag and diameter-spread variants against the free-fluid, equal-diameter runs
-/// they vary: the change of the mean size and of the velocity of aggregates of 5+, each ± the
-/// CI95 of a difference of independent means (the two CI95 half-widths in quadrature).
-fn variations(variants: &[&str], cols: &[Vec<f64>; 10]) -> String {
+/// they vary: the change of the mean size and of the velocity of aggregates of [`LARGE`]+, each
+/// ± the CI95 of a difference of independent means (the two CI95 half-widths in quadrature).
+fn variations(variants: &[&str], cols: &[Vec<f64>; 10]) -> Vec<Variation> {
     let at = |v: &str| variants.iter().position(|&x| x == v);
     let pairs = [
         ("a-eff-wall", "a-eff", "A_eff with the substrate's drag"),
@@ -784,77 +942,67 @@ fn variations(variants: &[&str], cols: &[Vec<f64>; 10]) -> String {
         ("cv-10", "cv-0", "A_eff, cv 10 %"),
         ("cv-20", "cv-0", "A_eff, cv 20 %"),
     ];
-    let lines: Vec<String> = pairs
+    pairs
         .iter()
-        .filter_map(|&(v, base, label)| Some((at(v)?, at(base)?, base, label)))
-        .map(|(k, b, base, label)| {
-            let change = |m: usize, c: usize| (cols[m][k] - cols[m][b], cols[c][k].hypot(cols[c][b]));
-            let ((ds, ds_ci), (dv, dv_ci)) = (change(2, 3), change(7, 8));
-            let word = |d: f64, ci: f64, decimals: usize, unit: &str| match () {
-                _ if !ci.is_finite() => "is not yet measured (fewer than two seeds with a value)".to_string(),
-                _ if d.abs() > ci => format!("changes ({d:+.decimals$} ± {ci:.decimals$} {unit})"),
-                _ => format!("does not change measurably ({d:+.decimals$} ± {ci:.decimals$} {unit})"),
-            };
-            format!(
-                "- {label} ({} seeds) against `{base}`: the mean size {}, the velocity of aggregates of 5+ {}, slope α {} \
-                 against {}.\n",
-                cols[0][k],
-                word(ds, ds_ci, 2, "particles"),
-                word(dv, dv_ci, 1, "µm/s"),
-                slope(cols[9][k]),
-                slope(cols[9][b])
-            )
+        .filter_map(|&(v, base, label)| Some((at(v)?, at(base)?, v, base, label)))
+        .map(|(k, b, variant, base, label)| {
+            let change = |m: usize, c: usize| Change::of(cols[m][k] - cols[m][b], cols[c][k].hypot(cols[c][b]));
+            Variation {
+                label,
+                variant,
+                base,
+                seeds: cols[0][k],
+                size: change(2, 3),
+                velocity: change(7, 8),
+                alpha: cols[9][k],
+                base_alpha: cols[9][b],
+            }
         })
-        .collect();
-    if lines.is_empty() {
-        return String::new();
-    }
-    format!(
-        "The opt-in variants against the runs they vary (differences of independent means, ± the two CI95 in \
-         quadrature). The substrate variants re-derive M so that a single sphere still moves at 7.5 µm/s under the \
-         wall-corrected drag (a 1 % gap, f = 3.38; RPY above the substrate has its own, f = 1.98 at the same gap: \
-         the far-field tensor has no lubrication) and run at dt = 2.5e-8 s (their stronger contacts need it), against \
-         the free-fluid runs at 5e-8 s; those marked *the scene's M* keep the free-fluid M instead (a lone sphere then \
-         moves at 7.5/f µm/s) and are set against their re-derived twin, so that they show what the magnetisation \
-         alone changes. The spread variants keep the scene's M, draw each diameter from a normal law \
-         truncated at ±3σ about 5.5 µm (the experiment's spread is not given), raise the lid to the largest diameter, \
-         add gravity to hold the monolayer on its substrate and run at dt = 2.5e-8 s; they are set against cv 0 % in the \
-         same set-up.\n\n{}\n",
-        lines.concat()
-    )
+        .collect()
 }
 
 /// The paper's explanation of its case-2 gap (constant diameters, where the experiment's were
-/// spread) against the gap itself: the experiment's mean size less that of equal diameters, and
-/// the largest change of the mean size the spread variants allow, in either direction (the far
-/// end of the CI95 of their difference to cv 0 %).
-fn spread_against_the_gap(variants: &[&str], cols: &[Vec<f64>; 10], experiment_size: f64) -> String {
+/// spread) against the gap itself.
+#[derive(Serialize, Debug)]
+struct SpreadGap {
+    experiment: f64,
+    equal: f64,
+    equal_ci: f64,
+    gap: f64,
+    /// The largest change of the mean size the spread variants allow, in either direction (the
+    /// far end of the CI95 of their difference to cv 0 %), and at which cv (%).
+    bound: f64,
+    cv: u32,
+    share: f64,
+    widest: u32,
+    closes: bool,
+}
+
+/// The experiment's mean size less that of equal diameters, and the largest change of the mean
+/// size the spread variants allow; `None` without cv 0 % or a spread with a finite bound.
+fn spread_against_the_gap(variants: &[&str], cols: &[Vec<f64>; 10], experiment_size: f64) -> Option<SpreadGap> {
     let at = |v: &str| variants.iter().position(|&x| x == v);
-    let Some(base) = at("cv-0") else { return String::new() };
+    let base = at("cv-0")?;
     let allowed: Vec<(f64, u32)> = [5, 10, 20]
         .iter()
         .filter_map(|&cv| at(&format!("cv-{cv}")).map(|k| (cv, k)))
         .map(|(cv, k)| ((cols[2][k] - cols[2][base]).abs() + cols[3][k].hypot(cols[3][base]), cv))
         .filter(|(bound, _)| bound.is_finite())
         .collect();
-    let Some(&(bound, cv)) = allowed.iter().max_by(|a, b| a.0.total_cmp(&b.0)) else { return String::new() };
+    let &(bound, cv) = allowed.iter().max_by(|a, b| a.0.total_cmp(&b.0))?;
     let widest = allowed.iter().map(|&(_, cv)| cv).max().unwrap_or(cv);
     let gap = experiment_size - cols[2][base];
-    let measured = format!(
-        "The paper explains its case-2 gap by its constant diameters, where the experiment's were spread. The \
-         experiment's mean size is {experiment_size} particles; equal diameters give {:.2} ± {:.2}",
-        cols[2][base], cols[3][base],
-    );
-    if gap <= 0.0 {
-        return format!("{measured}: they already reach it, and there is no gap for a spread to close.\n\n");
-    }
-    format!(
-        "{measured}, a gap of {gap:.1} particles. The largest change of the mean size the spread variants allow, in \
-         either direction (the far end of the CI95 of their difference to cv 0 %), is {bound:.2} particles (cv {cv} %), \
-         {:.0} % of the gap: a spread of diameters up to {widest} % {} the gap.\n\n",
-        100.0 * bound / gap,
-        if bound < gap { "does not close" } else { "could close" },
-    )
+    Some(SpreadGap {
+        experiment: experiment_size,
+        equal: cols[2][base],
+        equal_ci: cols[3][base],
+        gap,
+        bound,
+        cv,
+        share: 100.0 * bound / gap,
+        widest,
+        closes: bound >= gap,
+    })
 }
 
 #[cfg(test)]
@@ -862,8 +1010,8 @@ mod tests {
     use super::*;
 
     /// Each variant is set against the run it varies (the wall variants against their free-fluid
-    /// model, the spreads against equal diameters in the same set-up), the difference ± the two CI95 in quadrature, and called
-    /// a change only when the difference exceeds that.
+    /// model, the spreads against equal diameters in the same set-up), the difference ± the two
+    /// CI95 in quadrature, and called a change only when the difference exceeds that.
     #[test]
     fn variations_compare_each_variant_with_the_runs_it_varies() {
         let variants = ["a-eff", "no-shielding", "a-eff-wall", "cv-0", "cv-10", "cv-20"];
@@ -881,27 +1029,46 @@ mod tests {
         for row in rows {
             row.iter().zip(cols.iter_mut()).for_each(|(v, c)| c.push(*v));
         }
-        let text = variations(&variants, &cols);
-        let wall = text.lines().find(|l| l.contains("substrate's drag (10")).expect("the wall variant's line");
-        assert!(wall.contains("against `a-eff`"), "{wall}");
+        let list = variations(&variants, &cols);
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-9;
+        let wall = list.iter().find(|v| v.variant == "a-eff-wall").expect("the wall variant");
+        assert_eq!((wall.base, wall.seeds), ("a-eff", 10.0));
         // Size: -0.1 ± 0.5 (no change); velocity of 5+: -24.0 ± 8.5 (a change).
-        assert!(wall.contains("the mean size does not change measurably (-0.10 ± 0.50"), "{wall}");
-        assert!(wall.contains("5+ changes (-24.0 ± 8.5 µm/s)"), "{wall}");
-        let spread = text.lines().find(|l| l.contains("cv 10 %")).expect("the spread variant's line");
-        assert!(spread.contains("against `cv-0`: the mean size changes (+1.00 ± 0.50"), "{spread}");
-        assert!(!text.contains("cv 5 %") && !text.contains("no shielding with"), "variants without runs are left out");
-        let unmeasured = text.lines().find(|l| l.contains("cv 20 %")).expect("the cv 20 % line");
-        assert!(unmeasured.contains("5+ is not yet measured"), "{unmeasured}");
-        assert!(!text.contains("NaN"), "{text}");
+        assert!(close(wall.size.d, -0.1) && close(wall.size.ci, 0.5) && !wall.size.changed, "{wall:?}");
+        assert!(close(wall.velocity.d, -24.0) && close(wall.velocity.ci, 8.0f64.hypot(3.0)), "{wall:?}");
+        assert!(wall.velocity.changed && wall.velocity.measured);
+        let spread = list.iter().find(|v| v.variant == "cv-10").expect("the spread variant");
+        assert_eq!(spread.base, "cv-0");
+        assert!(close(spread.size.d, 1.0) && close(spread.size.ci, 0.5) && spread.size.changed, "{spread:?}");
+        assert!(list.iter().all(|v| v.variant != "cv-5" && v.variant != "no-shielding-wall"), "no runs, no line");
+        let unmeasured = list.iter().find(|v| v.variant == "cv-20").expect("the cv 20 % line");
+        assert!(!unmeasured.velocity.measured && !unmeasured.velocity.changed, "{unmeasured:?}");
         assert!(variations(&variants[..2], &cols).is_empty());
         // Gap 7 − 2.6 = 4.4; cv 10 %: |3.6 − 2.6| + 0.5 = 1.5, cv 20 %: 0.1 + 0.5 = 0.6.
-        let gap = spread_against_the_gap(&variants, &cols, 7.0);
-        assert!(gap.contains("mean size is 7 particles") && gap.contains("a gap of 4.4 particles"), "{gap}");
-        assert!(gap.contains("is 1.50 particles (cv 10 %), 34 %"), "{gap}");
-        assert!(gap.contains("up to 20 % does not close the gap"), "{gap}");
-        assert!(spread_against_the_gap(&variants[..5], &cols, 7.0).contains("up to 10 %"), "the widest spread run");
-        assert!(spread_against_the_gap(&variants, &cols, 2.5).contains("no gap"), "{gap}");
-        assert!(spread_against_the_gap(&variants[..3], &cols, 7.0).is_empty(), "no cv 0 %, no comparison");
+        let gap = spread_against_the_gap(&variants, &cols, 7.0).expect("cv 0 % and spreads");
+        assert!(close(gap.gap, 4.4) && close(gap.bound, 1.5) && gap.cv == 10, "{gap:?}");
+        assert!((gap.share - 34.09).abs() < 0.01 && gap.widest == 20 && !gap.closes, "{gap:?}");
+        assert_eq!(spread_against_the_gap(&variants[..5], &cols, 7.0).map(|g| g.widest), Some(10));
+        assert!(spread_against_the_gap(&variants, &cols, 2.5).is_some_and(|g| g.gap <= 0.0));
+        assert!(spread_against_the_gap(&variants[..3], &cols, 7.0).is_none(), "no cv 0 %, no comparison");
+    }
+
+    /// The template renders the variants' words from their data: a change, no measurable change,
+    /// and an unmeasured one.
+    #[test]
+    fn the_template_words_each_kind_of_change() {
+        let env = crate::report::template::environment();
+        let text = r#"{% from "hydrodynamics/macros.md" import change %}{{ change(a, 2, "particles") }}|{{ change(b, 1, "µm/s") }}|{{ change(c, 1, "µm/s") }}"#;
+        let out = env
+            .render_str(
+                text,
+                context! { a => Change::of(1.0, 0.5), b => Change::of(-0.1, 0.5), c => Change::of(3.0, f64::NAN) },
+            )
+            .unwrap();
+        assert_eq!(
+            out,
+            "changes (+1.00 ± 0.50 particles)|does not change measurably (−0.1 ± 0.5 µm/s)|is not yet measured (fewer than two seeds with a value)"
+        );
     }
 
     /// Velocities growing as n^0.7 give the exponent 0.7; a size seen fewer than three times is

@@ -3,8 +3,8 @@
 
 pub mod convergence;
 pub mod digest;
-pub mod figures;
 pub mod hydrodynamics;
 pub mod paper;
 pub mod runs;
 pub mod tables;
+pub mod template;
