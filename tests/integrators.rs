@@ -157,11 +157,11 @@ fn accuracy_study_observes_the_orders() {
         row.split('|').nth(2).unwrap().trim().to_string()
     };
     let num = |s: String| s.parse::<f64>().unwrap();
-    assert!((num(order("dipoles", "velocity-verlet")) - 1.0).abs() < 0.1);
-    assert!((num(order("dipoles", "exponential-verlet")) - 2.0).abs() < 0.1);
-    assert!((num(order("dipoles", "explicit-euler")) - 1.0).abs() < 0.1);
-    assert_eq!(order("terminal", "exponential-verlet"), "exact");
-    assert!(num(order("hertz", "velocity-verlet")) > 1.8);
+    assert!((num(order("Two dipoles", "velocity-verlet")) - 1.0).abs() < 0.1);
+    assert!((num(order("Two dipoles", "exponential-verlet")) - 2.0).abs() < 0.1);
+    assert!((num(order("Two dipoles", "explicit-euler")) - 1.0).abs() < 0.1);
+    assert_eq!(order("Terminal velocity", "exponential-verlet"), "exact");
+    assert!(num(order("Hertz impact", "velocity-verlet")) > 1.8);
     assert!(dir.join("convergence-dipoles.png").exists());
 }
 

@@ -12,8 +12,10 @@
 //! from 1/32 of the estimate; the largest stable dt is the last one before the first failure.
 
 use crate::core::integrators::Scheme;
-use crate::plot::{line_chart_with_legend, palette, RGBColor, Series, SeriesLabelPosition};
+use crate::plot::{line_chart_with_legend, palette, Legend, RGBColor, Series};
 use crate::scene::Scene;
+use minijinja::context;
+use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -31,12 +33,37 @@ pub const SCHEMES: [Scheme; 5] = [
 const RESPA_K: u64 = 10;
 pub const MODULI: [f64; 6] = [1e6, 1e7, 1e8, 1e9, 1e10, 1e11];
 pub const FIELDS: [f64; 4] = [0.005, 0.05, 0.4, 1.5];
+/// The map's restitution coefficient.
+pub const RESTITUTION: f64 = 0.5;
+/// A run lasts a gap's travel plus this many contact durations.
+pub const CONTACT_DURATIONS: f64 = 20.0;
+/// Physical bounds of a stable collision: closing speed below `SPEED_MARGIN` × the expected
+/// impact speed, overlap below `OVERLAP_MARGIN` × Hertz's at that speed.
+pub const SPEED_MARGIN: f64 = 1.5;
+pub const OVERLAP_MARGIN: f64 = 2.0;
+/// The dt scan: `GRID_POINTS` steps by factors of √2 from 1/`START_DIVISOR` of the estimate,
+/// below 1/`RUN_DIVISOR` of the run.
+pub const START_DIVISOR: f64 = 32.0;
+pub const GRID_POINTS: i32 = 24;
+pub const RUN_DIVISOR: f64 = 4.0;
+/// A dt that needs more steps than this is counted stable without a run.
+pub const MAX_STEPS: f64 = 2e6;
+/// The solver's overlap limit in the map's scenes (of the smaller diameter).
+pub const MAX_OVERLAP: f64 = 0.5;
+/// Slowest closing speed the map starts a pair at (m/s).
+pub const MIN_SPEED: f64 = 1e-3;
+/// The paper's setting: explicit Euler with E = `PAPER_E` (Pa) at dt = `PAPER_DT` (s).
+pub const PAPER_E: f64 = 1e9;
+pub const PAPER_DT: f64 = 1e-6;
+/// The cut-off study's scene (case 1) at this concentration (mg/ml) and field (T).
+pub const CUTOFF_CONCENTRATION: f64 = 4.5;
+pub const CUTOFF_FIELD: f64 = 0.4;
 
 type Error = Box<dyn std::error::Error>;
 
-/// The case-1 species with restitution 0.5.
+/// The case-1 species with restitution [`RESTITUTION`].
 fn species(youngs_modulus: f64, extra: &str) -> String {
-    super::fe3o4(youngs_modulus, 0.5, extra)
+    super::fe3o4(youngs_modulus, RESTITUTION, extra)
 }
 
 const WATER: &str = "[fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n";
@@ -53,7 +80,7 @@ fn collision(scheme: Scheme, youngs_modulus: f64, b0: f64, dt: f64, speed: f64, 
          [[particles]]\nspecies = \"p\"\npositions = [[-1.1e-5, 0.0, 0.0], [1.1e-5, 0.0, 0.0]]\n\
          velocities = [[{v:e}, 0.0, 0.0], [-{v:e}, 0.0, 0.0]]\n[forces.contact]\n[forces.dipole]\ninduction = \"exact\"\n\
          [forces.drag]\nlaw = \"stokes\"\nshielding = \"none\"\n[integration]\nscheme = \"{scheme}\"\nslow_every = {slow_every}\ndt = {dt:e}\nend_time = {end:e}\n\
-         [output]\ninterval = {end:e}\n[stability]\nmax_overlap = 0.5\nmax_step_fraction = 1.0\n",
+         [output]\ninterval = {end:e}\n[stability]\nmax_overlap = {MAX_OVERLAP:?}\nmax_step_fraction = 1.0\n",
         species(youngs_modulus, ""),
         v = 0.5 * speed
     )
@@ -91,7 +118,7 @@ fn stable(scheme: Scheme, e: f64, b0: f64, dt: f64, speed: f64, end: f64) -> boo
     // Physical bounds of the collision: the closing speed cannot exceed what the field adds to
     // the initial speed (the estimate's impact speed is already that bound; 1.5× leaves room for
     // its approximations), and the overlap cannot exceed Hertz's at that speed by much.
-    let (speed_limit, overlap_limit) = (1.5 * speed, 2.0 * hertz_overlap(e, 1.5 * speed));
+    let (speed_limit, overlap_limit) = (SPEED_MARGIN * speed, OVERLAP_MARGIN * hertz_overlap(e, SPEED_MARGIN * speed));
     while sim.state.step < scene.total_steps() {
         if sim.step().is_err() {
             return false;
@@ -110,22 +137,24 @@ pub fn map_point(scheme: Scheme, e: f64, b0: f64) -> Result<MapPoint, String> {
     // The estimate at rest gives the impact speed the field produces; the scan then starts the
     // particles at that speed.
     let probe = Scene::parse(&collision(scheme, e, b0, 1e-9, 0.0, 1e-6), "stability map").map_err(|e| e.to_string())?;
-    let speed = probe.estimate.impact_speed.max(1e-3);
+    let speed = probe.estimate.impact_speed.max(MIN_SPEED);
     let scene =
         Scene::parse(&collision(scheme, e, b0, 1e-9, speed, 1e-6), "stability map").map_err(|e| e.to_string())?;
     let est = &scene.estimate;
     let contact = est.contact_duration.unwrap_or(est.rayleigh_time);
-    let end = 1.1e-5 / speed + 20.0 * contact;
-    let start = est.stable_dt / 32.0;
-    let grid: Vec<f64> = (0..24).map(|k| start * 2f64.powf(k as f64 / 2.0)).filter(|&dt| dt < end / 4.0).collect();
-    let results: Vec<bool> = grid.iter().map(|&dt| end / dt > 2e6 || stable(scheme, e, b0, dt, speed, end)).collect();
+    let end = 1.1e-5 / speed + CONTACT_DURATIONS * contact;
+    let start = est.stable_dt / START_DIVISOR;
+    let grid: Vec<f64> =
+        (0..GRID_POINTS).map(|k| start * 2f64.powf(k as f64 / 2.0)).filter(|&dt| dt < end / RUN_DIVISOR).collect();
+    let results: Vec<bool> =
+        grid.iter().map(|&dt| end / dt > MAX_STEPS || stable(scheme, e, b0, dt, speed, end)).collect();
     let first_failure = results.iter().position(|ok| !ok);
     let measured = match first_failure {
         Some(0) => {
             // Unstable already at 1/32 of the estimate: scan down.
             (1..12)
                 .map(|k| start / 2f64.powf(k as f64 / 2.0))
-                .find(|&dt| end / dt > 2e6 || stable(scheme, e, b0, dt, speed, end))
+                .find(|&dt| end / dt > MAX_STEPS || stable(scheme, e, b0, dt, speed, end))
                 .unwrap_or(f64::NAN)
         }
         Some(k) => grid[k - 1],
@@ -266,7 +295,7 @@ fn dipole_forces(
     let list = positions.iter().map(|x| format!("[{:e}, {:e}, {:e}]", x[0], x[1], x[2])).collect::<Vec<_>>().join(", ");
     let cut = cutoff.map_or(String::new(), |c| format!("cutoff_diameters = {c}\n"));
     let text = format!(
-        "version = 1\n[domain]\nlo = [0.0, 0.0, 0.0]\nhi = [3.96e-4, 3.96e-4, 3.3e-4]\n[field]\nb0 = [0.4, 0.0, 0.0]\n{}\
+        "version = 1\n[domain]\nlo = [0.0, 0.0, 0.0]\nhi = [3.96e-4, 3.96e-4, 3.3e-4]\n[field]\nb0 = [{CUTOFF_FIELD:e}, 0.0, 0.0]\n{}\
          [[particles]]\nspecies = \"p\"\npositions = [{list}]\n[forces.dipole]\ninduction = \"{induction}\"\n{cut}\
          [integration]\ndt = 1.0e-8\nend_time = 1.0e-8\n",
         species(1e9, "")
@@ -280,14 +309,22 @@ fn dipole_forces(
     Ok(state.fields.force)
 }
 
+/// The cut-off study's settings the report names.
+const PAPER_SCHEME: &str = "paper induction, 15 d force cut-off (the paper's scheme)";
+const EXACT_CUT: &str = "exact induction, 15 d force cut-off";
+const NO_INDUCTION: &str = "no induction, all pairs";
+
 /// Relative errors (RMS over particles of |F − F_ref| / RMS |F_ref|, and the largest per
 /// particle relative to RMS |F_ref|) of induction/cut-off settings against exact induction over
 /// all pairs, on the case-1 box at 4.5 mg/ml: random placement, and the same particles gathered
 /// into chains along the field.
 pub fn cutoff_errors() -> Result<Vec<(String, &'static str, f64, f64)>, Error> {
     let scene = Scene::parse(
-        &std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/scenes/case1-c4.5.toml"))?,
-        "case1-c4.5",
+        &std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join(format!("experiments/scenes/case1-c{CUTOFF_CONCENTRATION}.toml")),
+        )?,
+        "cut-off scene",
     )?;
     let random: Vec<[f64; 3]> = scene.initial.position.iter().map(|x| [x.x, x.y, x.z]).collect();
     // Chains of 10 touching spheres along x from the first tenth of the random positions.
@@ -320,11 +357,11 @@ pub fn cutoff_errors() -> Result<Vec<(String, &'static str, f64, f64)>, Error> {
         let reference = dipole_forces(positions, "exact", None)?;
         let scale = (reference.iter().map(|f| f.norm_squared()).sum::<f64>() / reference.len() as f64).sqrt();
         for (label, induction, cutoff) in [
-            ("paper induction, 15 d force cut-off (the paper's scheme)", "paper", Some(15.0)),
+            (PAPER_SCHEME, "paper", Some(15.0)),
             ("paper induction, 10 d force cut-off", "paper", Some(10.0)),
             ("paper induction, all pairs", "paper", None),
-            ("exact induction, 15 d force cut-off", "exact", Some(15.0)),
-            ("no induction, all pairs", "none", None),
+            (EXACT_CUT, "exact", Some(15.0)),
+            (NO_INDUCTION, "none", None),
         ] {
             let forces = dipole_forces(positions, induction, cutoff)?;
             let diffs: Vec<f64> = forces.iter().zip(&reference).map(|(f, r)| (f - r).norm()).collect();
@@ -336,33 +373,27 @@ pub fn cutoff_errors() -> Result<Vec<(String, &'static str, f64, f64)>, Error> {
     Ok(rows)
 }
 
-/// One scheme's part of the stability map: its table and its figure.
-fn map_section(dir: &Path, points: &[MapPoint], scheme: Scheme) -> Result<String, Error> {
-    let mut md = String::new();
-    let _ = writeln!(md, "### {scheme}\n\n| E (Pa) | B0 (T) | impact speed (m/s) | Rayleigh time (s) | estimate (s) | measured (s) | measured / estimate |\n|---|---|---|---|---|---|---|");
+/// One scheme's part of the stability map: its table and its figure (file name).
+fn map_section(dir: &Path, points: &[MapPoint], scheme: Scheme) -> Result<minijinja::Value, Error> {
+    let mut table = String::from("| E (Pa) | B0 (T) | impact speed (m/s) | Rayleigh time (s) | estimate (s) | measured (s) | measured / estimate |\n|---|---|---|---|---|---|---|\n");
     let mut series = vec![];
+    let mut lower_bounds = vec![];
     for (k, &b) in FIELDS.iter().enumerate() {
         let here: Vec<&MapPoint> = points.iter().filter(|p| p.scheme == scheme && p.b0 == b).collect();
         for p in &here {
-            let measured = if p.measured.is_nan() {
-                "none: no dt kept the overlap physical (soft spheres at this speed)".to_string()
+            let (measured, ratio) = if p.measured.is_nan() {
+                ("none stable".to_string(), "–".to_string())
             } else {
-                format!(
-                    "{}{:.2e}{}",
-                    if p.at_grid_top { "≥ " } else { "" },
-                    p.measured,
-                    if p.non_monotonic { " ✱" } else { "" }
+                let bound = if p.at_grid_top { "≥ " } else { "" };
+                (
+                    format!("{bound}{:.2e}{}", p.measured, if p.non_monotonic { " ✱" } else { "" }),
+                    format!("{bound}{:.2}", p.measured / p.estimate),
                 )
             };
             let _ = writeln!(
-                md,
-                "| {:.0e} | {} | {:.2e} | {:.2e} | {:.2e} | {measured} | {:.2} |",
-                p.youngs_modulus,
-                p.b0,
-                p.impact_speed,
-                p.rayleigh,
-                p.estimate,
-                p.measured / p.estimate
+                table,
+                "| {:.0e} | {} | {:.2e} | {:.2e} | {:.2e} | {measured} | {ratio} |",
+                p.youngs_modulus, p.b0, p.impact_speed, p.rayleigh, p.estimate
             );
         }
         series.push(Series::markers(
@@ -379,7 +410,10 @@ fn map_section(dir: &Path, points: &[MapPoint], scheme: Scheme) -> Result<String
             here.iter().map(|p| (p.youngs_modulus.log10(), p.estimate.log10())).collect(),
             palette(k),
         ));
+        lower_bounds
+            .extend(here.iter().filter(|p| p.at_grid_top).map(|p| (p.youngs_modulus.log10(), p.measured.log10())));
     }
+    series.push(Series::markers("lower bound (largest dt scanned was stable)", lower_bounds, RGBColor(0, 0, 0), 9));
     let rayleigh: Vec<(f64, f64)> = points
         .iter()
         .filter(|p| p.scheme == scheme && p.b0 == FIELDS[0])
@@ -387,7 +421,12 @@ fn map_section(dir: &Path, points: &[MapPoint], scheme: Scheme) -> Result<String
         .collect();
     series.push(Series::line("Rayleigh time", rayleigh, palette(6)));
     if scheme == Scheme::ExplicitEuler {
-        series.push(Series::markers("the paper: E = 1e9 Pa, dt = 1e-6 s", vec![(9.0, -6.0)], RGBColor(0, 0, 0), 8));
+        series.push(Series::markers(
+            format!("the paper: E = {PAPER_E:.0e} Pa, dt = {PAPER_DT:.0e} s"),
+            vec![(PAPER_E.log10(), PAPER_DT.log10())],
+            RGBColor(0, 0, 0),
+            4,
+        ));
     }
     let figure = format!("stability-{scheme}.png");
     line_chart_with_legend(
@@ -396,13 +435,47 @@ fn map_section(dir: &Path, points: &[MapPoint], scheme: Scheme) -> Result<String
         "log10 Young's modulus (Pa)",
         "log10 dt (s)",
         &series,
-        SeriesLabelPosition::LowerLeft,
+        Legend::above_data(1.0),
     )?;
-    let _ = writeln!(md, "\n![{scheme}]({figure})\n");
-    Ok(md)
+    Ok(context! { scheme => scheme.name(), table => table, figure => figure })
 }
 
-/// Runs the whole study and writes `dir/stability.md` with its figures.
+/// Where the paper's setting lies against one measured bound.
+#[derive(Serialize)]
+pub struct PaperPoint {
+    pub b0: f64,
+    pub measured: f64,
+    /// The bound is only a lower bound: the scan's largest dt was stable.
+    pub lower_bound: bool,
+}
+
+/// The paper's setting against the explicit-Euler map at E = [`PAPER_E`], by field: the fields
+/// where `PAPER_DT` is above the measured bound, where no scanned dt was stable, where it is at or
+/// below the bound, and where it is above a bound that is only a lower bound (undecided).
+pub fn paper_setting(points: &[MapPoint]) -> (Vec<PaperPoint>, Vec<PaperPoint>, Vec<PaperPoint>, Vec<PaperPoint>) {
+    let (mut above, mut none, mut below, mut undecided) = (vec![], vec![], vec![], vec![]);
+    for p in points.iter().filter(|p| p.scheme == Scheme::ExplicitEuler && p.youngs_modulus == PAPER_E) {
+        let point = PaperPoint { b0: p.b0, measured: p.measured, lower_bound: p.at_grid_top };
+        if p.measured.is_nan() {
+            none.push(point);
+        } else if PAPER_DT <= p.measured {
+            below.push(point);
+        } else if p.at_grid_top {
+            undecided.push(point);
+        } else {
+            above.push(point);
+        }
+    }
+    (above, none, below, undecided)
+}
+
+fn min_max(xs: impl Iterator<Item = f64>) -> minijinja::Value {
+    let (lo, hi) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)));
+    context! { min => lo, max => hi }
+}
+
+/// Runs the whole study and writes `dir/stability.md` (from `templates/accuracy/stability.md`)
+/// with its figures.
 pub fn study(dir: &Path) -> Result<String, Error> {
     use rayon::prelude::*;
     std::fs::create_dir_all(dir)?;
@@ -415,51 +488,80 @@ pub fn study(dir: &Path) -> Result<String, Error> {
         .map(|&(s, e, b)| map_point(s, e, b))
         .collect::<Result<_, String>>()
         .map_err(|e| e.to_string())?;
-    let mut md = format!(
-        "# Stability: the largest stable time step, stiff and extreme cases\n\n\
-         Generated by `magdem study stability` (magdem {}, commit {}).\n\n## Stability map\n\n{}\n\n",
-        env!("CARGO_PKG_VERSION"),
-        env!("MAGDEM_GIT_COMMIT"),
-        "Two 11 µm Fe3O4 spheres one diameter apart along the field, closing at the impact speed magdem's estimate expects \
-         for the field (its magnetic energy at contact into motion, capped by drag), Stokes drag, exact induction, e = 0.5. \
-         A step is stable when the run reaches a gap's travel plus 20 contact durations without a stop of the solver's \
-         monitor (non-finite values, overlap above half a diameter, a particle moving more than its radius in a step) and, at \
-         every step, the closing speed stays below 1.5× the expected impact speed and the overlap below twice Hertz's at that \
-         speed. dt is scanned by factors of √2 from 1/32 of the estimate up to 90× it or a quarter of the run; *measured* is \
-         the last stable dt before the first failure (≥: the scan's top was still stable; ✱: a larger dt was stable again — \
-         stability is not monotonic there). *estimate* is what `magdem validate` prints (the contact \
-         oscillator bound at the expected impact: 2ζ/ω for explicit Euler, 2/ω(√(1+ζ²) − ζ) for the others; 2τ of drag \
-         for all but exponential Verlet). `respa` evaluates the moments and dipole forces every 10 steps (the paper \
-         scenes' setting); its estimate adds the bound 2/(K ω_m) of the magnetic attraction between touching \
-         spheres, a spring of stiffness 12 μ0 m²/(2π d⁵) held over K steps (ω_m with the reduced mass), which sets \
-         the plateau at strong fields. `adaptive-verlet` is not mapped: its dt is only a cap that its error control splits into \
-         substeps as contacts need (tests/integrators.rs checks that it resolves a stiff impact at a cap far above the \
-         fixed-step bound)."
-    );
-    for scheme in SCHEMES {
-        md += &map_section(dir, &points, scheme)?;
+    let sections: Vec<minijinja::Value> =
+        SCHEMES.iter().map(|&s| map_section(dir, &points, s)).collect::<Result<_, Error>>()?;
+    let found: Vec<&MapPoint> = points.iter().filter(|p| p.measured.is_finite() && !p.at_grid_top).collect();
+    let bounded: Vec<&MapPoint> = points.iter().filter(|p| p.at_grid_top).collect();
+    let none: Vec<&MapPoint> = points.iter().filter(|p| p.measured.is_nan()).collect();
+    let unsafe_points: Vec<minijinja::Value> = found
+        .iter()
+        .filter(|p| p.measured < p.estimate)
+        .map(|p| {
+            context! { scheme => p.scheme.name(), e => p.youngs_modulus, b0 => p.b0, ratio => p.measured / p.estimate }
+        })
+        .collect();
+    let (above, no_stable, below, undecided) = paper_setting(&points);
+    let extremes = extremes();
+    let mut extremes_table = String::from("| case | setting | outcome |\n|---|---|---|\n");
+    for e in &extremes {
+        let _ = writeln!(extremes_table, "| {} | {} | {} |", e.name, e.setting, e.outcome.replace('|', "/"));
     }
-    let ratio: Vec<f64> = points.iter().map(|p| p.measured / p.estimate).filter(|r| r.is_finite()).collect();
-    let (lo, hi) = (ratio.iter().copied().fold(f64::INFINITY, f64::min), ratio.iter().copied().fold(0.0, f64::max));
-    let _ = writeln!(
-        md,
-        "Over all {} points the measured largest stable dt is {lo:.2}–{hi:.2} times the estimate. The paper's setting (explicit \
-         Euler, E = 1e9 Pa, dt = 1e-6 s) lies above the measured bound at every field; in the case-1 ensemble it stops at its \
-         first step (reports/paper, sensitivity).\n",
-        points.len()
-    );
-    md += "## Stiff and extreme cases\n\nEach run to its end or to the solver's own stop (never NaN or silent nonsense: a stop \
-           names what happened, when, and the stable step it estimates).\n\n| case | setting | outcome |\n|---|---|---|\n";
-    for e in extremes() {
-        let _ = writeln!(md, "| {} | {} | {} |", e.name, e.setting, e.outcome.replace('|', "/"));
+    let count = |prefix: &str| extremes.iter().filter(|e| e.outcome.starts_with(prefix)).count();
+    let cutoff = cutoff_errors()?;
+    let mut cutoff_table = String::from("| configuration | setting | RMS error | largest error |\n|---|---|---|---|\n");
+    for (layout, label, rms, max) in &cutoff {
+        let _ = writeln!(cutoff_table, "| {layout} | {label} | {rms:.2e} | {max:.2e} |");
     }
-    md += "\n## Cut-off error of the dipole sum\n\nDipole forces on the case-1 particles at 4.5 mg/ml (0.4 T) against exact \
-           induction over all pairs; the paper's scheme iterated to its own fixed point (its moments converge over steps). \
-           Error: RMS over particles of |F − F_exact| relative to the RMS force, and the largest single-particle error on the \
-           same scale.\n\n| configuration | setting | RMS error | largest error |\n|---|---|---|---|\n";
-    for (layout, label, rms, max) in cutoff_errors()? {
-        let _ = writeln!(md, "| {layout} | {label} | {rms:.2e} | {max:.2e} |");
-    }
+    let pick = |label: &str| {
+        cutoff.iter().filter(|r| r.1 == label).map(|r| context! { rms => r.2, max => r.3 }).collect::<Vec<_>>()
+    };
+    let md = crate::report::template::render(
+        "accuracy/stability.md",
+        &context! {
+            version => env!("CARGO_PKG_VERSION"),
+            commit => env!("MAGDEM_GIT_COMMIT"),
+            restitution => RESTITUTION,
+            contact_durations => CONTACT_DURATIONS,
+            speed_margin => SPEED_MARGIN,
+            overlap_margin => OVERLAP_MARGIN,
+            start_divisor => START_DIVISOR,
+            grid_top => 2f64.powf((GRID_POINTS - 1) as f64 / 2.0) / START_DIVISOR,
+            run_divisor => RUN_DIVISOR,
+            down_divisor => START_DIVISOR * 2f64.powf(5.5),
+            max_steps => MAX_STEPS,
+            max_overlap => MAX_OVERLAP,
+            respa_k => RESPA_K,
+            moduli => MODULI.iter().map(|e| format!("{e:.0e}")).collect::<Vec<_>>(),
+            fields => FIELDS,
+            points => points.len(),
+            sections => sections,
+            found => found.len(),
+            found_ratio => min_max(found.iter().map(|p| p.measured / p.estimate)),
+            bounded => bounded.len(),
+            bounded_ratio => min_max(bounded.iter().map(|p| p.measured / p.estimate)),
+            no_stable => none.len(),
+            no_stable_e_max => none.iter().map(|p| p.youngs_modulus).fold(0.0, f64::max),
+            no_stable_b_min => none.iter().map(|p| p.b0).fold(f64::INFINITY, f64::min),
+            no_stable_overlap => min_max(none.iter().map(|p| hertz_overlap(p.youngs_modulus, p.impact_speed) / 1.1e-5)),
+            non_monotonic => points.iter().filter(|p| p.non_monotonic).count(),
+            unsafe_points => unsafe_points,
+            paper => context! {
+                e => PAPER_E, dt => PAPER_DT,
+                above => above, no_stable => no_stable, below => below, undecided => undecided,
+            },
+            extremes => extremes.len(),
+            extremes_table => extremes_table,
+            completed => count("completed "),
+            stopped => count("stopped: "),
+            refused => count("refused at load: "),
+            cutoff_concentration => CUTOFF_CONCENTRATION,
+            cutoff_field => CUTOFF_FIELD,
+            cutoff_table => cutoff_table,
+            paper_scheme => pick(PAPER_SCHEME),
+            no_induction => pick(NO_INDUCTION),
+            exact_cut => pick(EXACT_CUT),
+        },
+    )?;
     std::fs::write(dir.join("stability.md"), &md)?;
     Ok(md)
 }

@@ -14,6 +14,17 @@ pub const FRICTION: f64 = 0.5;
 pub const DT: f64 = 1.0e-10;
 /// A frame every this many steps.
 pub const FRAME_STEPS: u64 = 5;
+/// The benchmark's source.
+pub const SOURCE: &str = "Chung & Ooi (2011)";
+/// The restitution cases' coefficients (pairs at [`PAIR_SPEED`] each).
+pub const RESTITUTIONS: [f64; 4] = [0.3, 0.5, 0.7, 0.9];
+/// Approach speed of each sphere in the pair cases (m/s).
+pub const PAIR_SPEED: f64 = 0.05;
+/// Impact speed of the wall cases (m/s), and the restitution of the oblique and spin cases.
+pub const WALL_SPEED: f64 = 0.1;
+pub const OBLIQUE_RESTITUTION: f64 = 0.5;
+/// Incident angles of the oblique cases (degrees from the wall normal).
+pub const OBLIQUE_ANGLES: [f64; 9] = [5.0, 15.0, 25.0, 35.0, 45.0, 55.0, 65.0, 75.0, 85.0];
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Geometry {
@@ -136,16 +147,23 @@ pub fn cases() -> Vec<Case> {
         spin,
     };
     let mut v = vec![
-        base("elastic pair".into(), "1 normal, equal spheres", pair, 1.0, 0.05, 0.0, 0.0),
-        base("elastic wall".into(), "2 normal, sphere-wall", Geometry::Wall, 1.0, 0.1, 0.0, 0.0),
+        base("elastic pair".into(), "1 normal, equal spheres", pair, 1.0, PAIR_SPEED, 0.0, 0.0),
+        base("elastic wall".into(), "2 normal, sphere-wall", Geometry::Wall, 1.0, WALL_SPEED, 0.0, 0.0),
     ];
-    for e in [0.3, 0.5, 0.7, 0.9] {
-        v.push(base(format!("pair e = {e}"), "3 restitution", pair, e, 0.05, 0.0, 0.0));
+    for e in RESTITUTIONS {
+        v.push(base(format!("pair e = {e}"), "3 restitution", pair, e, PAIR_SPEED, 0.0, 0.0));
     }
-    for angle in [5.0_f64, 15.0, 25.0, 35.0, 45.0, 55.0, 65.0, 75.0, 85.0] {
-        let speed = 0.1;
-        let (vn, vt) = (speed * angle.to_radians().cos(), speed * angle.to_radians().sin());
-        v.push(base(format!("oblique {angle:.0}°"), "4 oblique, sphere-wall", Geometry::Wall, 0.5, vn, vt, 0.0));
+    for angle in OBLIQUE_ANGLES {
+        let (vn, vt) = (WALL_SPEED * angle.to_radians().cos(), WALL_SPEED * angle.to_radians().sin());
+        v.push(base(
+            format!("oblique {angle:.0}°"),
+            "4 oblique, sphere-wall",
+            Geometry::Wall,
+            OBLIQUE_RESTITUTION,
+            vn,
+            vt,
+            0.0,
+        ));
     }
     let a = 0.5 * DIAMETER;
     v.push(base("spin, normal".into(), "5 spin, sphere-wall", Geometry::Wall, 0.5, 0.1, 0.0, 0.5 * 0.1 / a));

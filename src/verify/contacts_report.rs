@@ -1,10 +1,20 @@
 //! Writes `contact-verification.md` and its figures from the outcomes of `verify contacts`.
 
-use super::contact_cases::{relative, Case, Geometry, Metrics, Outcome, DIAMETER, DT, FRAME_STEPS};
+use super::contact_cases::{
+    relative, Case, Geometry, Metrics, Outcome, DENSITY, DIAMETER, DT, FRAME_STEPS, FRICTION, OBLIQUE_RESTITUTION,
+    POISSON, RESTITUTIONS, SOURCE, WALL_SPEED, YOUNGS,
+};
 use crate::plot::{engine_colour, line_chart, Series};
+use crate::reference::deck::tsuji_alpha;
 use crate::reference::Engine;
+use crate::report::template::render;
+use minijinja::context;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+
+/// Targets against LIGGGHTS: largest |magdem/LIGGGHTS − 1| on normal and on tangential quantities.
+pub const TARGET_NORMAL: f64 = 0.005;
+pub const TARGET_TANGENTIAL: f64 = 0.01;
 
 /// The written report and the numbers `magdem verify contacts` prints.
 pub struct Report {
@@ -109,33 +119,6 @@ fn pct(v: f64) -> String {
     }
 }
 
-/// The figures' captions and how to read the differences between the engines.
-const READING: &str = concat!(
-    "![Normal force against overlap](contact-force-overlap.png)\n\n",
-    "Force–overlap loops of the restitution cases (line: magdem; large circles: LIGGGHTS; small circles: \
-LAMMPS). The damping term is proportional to √δ and to the normal velocity, so each loop starts at zero \
-force, is open, and encloses the dissipated energy; the lower the restitution, the wider the loop. The \
-force turns attractive near separation because the viscous term is not clipped (LIGGGHTS' default).\n\n",
-    "![Rebound angle against incident angle](contact-oblique.png)\n\n",
-    "Rebound angle of the sphere's centre from the wall normal against the incident angle (constant speed \
-0.1 m/s, e = 0.5, μ = 0.5).\n\n",
-    "## Reading the differences\n\n",
-    "- **magdem against LIGGGHTS**: the same contact law in both, so every quantity agrees to the last printed \
-digit; the residual is floating-point rounding.\n",
-    "- **LAMMPS, normal quantities**: agree once its inputs are mapped: the tsuji input is solved from \
-α(e_in) = √5|β(e)|, and the wall's and unlike pairs' (E, ν) are solved so that LAMMPS' effective moduli equal \
-magdem's E* and G* — the 2021 build forms a wall's E* as E/(2(1 − ν)) instead of E/(2(1 − ν²)), and its \
-automatic mixing of unlike types is broken. For e = 1 magdem gives LAMMPS zero viscoelastic damping, because \
-tsuji's polynomial is 3e-4, not 0, at e = 1 (it would cost the elastic cases 0.04% of restitution).\n",
-    "- **LAMMPS, tangential quantities**: differ by several per cent up to a factor of several in the spin \
-cases. The inputs match (same kt = 8G*a, same damping ratio); the Mindlin implementations do not: after \
-projecting the shear history onto the new tangent plane LAMMPS rescales it to its old length (LIGGGHTS does \
-not), and LAMMPS tests the Coulomb limit on the elastic plus damping force and keeps the damping part in the \
-capped force and in the reset history, where LIGGGHTS tests the elastic part alone and applies no damping while \
-sliding. The differences are largest where a contact passes between sliding and sticking (small incident \
-angles, spin); which of the two causes dominates each case is not separated here.\n"
-);
-
 /// Figure 1: force–overlap loops of the restitution cases; figure 2: rebound angle against
 /// incident angle.
 fn figures(dir: &Path, all: &[Outcome], names: &[&str]) -> Result<Vec<std::path::PathBuf>, Box<dyn std::error::Error>> {
@@ -151,9 +134,10 @@ fn figures(dir: &Path, all: &[Outcome], names: &[&str]) -> Result<Vec<std::path:
         series.push(Series { label, points, color: engine_colour(o.engine), markers, errors: vec![] });
     }
     let fig1 = dir.join("contact-force-overlap.png");
+    let restitutions: Vec<String> = RESTITUTIONS.iter().map(|e| e.to_string()).collect();
     line_chart(
         &fig1,
-        "Normal force against overlap, sphere–sphere, e = 0.3, 0.5, 0.7, 0.9",
+        &format!("Normal force against overlap, sphere–sphere, e = {}", restitutions.join(", ")),
         "overlap δ (nm)",
         "normal force (µN)",
         &series,
@@ -177,7 +161,7 @@ fn figures(dir: &Path, all: &[Outcome], names: &[&str]) -> Result<Vec<std::path:
     let fig2 = dir.join("contact-oblique.png");
     line_chart(
         &fig2,
-        "Oblique sphere–wall impact, 0.1 m/s, e = 0.5, μ = 0.5",
+        &format!("Oblique sphere–wall impact, {WALL_SPEED} m/s, e = {OBLIQUE_RESTITUTION}, μ = {FRICTION}"),
         "incident angle (°)",
         "rebound angle (°)",
         &series,
@@ -186,41 +170,27 @@ fn figures(dir: &Path, all: &[Outcome], names: &[&str]) -> Result<Vec<std::path:
     Ok(figures)
 }
 
-pub fn write(dir: &Path, all: &[Outcome], engines: &[Engine]) -> Result<Report, Box<dyn std::error::Error>> {
-    let mut md = String::new();
-    let names: Vec<&str> = engines.iter().map(|e| e.name()).collect();
-    let _ = writeln!(md, "# Contact cross-verification: magdem against LIGGGHTS and LAMMPS\n");
-    let _ = writeln!(
-        md,
-        "Generated by `magdem verify contacts` (magdem {}, commit {}). Engines: magdem{}.\n",
-        env!("CARGO_PKG_VERSION"),
-        env!("MAGDEM_GIT_COMMIT"),
-        names.iter().map(|n| format!(", {n}")).collect::<String>()
-    );
-    md += "The single-contact benchmark types of Chung & Ooi (2011) — elastic normal impact of equal spheres \
-and against a wall, restitution, oblique impacts over a range of angles, impacts with spin, unequal \
-sizes — with the paper's material (11 µm spheres, E = 1e9 Pa, ν = 0.5, μ = 0.5, ρ = 1087 kg/m³). \
-Each case is one magdem scene; `magdem run` and `magdem run --engine liggghts|lammps` run it, all \
-three write the same HDF5 schema, and one analysis reads the three files. Velocity Verlet in all \
-three (LIGGGHTS/LAMMPS `nve/sphere`), ";
-    let _ = writeln!(md, "dt = {DT:e} s, a frame every {FRAME_STEPS} steps; contact start and end are the linearly interpolated zero crossings of the overlap.\n");
-    md += "Contact models: magdem's is LIGGGHTS' `hertz tangential history` with `coefficientRestitution` \
-(formulas in `src/core/forces/contact.rs`). LAMMPS runs `pair_style granular hertz/material … tangential \
-mindlin NULL x_t μ damping tsuji` with the tsuji input e_in solved from α(e_in) = √5 |β(e)| and \
-x_t = 2√(G*/E*), which makes its damping equal to LIGGGHTS' by construction (`src/reference/deck.rs`). \
-Walls are planes with the sphere's own material. Closed forms (elastic cases): \
-δ = (15 m* v²/(16 E* √R*))^(2/5), t_c = 2.87 (m*²/(R* E*² v))^(1/5) (DESIGN.md §5).\n\n";
-    md += "Δ columns: magdem / reference − 1 (for quantities near zero, the difference over the case's speed \
-scale). Target: 0.5% on normal quantities, 1% on tangential ones against LIGGGHTS.\n\n";
+/// Largest |Δ| per engine and kind (normal, tangential), and where the largest tangential one is.
+#[derive(Default, Clone)]
+struct Worst {
+    normal: f64,
+    tangential: f64,
+    tangential_min: f64,
+    tangential_case: String,
+}
 
+pub fn write(dir: &Path, all: &[Outcome], engines: &[Engine]) -> Result<Report, Box<dyn std::error::Error>> {
+    let names: Vec<&str> = engines.iter().map(|e| e.name()).collect();
     let mut header = "| case | quantity | closed form | magdem |".to_string();
     let mut rule = "|---|---|---|---|".to_string();
     for n in &names {
         header += &format!(" {n} | Δ {n} |");
         rule += "---|---|";
     }
-    let _ = writeln!(md, "{header}\n{rule}");
-    let (mut worst_normal, mut worst_tangential) = (0.0_f64, 0.0_f64);
+    let mut table = format!("{header}\n{rule}\n");
+    let mut worst: Vec<Worst> =
+        names.iter().map(|_| Worst { tangential_min: f64::INFINITY, ..Default::default() }).collect();
+    let mut closed_worst = 0.0_f64;
     let mut csv = String::from("case,group,quantity,engine,value,closed_form\n");
     let case_names: Vec<String> = {
         let mut v: Vec<String> = all.iter().map(|o| o.case.name.clone()).collect();
@@ -233,6 +203,9 @@ scale). Target: 0.5% on normal quantities, 1% on tangential ones against LIGGGHT
         let magdem = runs.iter().find(|o| o.engine == "magdem").expect("magdem ran every case");
         for q in quantities(case) {
             let mv = (q.get)(&magdem.metrics);
+            if let Some(c) = q.closed {
+                closed_worst = closed_worst.max(relative(mv, c, q.scale).abs());
+            }
             let mut row =
                 format!("| {} | {} | {} | {} |", case.name, q.name, q.closed.map_or("–".into(), sci), sci(mv));
             let _ = writeln!(
@@ -243,37 +216,73 @@ scale). Target: 0.5% on normal quantities, 1% on tangential ones against LIGGGHT
                 q.name,
                 q.closed.map_or(String::new(), |c| format!("{c:e}"))
             );
-            for n in &names {
+            for (k, n) in names.iter().enumerate() {
                 match runs.iter().find(|o| o.engine == *n) {
                     Some(o) => {
                         let rv = (q.get)(&o.metrics);
                         let d = relative(mv, rv, q.scale);
                         row += &format!(" {} | {} |", sci(rv), pct(d));
                         let _ = writeln!(csv, "\"{}\",\"{}\",\"{}\",{n},{rv:e},", case.name, case.group, q.name);
-                        if *n == "liggghts" {
-                            if q.normal {
-                                worst_normal = worst_normal.max(d.abs());
-                            } else {
-                                worst_tangential = worst_tangential.max(d.abs());
+                        let w = &mut worst[k];
+                        if q.normal {
+                            w.normal = w.normal.max(d.abs());
+                        } else {
+                            w.tangential_min = w.tangential_min.min(d.abs());
+                            if d.abs() > w.tangential {
+                                w.tangential = d.abs();
+                                w.tangential_case = format!("the {} of {}", q.name, case.name);
                             }
                         }
                     }
                     None => row += " – | – |",
                 }
             }
-            let _ = writeln!(md, "{row}");
+            table += &row;
+            table += "\n";
         }
     }
     std::fs::write(dir.join("contact-verification.csv"), csv)?;
-    let _ = writeln!(
-        md,
-        "\nLargest |Δ| against LIGGGHTS: {:.4}% on normal quantities, {:.4}% on tangential ones.\n",
-        100.0 * worst_normal,
-        100.0 * worst_tangential
-    );
-
     let figures = figures(dir, all, &names)?;
-    md += READING;
+    let of = |engine: &str| {
+        names.iter().position(|n| *n == engine).map(|k| {
+            let w = &worst[k];
+            context! {
+                normal => 100.0 * w.normal,
+                tangential => 100.0 * w.tangential,
+                tangential_min => 100.0 * w.tangential_min,
+                tangential_case => w.tangential_case.clone(),
+            }
+        })
+    };
+    let md = render(
+        "verification/contacts.md",
+        &context! {
+            version => env!("CARGO_PKG_VERSION"),
+            commit => env!("MAGDEM_GIT_COMMIT"),
+            engines => names.clone(),
+            source => SOURCE,
+            cases => case_names.len(),
+            material => context! {
+                diameter_um => 1e6 * DIAMETER,
+                youngs => YOUNGS,
+                poisson => POISSON,
+                friction => FRICTION,
+                density => DENSITY,
+            },
+            dt => DT,
+            frame_steps => FRAME_STEPS,
+            targets => context! { normal => 100.0 * TARGET_NORMAL, tangential => 100.0 * TARGET_TANGENTIAL },
+            closed_worst => 100.0 * closed_worst,
+            liggghts => of("liggghts"),
+            lammps => of("lammps"),
+            table => table,
+            restitutions => RESTITUTIONS.to_vec(),
+            oblique => context! { speed => WALL_SPEED, restitution => OBLIQUE_RESTITUTION, friction => FRICTION },
+            tsuji_at_one => tsuji_alpha(1.0),
+        },
+    )?;
     std::fs::write(dir.join("contact-verification.md"), &md)?;
-    Ok(Report { markdown: md, figures, worst_normal, worst_tangential })
+    let at = |engine: &str| names.iter().position(|n| *n == engine).map(|k| worst[k].clone()).unwrap_or_default();
+    let liggghts = at("liggghts");
+    Ok(Report { markdown: md, figures, worst_normal: liggghts.normal, worst_tangential: liggghts.tangential })
 }

@@ -9,10 +9,25 @@
 use crate::io::trajectory::Trajectory;
 use crate::plot::{engine_colour, line_chart, Series};
 use crate::reference::{self, Engine};
+use crate::report::template::render;
 use crate::run::{run, RunOptions};
 use crate::scene::Scene;
+use minijinja::{context, Value};
+use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
+
+/// The shipped case-1 scene of the lock-step comparison.
+const CASE1: &str = "case1-c4.5";
+/// The files-route study: the pair approach at this dt to this time (before contact), exchanging
+/// every K steps for each K here.
+const FILES_ROUTE_DT: f64 = 1.0e-8;
+const FILES_ROUTE_END: f64 = 9.0e-5;
+const FILES_ROUTE_KS: [u64; 5] = [3, 10, 30, 100, 300];
+/// Position differences below this (m) are drawn at it on the log axis (exactly equal positions).
+const LOG_FLOOR: f64 = 1e-22;
+/// Coulomb's constant k_e (N m²/C²) as LAMMPS' dipole pair style takes it.
+const COULOMB: f64 = 8.9876e9;
 
 /// Two dipoles closing with exact induction, touching at about 0.1 ms (the lock-step check).
 pub const PAIR: &str = r#"# Two 11 um Fe3O4 spheres 6 diameters apart, slightly off the field axis, exact induction.
@@ -73,15 +88,15 @@ const STOKES: (&str, &str) =
 /// `end_time` seconds.
 pub fn case1_scene(end_time: f64) -> Result<String, String> {
     let text = edited_scene(
-        "case1-c4.5",
+        CASE1,
         &[
             (STOKES.0, STOKES.1.into()),
             ("end_time = 5.0e-3", format!("end_time = {end_time:e}")),
             ("interval = 5.0e-5", format!("interval = {:e}", end_time / 50.0)),
-            ("name = \"case1-c4.5\"", "name = \"case1-c4.5-stokes\"".into()),
+            (&format!("name = \"{CASE1}\""), format!("name = \"{CASE1}-stokes\"")),
         ],
     )?;
-    Ok(format!("# verify magnetic: case1-c4.5.toml with Stokes drag, no shielding, no rotational drag\n{text}"))
+    Ok(format!("# verify magnetic: {CASE1}.toml with Stokes drag, no shielding, no rotational drag\n{text}"))
 }
 
 /// The 2.25 mg/ml case-1 scene as LAMMPS' native deck can hold it (`--native`): fixed moments
@@ -165,10 +180,11 @@ pub fn pair_before_contact(scheme: crate::core::integrators::Scheme, dt: f64, sl
         .replace("interval = 2.0e-6", "interval = 9.6e-5")
 }
 
-/// The pair approach run for 9e-5 s at dt = 1e-8 s (before contact), for the files-route study.
+/// The pair approach run for [`FILES_ROUTE_END`] at [`FILES_ROUTE_DT`] (before contact), for the
+/// files-route study.
 pub fn files_route_scene() -> String {
-    PAIR.replace("dt = 1.0e-9", "dt = 1.0e-8")
-        .replace("end_time = 2.0e-4", "end_time = 9.0e-5")
+    PAIR.replace("dt = 1.0e-9", &format!("dt = {FILES_ROUTE_DT:.1e}"))
+        .replace("end_time = 2.0e-4", &format!("end_time = {FILES_ROUTE_END:.1e}"))
         .replace("interval = 2.0e-6", "interval = 1.0e-6")
 }
 
@@ -207,7 +223,39 @@ pub fn files_route_lag(
     Ok(rows)
 }
 
-/// One scene run in lock step by each engine: the position differences per frame and their figure.
+/// One engine's position differences in a lock-step scene: the largest over the run, before and
+/// from magdem's first contact, and the median over particles at the last frame (m).
+#[derive(Serialize)]
+struct EngineDifference {
+    engine: &'static str,
+    largest: f64,
+    before_contact: f64,
+    after_contact: f64,
+    final_median: f64,
+}
+
+/// The time of the first frame in which two of the trajectory's particles overlap (s).
+fn first_contact(path: &Path) -> Result<Option<f64>, Box<dyn std::error::Error>> {
+    let t = Trajectory::open(path)?;
+    let x = t.all_vectors("position")?;
+    let radius = t.file.dataset("particles/radius")?.read_raw::<f64>()?;
+    let times = t.times()?;
+    let n = radius.len();
+    for (k, &time) in times.iter().enumerate() {
+        for i in 0..n {
+            for j in i + 1..n {
+                let d = (0..3).map(|c| (x[[k, i, c]] - x[[k, j, c]]).powi(2)).sum::<f64>().sqrt();
+                if d < radius[i] + radius[j] {
+                    return Ok(Some(time));
+                }
+            }
+        }
+    }
+    Ok(None)
+}
+
+/// One scene run in lock step by each engine: the position differences per frame, their figure,
+/// and what the summary quotes.
 fn lock_step_section(
     dir: &Path,
     work: &Path,
@@ -215,32 +263,27 @@ fn lock_step_section(
     name: &str,
     text: &str,
     title: &str,
-) -> Result<String, Box<dyn std::error::Error>> {
-    let mut md = String::new();
+) -> Result<Value, Box<dyn std::error::Error>> {
     let (diffs, times) = compare(text, name, work, engines)?;
-    let _ = writeln!(
-        md,
-        "## {title}\n\nScene `{name}` (its TOML is stored in each trajectory). Wall time: {}.\n",
-        times.iter().map(|(e, t)| format!("{e} {t:.1} s")).collect::<Vec<_>>().join(", ")
-    );
-    md += "| time (s) |";
+    let contact = first_contact(&work.join(format!("{name}.magdem.h5")))?;
+    let mut table = String::from("| time (s) |");
     let mut rule = String::from("|---|");
     for d in &diffs {
-        md += &format!(" {} max (m) | {} median (m) |", d.engine, d.engine);
+        table += &format!(" {} max (m) | {} median (m) |", d.engine, d.engine);
         rule += "---|---|";
     }
-    let _ = writeln!(md, "\n{rule}");
+    let _ = writeln!(table, "\n{rule}");
     let frames = diffs.first().map_or(0, |d| d.times.len());
     let step = (frames / 10).max(1);
     let rows = (0..frames).step_by(step).chain((frames > 0 && (frames - 1) % step != 0).then(|| frames - 1));
     for k in rows {
-        let _ = write!(md, "| {:.3e} |", diffs[0].times[k]);
+        let _ = write!(table, "| {:.3e} |", diffs[0].times[k]);
         for d in &diffs {
-            let _ = write!(md, " {:.3e} | {:.3e} |", d.max[k], d.median[k]);
+            let _ = write!(table, " {:.3e} | {:.3e} |", d.max[k], d.median[k]);
         }
-        md += "\n";
+        table += "\n";
     }
-    let floor = |v: f64| v.max(1e-22).log10();
+    let floor = |v: f64| v.max(LOG_FLOOR).log10();
     let series: Vec<Series> = diffs
         .iter()
         .flat_map(|d| {
@@ -264,8 +307,30 @@ fn lock_step_section(
         .collect();
     let figure = format!("magnetic-{name}.png");
     line_chart(&dir.join(&figure), title, "time (ms)", "log10 |x_engine − x_magdem| (m)", &series)?;
-    let _ = writeln!(md, "\n![{title}]({figure})\n");
-    Ok(md)
+    let largest = |d: &Difference, keep: &dyn Fn(f64) -> bool| {
+        d.times.iter().zip(&d.max).filter(|(t, _)| keep(**t)).map(|(_, v)| *v).fold(f64::NAN, f64::max)
+    };
+    let contact_time = contact.unwrap_or(f64::INFINITY);
+    let engines: Vec<EngineDifference> = diffs
+        .iter()
+        .map(|d| EngineDifference {
+            engine: d.engine,
+            largest: largest(d, &|_| true),
+            before_contact: largest(d, &|t| t < contact_time),
+            after_contact: largest(d, &|t| t >= contact_time),
+            final_median: d.median.last().copied().unwrap_or(f64::NAN),
+        })
+        .collect();
+    Ok(context! {
+        name => name,
+        title => title,
+        wall_times => times.iter().map(|(e, t)| context! { engine => e, seconds => t }).collect::<Vec<_>>(),
+        table => table,
+        figure => figure,
+        contact_ms => contact.map(|t| 1e3 * t),
+        end_ms => 1e3 * diffs.first().and_then(|d| d.times.last().copied()).unwrap_or(f64::NAN),
+        engines => engines,
+    })
 }
 
 /// The files route's lag error against the exchange interval K, in `engine`.
@@ -274,33 +339,17 @@ fn files_route_section(
     work: &Path,
     engine: Engine,
     magdem: &Path,
-) -> Result<String, Box<dyn std::error::Error>> {
-    let mut md = String::new();
-    let ks = [3, 10, 30, 100, 300];
-    let rows = files_route_lag(engine, &files_route_scene(), &work.join("files-route"), magdem, &ks)?;
+) -> Result<Value, Box<dyn std::error::Error>> {
+    let rows = files_route_lag(engine, &files_route_scene(), &work.join("files-route"), magdem, &FILES_ROUTE_KS)?;
     let (lx, ly): (Vec<f64>, Vec<f64>) = rows.iter().map(|r| ((r.0 as f64).ln(), r.1.ln())).unzip();
     let (mx, my) = (lx.iter().sum::<f64>() / lx.len() as f64, ly.iter().sum::<f64>() / ly.len() as f64);
     let slope = lx.iter().zip(&ly).map(|(x, y)| (x - mx) * (y - my)).sum::<f64>()
         / lx.iter().map(|x| (x - mx).powi(2)).sum::<f64>();
-    let _ = writeln!(
-        md,
-        "## The files route: lag error against the exchange interval\n\n\
-         Without the shared library (a bare binary, or an MPI run) the deck exchanges files with magdem every K steps \
-         (`magdem run --engine {e} --exchange-every K`): it writes the positions, calls `magdem magnetic-forces` through \
-         `shell`, reads the forces as atomfile variables and applies them with `fix addforce` until the next exchange, so \
-         they lag by up to K steps. Measured on the pair approach (dt = 1e-8 s, 9e-5 s, before contact) in {e}, against \
-         the in-process route (every step):\n\n| K (steps) | largest position difference (m) | wall time (s) |\n|---|---|---|",
-        e = engine.name()
-    );
+    let mut table = String::from("| K (steps) | largest position difference (m) | wall time (s) |\n|---|---|---|\n");
     for (k, err, wall) in &rows {
-        let _ = writeln!(md, "| {k} | {err:.3e} | {wall:.2} |");
+        let _ = writeln!(table, "| {k} | {err:.3e} | {wall:.2} |");
     }
-    let _ = writeln!(
-        md,
-        "\nThe error grows as K^{slope:.2} (least-squares slope of log error on log K): first order in the lag, as a force \
-         held constant over K steps predicts. The cost is about {:.0} ms per exchange (process start, scene parse, file I/O).\n",
-        1e3 * rows[0].2 / (9000.0 / rows[0].0 as f64)
-    );
+    let steps = (FILES_ROUTE_END / FILES_ROUTE_DT).round();
     let series = vec![Series {
         label: format!("{} files route", engine.name()),
         points: rows.iter().map(|r| ((r.0 as f64).log10(), r.1.log10())).collect(),
@@ -315,32 +364,36 @@ fn files_route_section(
         "log10 max |x_files − x_callback| (m)",
         &series,
     )?;
-    md += "![Files route lag error](magnetic-files-route.png)\n\n";
-    Ok(md)
+    Ok(context! {
+        engine => engine.name(),
+        dt => FILES_ROUTE_DT,
+        end_time => FILES_ROUTE_END,
+        table => table,
+        slope => slope,
+        ms_per_exchange => 1e3 * rows[0].2 / (steps / rows[0].0 as f64),
+    })
 }
 
 /// magdem's dipole forces against LAMMPS' `lj/cut/dipole/cut` on the shipped scenes.
-fn dipole_check_section(work: &Path) -> Result<String, Box<dyn std::error::Error>> {
-    let mut md = String::new();
-    md += "## The dipole force against LAMMPS' own\n\n\
-LAMMPS' `lj/cut/dipole/cut` (ε = 0; electric dipoles p = m √(1e-7/k_e), k_e = 8.9876e9) evaluates the dipole–dipole \
-forces between the same moments (magdem's, at the initial positions of the shipped scenes) independently of magdem's \
-code (`src/reference/dipole_check.rs`).\n\n| scene | pair sum | particles | largest force (N) | max ‖F_lammps − F_magdem‖ / max ‖F‖ |\n|---|---|---|---|---|\n";
-    for (name, cutoff, label) in
-        [("case1-c4.5", "cutoff_diameters = 15.0", "15 diameters"), ("case1-c0.563", "", "all pairs")]
+fn dipole_check_section(work: &Path) -> Result<Value, Box<dyn std::error::Error>> {
+    let mut table = String::from(
+        "| scene | pair sum | particles | largest force (N) | max ‖F_lammps − F_magdem‖ / max ‖F‖ |\n|---|---|---|---|---|\n",
+    );
+    let mut worst = 0.0_f64;
+    for (name, cutoff, label) in [(CASE1, "cutoff_diameters = 15.0", "15 diameters"), ("case1-c0.563", "", "all pairs")]
     {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("experiments/scenes/{name}.toml"));
         let text = std::fs::read_to_string(&path)?.replace("cutoff_diameters = 15.0", cutoff);
         let scene = Scene::parse(&text, name)?;
         let c = reference::dipole_check::check(&scene, &work.join(format!("dipole-{name}")))?;
+        worst = worst.max(c.max_relative_error);
         let _ = writeln!(
-            md,
+            table,
             "| {name} | {label} | {} | {:.4e} | {:.2e} |",
             c.particles, c.largest_force, c.max_relative_error
         );
     }
-    md += "\n";
-    Ok(md)
+    Ok(context! { table => table, worst => worst, coulomb => COULOMB })
 }
 
 /// Runs both scenes and writes `dir/magnetic-verification.md` with one figure per scene.
@@ -352,39 +405,43 @@ pub fn verify(
     magdem: &Path,
 ) -> Result<String, Box<dyn std::error::Error>> {
     std::fs::create_dir_all(dir)?;
-    let mut md = String::from("# Magnetic forces in lock step: magdem, LIGGGHTS and LAMMPS\n\n");
-    let _ = writeln!(
-        md,
-        "Generated by `magdem verify magnetic` (magdem {}, commit {}). LIGGGHTS and LAMMPS run in process from their \
-         shared libraries; a `fix external pf/callback` hands magdem the positions every step and magdem's core returns \
-         the magnetic forces (moments with the scene's mutual induction, dipole and gradient forces). Contact, drag and \
-         integration are the reference code's own. The figures show the largest and the median distance between a \
-         particle's position in the reference code and in magdem (log10 of metres; exactly equal positions are drawn at −22). The pair touches at about 0.1 ms.\n",
-        env!("CARGO_PKG_VERSION"),
-        env!("MAGDEM_GIT_COMMIT")
-    );
+    let pair = Scene::parse(PAIR, "pair-approach")?;
     let case1 = case1_scene(case1_end)?;
+    let case1_parsed = Scene::parse(&case1, CASE1)?;
+    let b0 = pair.spec.field.as_ref().map_or(f64::NAN, |f| f.b0.iter().map(|b| b * b).sum::<f64>().sqrt());
+    let concentration = case1_parsed.spec.particles.first().and_then(|p| p.concentration).unwrap_or(f64::NAN);
+    let pair_title = format!("Two dipoles closing (exact induction), {b0} T");
+    let case1_title =
+        format!("Case 1, {concentration} mg/ml, {} particles, Stokes drag", case1_parsed.initial.position.len());
+    let mut scenes = vec![];
     for (name, text, title) in [
-        ("pair-approach", PAIR.to_string(), "Two dipoles closing (exact induction), 0.4 T"),
-        ("case1-c4.5-stokes", case1, "Case 1, 4.5 mg/ml, 307 particles, Stokes drag"),
+        ("pair-approach", PAIR.to_string(), pair_title.as_str()),
+        (&*format!("{CASE1}-stokes"), case1, case1_title.as_str()),
     ] {
-        md += &lock_step_section(dir, work, engines, name, &text, title)?;
+        scenes.push(lock_step_section(dir, work, engines, name, &text, title)?);
     }
-    if let Some(&engine) = engines.iter().find(|e| e.available()) {
-        md += &files_route_section(dir, work, engine, magdem)?;
-    }
-    if engines.contains(&Engine::Lammps) {
-        md += &dipole_check_section(work)?;
-    }
-    md += "## Reading it\n\n\
-- **LIGGGHTS** uses the same contact law as magdem (`reports/contact-verification.md`), so with the same magnetic \
-forces the trajectories agree to round-off until contact chaos amplifies the last bits of the force sums, which are \
-added in a different order.\n\
-- **LAMMPS** agrees to round-off until the first contacts with tangential motion, where its Mindlin implementation \
-differs from LIGGGHTS' (history rescaled after projection, damping inside the Coulomb check); from there the \
-trajectories separate.\n\
-- Over longer times differences of either kind grow, because aggregation is chaotic; over a full run the \
-comparison that matters is statistical (aggregate size and length distributions, the reproduction report).\n";
+    let files_route = match engines.iter().find(|e| e.available()) {
+        Some(&engine) => Some(files_route_section(dir, work, engine, magdem)?),
+        None => None,
+    };
+    let dipole = if engines.contains(&Engine::Lammps) { Some(dipole_check_section(work)?) } else { None };
+    let md = render(
+        "verification/magnetic.md",
+        &context! {
+            version => env!("CARGO_PKG_VERSION"),
+            commit => env!("MAGDEM_GIT_COMMIT"),
+            engines => engines.iter().map(|e| e.name()).collect::<Vec<_>>(),
+            diameter => pair.spec.species[0].diameter,
+            diameter_um => 1e6 * pair.spec.species[0].diameter,
+            log_floor => LOG_FLOOR.log10(),
+            pair => scenes[0].clone(),
+            case1 => scenes[1].clone(),
+            case1_particles => case1_parsed.initial.position.len(),
+            case1_concentration => concentration,
+            files_route => files_route,
+            dipole => dipole,
+        },
+    )?;
     std::fs::write(dir.join("magnetic-verification.md"), &md)?;
     Ok(md)
 }
