@@ -940,7 +940,7 @@ fn induction_effect() -> String {
 
 fn induction_effect_in(explanations: &Path) -> String {
     let measured = || -> Option<String> {
-        use crate::report::convergence::Explanation;
+        use crate::report::paper::convergence::Explanation;
         let table = crate::report::tables::read_csv(explanations).ok()?;
         let text = |name: &str| table.column(name).ok()?.str().ok().cloned();
         let number = |name: &str| crate::report::tables::floats(&table, name).ok();

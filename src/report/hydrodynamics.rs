@@ -5,6 +5,7 @@
 //! `experiments/hydrodynamics/*.toml`. The numbers, tables and figures are computed here; the words
 //! are `templates/hydrodynamics/README.md`.
 
+use super::estimate::{log_slope, sizes_and_velocities};
 use super::runs::{experiment_files, load_runs_digested, Run};
 use super::tables::{col, floats, frame, markdown, read_csv, scol, write};
 use super::template::render;
@@ -475,35 +476,6 @@ fn refactor_section(case2: &Path, tables: &Path) -> Result<Value, Error> {
     })
 }
 
-/// Per run: the mean size of its last frame's aggregates, and the tracked velocities (µm/s) of
-/// the free ones (no x wall holding them) with their sizes.
-pub(crate) fn sizes_and_velocities(r: &Run) -> (f64, Vec<(usize, f64)>) {
-    let size = summary(&r.last.iter().map(|a| a.size() as f64).collect::<Vec<_>>()).mean;
-    let free = r.last.iter().filter(|a| !a.at_x_wall).map(|a| (a.size, a.tracked_vx * 1e6)).collect();
-    (size, free)
-}
-
-/// Least-squares slope of ln v against ln n over the per-size means (sizes with ≥ 3 aggregates).
-pub(crate) fn log_slope(by_size: &BTreeMap<usize, Vec<f64>>) -> f64 {
-    let pts: Vec<(f64, f64)> = by_size
-        .iter()
-        .filter(|(_, v)| v.len() >= 3)
-        .map(|(&n, v)| (n as f64, summary(v).mean))
-        .filter(|&(_, v)| v > 0.0)
-        .map(|(n, v)| (n.ln(), v.ln()))
-        .collect();
-    if pts.len() < 2 {
-        return f64::NAN;
-    }
-    let (mx, my) = (
-        pts.iter().map(|p| p.0).sum::<f64>() / pts.len() as f64,
-        pts.iter().map(|p| p.1).sum::<f64>() / pts.len() as f64,
-    );
-    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    sxy / sxx
-}
-
 /// One drag model of case 2 in words' reach: α, and where its aggregates of [`LARGE`]+ fall
 /// against the experiment's band (`overlapping`, `clear` or `unknown` without a CI).
 #[derive(Serialize)]
@@ -782,8 +754,8 @@ fn case1_section(runs: &[Run], reference: &Path, out: &Path, tables: &Path) -> R
         }
         let lengths: Vec<f64> = group.iter().map(|r| r.mean_length_um()).collect();
         let spread: Vec<f64> = group.iter().map(|r| summary(&r.lengths_um()).population_std).collect();
-        let change = super::convergence::paired_change(&base, &group);
-        let early_change = super::convergence::Estimate::of(
+        let change = super::estimate::paired_change(&base, &group);
+        let early_change = super::estimate::Estimate::of(
             &group
                 .iter()
                 .filter_map(|r| {

@@ -1,9 +1,9 @@
 //! Walls and particle count: periodic faces and larger boxes against the paper's.
 
+use super::convergence;
 use super::{mean, Inputs};
 use crate::analysis::stats::ci95_half_width;
 use crate::plot::{category_panels, palette, BarGroup, BarPanel, Mark};
-use crate::report::convergence;
 use crate::report::runs::Run;
 use crate::report::tables::{col, floats, frame, markdown, same, scol, ucol, write};
 use minijinja::{context, Value};

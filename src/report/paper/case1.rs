@@ -1,12 +1,12 @@
 //! Case 1 in the paper's box: Table 3, its seeds, Table 4, the box plots and the approach figure.
 
+use super::convergence;
 use super::{completed, mean, seed_list, table3_ensemble, Inputs, Paper};
 use crate::analysis::stats::{ci95_half_width, summary};
 use crate::plot::{
     box_panels, category_panels, engine_colour, line_chart_with_legend, palette, BarGroup, BarPanel, BoxPanel,
     BoxStats, Mark, RGBColor, Series, SeriesLabelPosition,
 };
-use crate::report::convergence;
 use crate::report::runs::Run;
 use crate::report::tables::{col, floats, frame, markdown, same, ucol, write};
 use crate::scene::Scene;

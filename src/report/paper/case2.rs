@@ -8,8 +8,8 @@ use crate::core::magnetisation::MU0;
 use crate::plot::{
     category_panels, engine_colour, palette, BarGroup, BarPanel, Mark, RGBColor, Series, SeriesLabelPosition,
 };
-use crate::report::convergence::Estimate;
-use crate::report::hydrodynamics::{log_slope, sizes_and_velocities};
+use crate::report::estimate::Estimate;
+use crate::report::estimate::{log_slope, sizes_and_velocities};
 use crate::report::runs::Run;
 use crate::report::tables::{col, floats, frame, markdown, scol, write};
 use crate::scene::Scene;

@@ -1,9 +1,9 @@
 //! LIGGGHTS and LAMMPS on the same case-1 scenes, and the list of every run.
 
+use super::convergence;
 use super::{mean, Inputs};
 use crate::analysis::stats::{ci95_half_width, summary};
 use crate::plot::{category_panels, engine_colour, line_chart_with_legend, BarGroup, BarPanel, Mark, Series};
-use crate::report::convergence;
 use crate::report::runs::Run;
 use crate::report::tables::{col, frame, markdown, same, scol, ucol, write};
 use crate::scene::Scene;

@@ -9,15 +9,16 @@
 mod box_count;
 mod case1;
 mod case2;
+pub mod convergence;
 mod drawing;
 mod engines;
 mod figures;
 mod why;
 
-use super::convergence::{self, Effect, Targets};
 use super::runs::{experiment_files, load_runs_digested, Run};
 use super::tables::{floats, read_csv};
 use crate::analysis::stats::summary;
+use convergence::{Effect, Targets};
 use minijinja::Value;
 use polars::prelude::{DataFrame, PolarsResult};
 use std::cell::RefCell;

@@ -1,8 +1,8 @@
 //! Why the numbers differ: the sensitivity study and the ranking of explanations.
 
+use super::convergence::{self, Effect, Explanation};
 use super::{completed, mean, seed_list, table3_ensemble, Inputs};
 use crate::plot::{category_panels, palette, BarGroup, BarPanel, Mark, Series, SeriesLabelPosition};
-use crate::report::convergence::{self, Effect, Explanation};
 use crate::report::runs::Run;
 use crate::report::tables::{col, frame, markdown, same, scol, ucol, write};
 use crate::scene::Scene;

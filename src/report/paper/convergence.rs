@@ -3,62 +3,28 @@
 //! measurement would make of them, and a ranking of why the paper, the experiment and magdem
 //! differ. Every number comes from the runs; a section whose runs do not exist says so.
 
-use super::paper::Inputs;
-use super::runs::Run;
-use super::tables::{col, frame, markdown, same, scol, ucol, write};
+use super::Inputs;
 use crate::analysis::stats::{ci95_half_width, slope_ci95, summary};
 use crate::core::magnetisation::MU0;
 use crate::plot::{chart, palette, Legend, RGBColor, Scale, Series, SeriesLabelPosition};
+use crate::report::estimate::{paired, unpaired};
+pub use crate::report::estimate::{paired_change, Estimate};
+use crate::report::runs::Run;
+use crate::report::tables::{col, frame, markdown, same, scol, ucol, write};
 use minijinja::{context, Value};
-use polars::prelude::DataFrame;
 use rand::{RngExt, SeedableRng};
 use std::collections::BTreeMap;
-use std::fmt::Write as _;
 use std::path::Path;
 
 type Error = Box<dyn std::error::Error>;
 
-pub use super::runs::TABLE3;
+pub use crate::report::runs::TABLE3;
 
 /// What the paper and the experiment report per concentration (Table 3).
 pub struct Targets {
     pub concentration: Vec<f64>,
     pub paper: Vec<f64>,
     pub experiment: Vec<f64>,
-}
-
-/// A mean over independent runs and its 95 % confidence half-width.
-#[derive(Debug, Clone, Copy, serde::Serialize)]
-pub struct Estimate {
-    pub n: usize,
-    pub mean: f64,
-    pub ci95: f64,
-}
-
-impl Estimate {
-    pub fn of(values: &[f64]) -> Self {
-        let values: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
-        let mean = if values.is_empty() { f64::NAN } else { summary(&values).mean };
-        Self { n: values.len(), mean, ci95: ci95_half_width(&values) }
-    }
-
-    /// "mean ± CI95" with `digits` decimals ("mean (n = …)" without a CI, "–" without a mean).
-    pub fn cell(&self, digits: usize) -> String {
-        match (self.mean.is_finite(), self.ci95.is_finite()) {
-            (false, _) => "–".into(),
-            (true, false) => format!("{:.digits$} (n = {})", self.mean, self.n),
-            (true, true) => format!("{:.digits$} ± {:.digits$}", self.mean, self.ci95),
-        }
-    }
-
-    /// A change as "+mean ± CI95" with `digits` decimals ("+mean" without a CI: one run or seed).
-    pub fn signed_cell(&self, digits: usize) -> String {
-        match (self.mean.is_finite(), self.ci95.is_finite()) {
-            (false, _) => "–".into(),
-            (true, false) => format!("{:+.digits$}", self.mean),
-            (true, true) => format!("{:+.digits$} ± {:.digits$}", self.mean, self.ci95),
-        }
-    }
 }
 
 /// Why magdem's answer, the paper's and the experiment's may differ: what the ranking weighs.
@@ -131,31 +97,6 @@ fn select<'a>(runs: &'a [Run], experiments: &[&str], variant: &str, c: f64) -> V
 /// The Table 3 ensemble at concentration `c` (velocity Verlet).
 pub fn table3_runs(runs: &[Run], c: f64) -> Vec<&Run> {
     select(runs, &TABLE3, "", c)
-}
-
-/// Paired relative change of `b` against `a` (%), matched by seed: each seed's
-/// 100 (b_s − a_s)/ā, mean ± CI95 over the seeds both have.
-fn paired(a: &[&Run], b: &[&Run], value: impl Fn(&Run) -> f64) -> Estimate {
-    let pairs: Vec<(f64, f64)> =
-        a.iter().filter_map(|ra| b.iter().find(|rb| rb.seed == ra.seed).map(|rb| (value(ra), value(rb)))).collect();
-    let reference = Estimate::of(&pairs.iter().map(|p| p.0).collect::<Vec<_>>()).mean;
-    Estimate::of(&pairs.iter().map(|(x, y)| 100.0 * (y - x) / reference).collect::<Vec<_>>())
-}
-
-/// [`paired`] on the runs' mean lengths.
-pub fn paired_change(a: &[&Run], b: &[&Run]) -> Estimate {
-    paired(a, b, |r| r.mean_length_um())
-}
-
-/// Relative change of the mean of `b` against the mean of `a` (%) for unpaired ensembles, with
-/// the half-width √(CI_a² + CI_b²)/ā (conservative for independent means).
-fn unpaired(a: &[f64], b: &[f64]) -> Estimate {
-    let (ea, eb) = (Estimate::of(a), Estimate::of(b));
-    Estimate {
-        n: ea.n.min(eb.n),
-        mean: 100.0 * (eb.mean / ea.mean - 1.0),
-        ci95: 100.0 * ea.ci95.hypot(eb.ci95) / ea.mean,
-    }
 }
 
 fn lengths(runs: &[&Run]) -> Vec<f64> {
@@ -1265,7 +1206,7 @@ pub fn measurement(inp: &Inputs) -> Result<Value, Error> {
     write(&mut df, &inp.tables, "measurement")?;
     let headers: Vec<&str> = ["c (mg/ml)", "runs"].into_iter().chain(MEASURES).chain(["experiment"]).collect();
     let md = markdown(&frame(cells)?, &headers, &[3, 0, 1, 1, 1, 1, 1, 1, 0])?;
-    let imaging = super::runs::IMAGING;
+    let imaging = crate::report::runs::IMAGING;
     Ok(context! {
         ran => true,
         table => md,
@@ -1280,7 +1221,7 @@ pub fn measurement(inp: &Inputs) -> Result<Value, Error> {
 /// The six measures of one run's last frame (µm): 3-D, projected and image lengths, each over
 /// all aggregates and over those of two or more particles.
 fn measures(r: &Run) -> [f64; 6] {
-    let m = |v: Vec<f64>| super::runs::mean_um(&v);
+    let m = |v: Vec<f64>| crate::report::runs::mean_um(&v);
     let finite = || r.last.iter().filter(|a| !a.percolating);
     let [projected, projected_2, image, image_2] = r.image.unwrap_or([f64::NAN; 4]);
     [
@@ -1291,135 +1232,6 @@ fn measures(r: &Run) -> [f64; 6] {
         image,
         image_2,
     ]
-}
-
-/// Every explanation ranked by the size of its effect at each concentration.
-pub fn ranking_section(effects: &[Effect], t: &Targets, runs: &[Run], tables: &Path) -> Result<String, Error> {
-    let mut md = String::from("## Why the numbers differ\n\n");
-    if effects.is_empty() {
-        return Ok(md + "No effects measured yet.\n\n");
-    }
-    md += "Each explanation's effect on the mean aggregate length at 5 ms, as a change of magdem's answer (%, mean ± CI95), \
-           ranked by its size at each concentration. The effects come from the sections above and from the sensitivity \
-           study, and each row names what it compares. For *seeds* the number is the CI95 of the Table 3 mean, the \
-           statistical uncertainty the other effects must clear. The first line of each block gives how far magdem's Table 3 \
-           mean (velocity Verlet) lies from the experiment's and the paper's.\n\n";
-    let (mut c_col, mut e_col, mut w_col, mut m_col, mut ci_col, mut n_col) =
-        (vec![], vec![], vec![], vec![], vec![], vec![]);
-    for (&c, (&exp, &paper)) in t.concentration.iter().zip(t.experiment.iter().zip(&t.paper)) {
-        let mut here: Vec<&Effect> =
-            effects.iter().filter(|e| same(e.concentration, c) && e.change.mean.is_finite()).collect();
-        if here.is_empty() {
-            continue;
-        }
-        // The seeds rank by their CI95, every other explanation by its mean change.
-        let size = |e: &Effect| if e.explanation == Explanation::Seeds { e.change.ci95 } else { e.change.mean.abs() };
-        here.sort_by(|a, b| size(b).total_cmp(&size(a)));
-        let table3 = Estimate::of(&lengths(&table3_runs(runs, c)));
-        let _ = writeln!(
-            md,
-            "**{c} mg/ml**: magdem {:.0} ± {:.0} µm; against the experiment ({exp:.0} µm) {:+.0} %, against the paper ({paper:.0} µm) {:+.0} %.\n\n| rank | explanation | effect (%) | ± CI95 | what is compared |\n|---|---|---|---|---|",
-            table3.mean,
-            table3.ci95,
-            100.0 * (table3.mean / exp - 1.0),
-            100.0 * (table3.mean / paper - 1.0)
-        );
-        for (rank, e) in here.iter().enumerate() {
-            let effect =
-                if e.explanation == Explanation::Seeds { "±".to_string() } else { format!("{:+.1}", e.change.mean) };
-            let name = e.explanation.name();
-            let _ = writeln!(md, "| {} | {name} | {effect} | {:.1} | {} |", rank + 1, e.change.ci95, e.what);
-            c_col.push(c);
-            e_col.push(name.to_string());
-            w_col.push(e.what.clone());
-            m_col.push(e.change.mean);
-            ci_col.push(e.change.ci95);
-            n_col.push(e.change.n as f64);
-        }
-        let missing: Vec<&str> = Explanation::ALL
-            .into_iter()
-            .filter(|x| !here.iter().any(|e| e.explanation == *x))
-            .map(Explanation::name)
-            .collect();
-        if !missing.is_empty() {
-            let _ = writeln!(md, "\nNot measured at {c} mg/ml: {}.", missing.join(", "));
-        }
-        md += "\n";
-    }
-    let mut df = DataFrame::new(vec![
-        col("concentration_mg_per_ml", c_col),
-        scol("explanation", e_col),
-        scol("what", w_col),
-        col("change_percent", m_col),
-        col("ci95_percent", ci_col),
-        col("runs_or_pairs", n_col),
-    ])?;
-    write(&mut df, tables, "explanations")?;
-    md += &closest_combination(runs, t, effects);
-    Ok(md)
-}
-
-/// The combination of physically defensible choices that comes closest to the experiment at all
-/// four concentrations at once (one bead magnetisation for every concentration).
-fn closest_combination(runs: &[Run], t: &Targets, effects: &[Effect]) -> String {
-    let sweep: Vec<&Run> = runs.iter().filter(|r| r.experiment == "paper-magnetisation" && r.completed()).collect();
-    let mut variants: Vec<(String, f64)> = vec![];
-    for r in &sweep {
-        if !variants.iter().any(|v| v.0 == r.variant) && r.magnetisation <= 4.8e5 * (1.0 + 1e-9) {
-            variants.push((r.variant.clone(), r.magnetisation));
-        }
-    }
-    if variants.is_empty() {
-        return "The combination that comes closest needs the magnetisation sweep (`experiments/paper/opt-in/magnetisation.toml`).\n\n".into();
-    }
-    variants.sort_by(|a, b| a.1.total_cmp(&b.1));
-    let measurement = |c: f64| {
-        effects
-            .iter()
-            .find(|e| same(e.concentration, c) && e.explanation == Explanation::Measurement)
-            .map_or(0.0, |e| e.change.mean)
-    };
-    let mut best: Option<(f64, String, bool, Vec<f64>)> = None;
-    for (name, m) in &variants {
-        for imaged in [false, true] {
-            let predicted: Vec<f64> = t
-                .concentration
-                .iter()
-                .map(|&c| {
-                    Estimate::of(&lengths(&select(runs, &["paper-magnetisation"], name, c))).mean
-                        * if imaged { 1.0 + measurement(c) / 100.0 } else { 1.0 }
-                })
-                .collect();
-            if predicted.iter().any(|p| !p.is_finite()) {
-                continue;
-            }
-            let score = (predicted.iter().zip(&t.experiment).map(|(p, e)| (p / e).ln().powi(2)).sum::<f64>()
-                / predicted.len() as f64)
-                .sqrt();
-            if best.as_ref().is_none_or(|b| score < b.0) {
-                best = Some((score, format!("{name} (M = {m:.2e} A/m)"), imaged, predicted));
-            }
-        }
-    }
-    let Some((score, name, imaged, predicted)) = best else { return String::new() };
-    let rows: Vec<String> = t
-        .concentration
-        .iter()
-        .zip(&predicted)
-        .zip(&t.experiment)
-        .map(|((c, p), e)| format!("{c} mg/ml: {p:.0} µm against {e:.0} ({:+.0} %)", 100.0 * (p / e - 1.0)))
-        .collect();
-    format!(
-        "**Closest defensible combination.** One bead magnetisation for all four concentrations (the same beads), at most \
-         bulk magnetite's saturation (4.8e5 A/m; composite beads of 1087 kg/m³ hold less), at the paper's box and 5 ms, \
-         measured in 3-D or as projected MajorAxisLength. Over the swept values, the choice that minimises the RMS \
-         log-ratio to the experiment is {name}, {} ({}). The RMS log-ratio is {score:.2}, a factor {:.2} typical. \
-         The box and the stopping time are left out of the combination: the experiment held about 10⁶ particles, and its \
-         observation time is not stated. Their effects, ranked above, say how much each would move the answer.\n\n",
-        if imaged { "projected" } else { "3-D" },
-        rows.join("; "),
-        score.exp()
-    )
 }
 
 #[cfg(test)]
