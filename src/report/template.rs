@@ -2,7 +2,8 @@
 //! numbers, tables and figures and passes them in by name; the words live in the templates.
 //!
 //! Filters for numbers (NaN or a missing value prints "–"):
-//! `f(n)` fixed with n decimals, `signed(n)` with its sign, `sci(n)` as 4.80e5, `pm(n)` an
+//! `f(n)` fixed with n decimals, `signed(n)` with its sign, `sci(n)` as 4.80e5, `g(n)` n significant
+//! figures, fixed between 0.01 and 1e4 and scientific outside, `pm(n)` an
 //! estimate `{mean, ci95}` as "mean ± ci95", `spm(n)` the same signed, `int` with thin thousands.
 
 use minijinja::value::{Kwargs, Value};
@@ -64,6 +65,19 @@ fn signed(v: Value, digits: Option<usize>) -> String {
     number(&v).map_or("–".into(), |x| format!("{:+.*}", digits.unwrap_or(1), x).replace('-', "−"))
 }
 
+/// Fixed with `digits` significant figures between 0.01 and 1e4, else scientific.
+fn general(v: Value, digits: Option<usize>) -> String {
+    let digits = digits.unwrap_or(2);
+    match number(&v) {
+        Some(x) if x == 0.0 || (1e-2..1e4).contains(&x.abs()) => {
+            let decimals = (digits as i32 - 1 - x.abs().log10().floor() as i32).max(0) as usize;
+            format!("{x:.decimals$}").replace('-', "−")
+        }
+        Some(_) => sci(v, Some(digits.saturating_sub(1))),
+        None => "–".into(),
+    }
+}
+
 fn sci(v: Value, digits: Option<usize>) -> String {
     number(&v).map_or("–".into(), |x| format!("{:.*e}", digits.unwrap_or(2), x).replace('-', "−"))
 }
@@ -109,6 +123,7 @@ pub fn environment() -> Environment<'static> {
     env.add_filter("f", fixed);
     env.add_filter("signed", signed);
     env.add_filter("sci", sci);
+    env.add_filter("g", general);
     env.add_filter("int", int);
     env.add_filter("pm", |v: Value, d: Option<usize>| estimate(&v, d.unwrap_or(1), false));
     env.add_filter("spm", |v: Value, d: Option<usize>| estimate(&v, d.unwrap_or(1), true));
