@@ -87,16 +87,7 @@ pub fn table3(inp: &Inputs) -> Result<Value, Error> {
     let ens = ensembles(runs, &conc);
     let (paper_mean, paper_std) = (floats(&paper.table3, "sim_mean_length_um")?, floats(&paper.table3, "sim_std_um")?);
     let (exp_mean, exp_std) = (floats(&paper.table3, "exp_mean_length_um")?, floats(&paper.table3, "exp_std_um")?);
-    let sweep = |c: f64| -> Vec<&Run> {
-        runs.iter()
-            .filter(|r| {
-                r.experiment == "paper-magnetisation"
-                    && r.variant == SATURATED
-                    && r.completed()
-                    && same(r.concentration, c)
-            })
-            .collect()
-    };
+    let sweep = |c: f64| convergence::select(runs, &["paper-magnetisation"], SATURATED, c);
     let saturated: Vec<convergence::Estimate> = conc
         .iter()
         .map(|&c| convergence::Estimate::of(&sweep(c).iter().map(|r| r.mean_length_um()).collect::<Vec<_>>()))

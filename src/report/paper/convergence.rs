@@ -81,7 +81,7 @@ pub struct Effect {
 }
 
 /// Completed runs of `experiments` with `variant` at concentration `c`, by seed (one per seed).
-fn select<'a>(runs: &'a [Run], experiments: &[&str], variant: &str, c: f64) -> Vec<&'a Run> {
+pub(crate) fn select<'a>(runs: &'a [Run], experiments: &[&str], variant: &str, c: f64) -> Vec<&'a Run> {
     let mut by_seed: BTreeMap<u64, &Run> = BTreeMap::new();
     for r in runs.iter().filter(|r| {
         r.completed()

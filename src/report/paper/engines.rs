@@ -52,20 +52,9 @@ fn reference(runs: &[Run], out: &Path, tables: &Path) -> Result<Value, Error> {
                 .map(|r| if r.completed() { "completed".to_string() } else { format!("{} {}", r.status, r.message) })
                 .collect(),
         ),
-        col(
-            "aggregates",
-            here.iter().map(|r| if r.completed() { r.last.len() as f64 } else { f64::NAN }).collect::<Vec<_>>(),
-        ),
-        col(
-            "mean_length_um",
-            here.iter().map(|r| if r.completed() { r.mean_length_um() } else { f64::NAN }).collect::<Vec<_>>(),
-        ),
-        col(
-            "pop_std_um",
-            here.iter()
-                .map(|r| if r.completed() { summary(&r.lengths_um()).population_std } else { f64::NAN })
-                .collect::<Vec<_>>(),
-        ),
+        col("aggregates", of_completed(here.iter().copied(), |r| r.last.len() as f64)),
+        col("mean_length_um", of_completed(here.iter().copied(), Run::mean_length_um)),
+        col("pop_std_um", of_completed(here.iter().copied(), |r| summary(&r.lengths_um()).population_std)),
         col(
             "largest",
             here.iter()
@@ -293,30 +282,11 @@ pub fn runs(inp: &Inputs) -> Result<Value, Error> {
         scol("source", runs.iter().map(|r| r.source.name().to_string()).collect()),
         scol("message", runs.iter().map(|r| r.message.clone()).collect()),
         col("end_time_s", runs.iter().map(|r| r.times.last().copied().unwrap_or(f64::NAN)).collect::<Vec<_>>()),
-        col(
-            "aggregates",
-            runs.iter().map(|r| if r.completed() { r.last.len() as f64 } else { f64::NAN }).collect::<Vec<_>>(),
-        ),
-        col(
-            "mean_length_um",
-            runs.iter().map(|r| if r.completed() { r.mean_length_um() } else { f64::NAN }).collect::<Vec<_>>(),
-        ),
-        col(
-            "pop_std_um",
-            runs.iter()
-                .map(|r| if r.completed() { summary(&r.lengths_um()).population_std } else { f64::NAN })
-                .collect::<Vec<_>>(),
-        ),
-        col(
-            "sample_std_um",
-            runs.iter()
-                .map(|r| if r.completed() { summary(&r.lengths_um()).sample_std } else { f64::NAN })
-                .collect::<Vec<_>>(),
-        ),
-        col(
-            "box_limited_fraction",
-            runs.iter().map(|r| if r.completed() { r.box_limited_fraction() } else { f64::NAN }).collect::<Vec<_>>(),
-        ),
+        col("aggregates", of_completed(runs, |r| r.last.len() as f64)),
+        col("mean_length_um", of_completed(runs, Run::mean_length_um)),
+        col("pop_std_um", of_completed(runs, |r| summary(&r.lengths_um()).population_std)),
+        col("sample_std_um", of_completed(runs, |r| summary(&r.lengths_um()).sample_std)),
+        col("box_limited_fraction", of_completed(runs, Run::box_limited_fraction)),
         ucol("percolating", runs.iter().map(|r| r.percolating() as u64).collect()),
         col("wall_time_s", runs.iter().map(|r| r.wall_time).collect::<Vec<_>>()),
     ])?;
@@ -377,4 +347,9 @@ pub fn provenance(inp: &Inputs) -> Result<Value, Error> {
         from_digests => count(&|r| r.source == crate::report::runs::Source::Digest),
         gap => inp.options.gap,
     })
+}
+
+/// `value` of each completed run, NaN for the others: a column of a run table.
+fn of_completed<'a>(runs: impl IntoIterator<Item = &'a Run>, value: impl Fn(&Run) -> f64) -> Vec<f64> {
+    runs.into_iter().map(|r| if r.completed() { value(r) } else { f64::NAN }).collect()
 }

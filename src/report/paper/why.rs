@@ -205,19 +205,20 @@ fn reference_slow_every(runs: &[Run]) -> Option<u64> {
 
 /// The experiment that switches the shielding off under Table 3's integrator and seeds.
 pub const SHIELDING_VERLET: &str = "paper-shielding-verlet";
+/// Its variant without the shielded area.
+const SHIELDING_OFF: &str = "no-shielding";
 
 /// Paired change of the mean length when the shielded area is switched off, under velocity
 /// Verlet against the Table 3 runs of the same seeds (%).
 fn shielding_verlet(runs: &[Run], c: f64) -> convergence::Estimate {
-    let off: Vec<&Run> =
-        runs.iter().filter(|r| r.experiment == SHIELDING_VERLET && r.completed() && same(r.concentration, c)).collect();
+    let off = convergence::select(runs, &[SHIELDING_VERLET], SHIELDING_OFF, c);
     convergence::paired_change(&convergence::table3_runs(runs, c), &off)
 }
 
 /// True where the shielding's effect at `c` comes from the Verlet pairs instead of the
 /// sensitivity study's r-RESPA pairs.
 fn shielding_on_verlet(inp: &Inputs, variant: &str, c: f64) -> bool {
-    variant == "no-shielding" && shielding_verlet(inp.runs, c).n >= 2
+    variant == SHIELDING_OFF && shielding_verlet(inp.runs, c).n >= 2
 }
 
 /// One effect in a concentration's ranking.
@@ -369,22 +370,13 @@ pub fn shielding(inp: &Inputs) -> Result<Value, Error> {
             change: verlet,
         });
     }
-    fn pick<'a>(runs: &'a [Run], experiment: &str, variant: &str, c: f64) -> Vec<&'a Run> {
-        let mut v: Vec<&Run> = runs
-            .iter()
-            .filter(|r| r.experiment == experiment && r.variant == variant && r.completed() && same(r.concentration, c))
-            .collect();
-        v.sort_by_key(|r| r.seed);
-        v
-    }
+    let pick = |runs, experiment, variant| convergence::select(runs, &[experiment], variant, c);
     let respa = convergence::paired_change(
-        &pick(inp.runs, "paper-sensitivity", "respa", c),
-        &pick(inp.runs, "paper-sensitivity", "no-shielding", c),
+        &pick(inp.runs, "paper-sensitivity", "respa"),
+        &pick(inp.runs, "paper-sensitivity", "no-shielding"),
     );
-    let stokes = convergence::paired_change(
-        &pick(inp.hydro, "hydro-case1", "a-eff", c),
-        &pick(inp.hydro, "hydro-case1", "stokes", c),
-    );
+    let stokes =
+        convergence::paired_change(&pick(inp.hydro, "hydro-case1", "a-eff"), &pick(inp.hydro, "hydro-case1", "stokes"));
     // Whether the r-RESPA and the Verlet estimates differ by more than their combined CI95.
     let gap = convergence::Estimate {
         n: respa.n.min(verlet.n),
