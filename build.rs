@@ -3,6 +3,11 @@
 use std::path::PathBuf;
 use std::process::Command;
 
+/// What the binary is built from: its sources. A dirty file elsewhere (a report, a run) does not
+/// change the binary, and `.git/index` is not watched: `git status` rewrites it, so watching it
+/// rebuilt magdem after every `git status`.
+const SOURCES: &[&str] = &["src", "templates", "Cargo.toml", "Cargo.lock", "build.rs"];
+
 fn main() {
     let commit = Command::new("git")
         .args(["rev-parse", "--short=12", "HEAD"])
@@ -12,18 +17,29 @@ fn main() {
         .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
         .unwrap_or_else(|| "unknown".into());
     let dirty = Command::new("git")
-        .args(["status", "--porcelain", "--untracked-files=no"])
+        .args(["status", "--porcelain", "--untracked-files=no", "--"])
+        .args(SOURCES)
         .output()
         .ok()
         .is_some_and(|o| !o.stdout.is_empty());
     println!("cargo:rustc-env=MAGDEM_GIT_COMMIT={commit}{}", if dirty { "-dirty" } else { "" });
-    println!("cargo:rerun-if-changed=.git/HEAD");
-    println!("cargo:rerun-if-changed=.git/index");
+    // A new commit moves HEAD or a branch ref (loose or packed); a path that does not exist
+    // would rerun this script on every build, so only existing ones are watched.
+    for path in [".git/HEAD", ".git/refs/heads", ".git/packed-refs"].iter().chain(SOURCES) {
+        if std::path::Path::new(path).exists() {
+            println!("cargo:rerun-if-changed={path}");
+        }
+    }
 
     let shim = "src/reference/shim/liggghts_shim.cpp";
     println!("cargo:rerun-if-changed={shim}");
     if std::env::var_os("CARGO_FEATURE_LIGGGHTS_SHIM").is_some() {
         let out = PathBuf::from(std::env::var("OUT_DIR").unwrap()).join("libmagdem_liggghts_shim.so");
+        println!("cargo:rustc-env=MAGDEM_LIGGGHTS_SHIM={}", out.display());
+        let modified = |p: &std::path::Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
+        if modified(&out).is_some_and(|built| modified(shim.as_ref()).is_some_and(|source| built > source)) {
+            return;
+        }
         // The cc crate finds the C++ compiler and its flags; the shim is linked as a shared object.
         let compiler = cc::Build::new().cpp(true).get_compiler();
         let status = compiler
@@ -35,6 +51,5 @@ fn main() {
             .status()
             .expect("run the C++ compiler");
         assert!(status.success(), "building the LIGGGHTS shim failed (is libliggghts-dev installed?)");
-        println!("cargo:rustc-env=MAGDEM_LIGGGHTS_SHIM={}", out.display());
     }
 }

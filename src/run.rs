@@ -79,6 +79,26 @@ fn check_space(scene: &Scene, output: &Path, frame: usize, contacts: usize) -> R
     }
 }
 
+/// Refuses, before anything is written, a run whose frames (without contacts) alone exceed the
+/// free space of the output's disk.
+fn check_run_space(scene: &Scene, output: &Path) -> Result<(), RunFailure> {
+    let frames = scene.total_steps() / scene.steps_per_frame() + 1;
+    let vectors = if scene.spec.output.forces { 6 } else { 4 };
+    let frame = scene.initial.len() as f64 * 24.0 * vectors as f64;
+    let needed = frames as f64 * frame;
+    match free_space(output) {
+        Some(free) if needed > free as f64 => Err(RunFailure::Refused(format!(
+            "integration.end_time = {:e} with output.interval = {:e} s gives {frames} frames of {:.3e} bytes ({needed:.3e} in all), \
+             and the disk of {} has {free} bytes free: shorten the run or write fewer frames",
+            scene.spec.integration.end_time,
+            scene.steps_per_frame() as f64 * scene.dt(),
+            frame,
+            output.display(),
+        ))),
+        _ => Ok(()),
+    }
+}
+
 /// An exclusive lock on `<output>.lock` for the life of a run: a second process writing the
 /// same file is refused at start. The operating system releases the lock when the process ends,
 /// however it ends (a `kill -9` leaves the lock file but not the lock).
@@ -159,6 +179,9 @@ pub struct RunSummary {
 /// executes on a thread of the current rayon pool, so that a step's parallel loops start from
 /// inside the pool instead of handing work over from outside it at every step.
 pub fn run(scene: &Scene, output: &Path, options: &RunOptions) -> Result<RunSummary, RunFailure> {
+    if !(options.resume && output.exists()) {
+        check_run_space(scene, output)?;
+    }
     let _lock = OutputLock::acquire(output)?;
     check_existing(scene, output, options)?;
     let result = rayon::scope(|_| run_in_pool(scene, output, options));

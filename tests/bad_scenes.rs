@@ -74,22 +74,58 @@ fn every_bad_scene_of_the_corpus_is_refused_with_a_message_naming_the_cause() {
     }
 }
 
+/// `validate` and `run` refuse the same scenes with the same one-line message and code 2, and
+/// `run` writes nothing: a zero step, a run of more steps than an f64 counts exactly, no particles.
 #[test]
-fn cli_exits_with_code_2_and_one_line_on_a_bad_scene() {
-    let work = tempfile::Builder::new().prefix("magdem-bad-").tempdir().unwrap();
-    let dir = work.path();
-    let path = dir.join("bad.toml");
-    std::fs::write(&path, edit("dt = 1.0e-8", "dt = 0.0")).unwrap();
-    let (scene, output) = (path.to_str().unwrap(), dir.join("x.h5"));
-    let runs: [(&str, Vec<&str>); 2] =
-        [("validate", vec!["validate", scene]), ("run", vec!["run", scene, "-q", "-o", output.to_str().unwrap()])];
-    for (sub, args) in runs {
-        let out = Command::new(env!("CARGO_BIN_EXE_magdem")).args(&args).output().unwrap();
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(2), "{sub}: {stderr}");
-        assert_eq!(stderr.trim().lines().count(), 1, "{sub}: {stderr}");
-        assert!(stderr.contains("integration.dt = 0"), "{sub}: {stderr}");
+fn validate_and_run_refuse_alike_with_code_2_and_one_line() {
+    let zero_count = "positions = [[2.0e-5, 5.0e-5, 5.0e-5], [8.0e-5, 5.0e-5, 5.0e-5]]";
+    for (from, to, expected) in [
+        ("dt = 1.0e-8", "dt = 0.0", "integration.dt = 0"),
+        ("end_time = 1.0e-6", "end_time = 1.0e300", "integration.end_time = 1e300"),
+        (zero_count, "count = 0", "particles[0].count = 0: the scene places no particles"),
+    ] {
+        let work = tempfile::Builder::new().prefix("magdem-bad-").tempdir().unwrap();
+        let dir = work.path();
+        let path = dir.join("bad.toml");
+        std::fs::write(&path, edit(from, to)).unwrap();
+        let (scene, output) = (path.to_str().unwrap(), dir.join("x.h5"));
+        let runs: [(&str, Vec<&str>); 2] =
+            [("validate", vec!["validate", scene]), ("run", vec!["run", scene, "-q", "-o", output.to_str().unwrap()])];
+        let mut messages = vec![];
+        for (sub, args) in runs {
+            let out = Command::new(env!("CARGO_BIN_EXE_magdem")).args(&args).output().unwrap();
+            let stderr = String::from_utf8_lossy(&out.stderr).trim().to_string();
+            assert_eq!(out.status.code(), Some(2), "{sub}: {stderr}");
+            assert_eq!(stderr.lines().count(), 1, "{sub}: {stderr}");
+            assert!(stderr.contains(expected), "{sub}: {stderr}");
+            messages.push(stderr);
+        }
+        assert_eq!(messages[0], messages[1]);
+        assert!(!output.exists(), "{to}: run wrote {}", output.display());
     }
+}
+
+/// A run whose frames alone exceed the free space of its disk is refused before it writes
+/// anything: an fcc bed of a few hundred particles, 1e12 frames of ~1e4 bytes (~1e16 bytes).
+#[test]
+fn a_run_larger_than_its_disk_is_refused_before_writing() {
+    let work = tempfile::Builder::new().prefix("magdem-disk-").tempdir().unwrap();
+    let dir = work.path();
+    let path = dir.join("huge.toml");
+    let positions = "positions = [[2.0e-5, 5.0e-5, 5.0e-5], [8.0e-5, 5.0e-5, 5.0e-5]]";
+    let text = edit(positions, "lattice = { kind = \"fcc\" }")
+        .replace("end_time = 1.0e-6", "end_time = 1.0e4\n[output]\ninterval = 1.0e-8");
+    std::fs::write(&path, text).unwrap();
+    let output = dir.join("huge.h5");
+    let out = Command::new(env!("CARGO_BIN_EXE_magdem"))
+        .args(["run", path.to_str().unwrap(), "-q", "-o", output.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("integration.end_time") && stderr.contains("output.interval"), "{stderr}");
+    assert!(stderr.contains("bytes free"), "{stderr}");
+    assert!(std::fs::read_dir(dir).unwrap().count() == 1, "run wrote into {}", dir.display());
 }
 
 #[test]

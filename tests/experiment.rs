@@ -169,6 +169,7 @@ fn bad_variants_name_the_key() {
         ("[variants.x]\nengine = \"lammps\"\n", "variants.x.engine"),
         ("[variants]\nx = 3\n", "variants.x"),
         ("[variants.\"a b\"]\nseed = 2\n", "names use letters"),
+        ("[variants.mu-r-12.3]\n\"integration.dt\" = 1.0e-8\n", "[variants.\"mu-r-12.3\"]"),
     ] {
         let (_work, file, _) = setup("badvariant", "seed = [1]\n");
         let text = std::fs::read_to_string(&file).unwrap();

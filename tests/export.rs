@@ -85,34 +85,43 @@ fn paraview_reads_the_xdmf_sidecar_and_renders_a_frame() {
     let xdmf = h5.with_extension("xdmf");
     assert!(xdmf.exists(), "run writes the sidecar beside the file");
     let (n, frames, x7) = truth(&h5);
+    // ParaView's default reader for the file (`OpenDataFile`, Xdmf3ReaderS) and the legacy one.
     let script = r#"
-import sys
-from paraview.simple import XDMFReader
+import os, sys
+from paraview.simple import OpenDataFile, XDMFReader
 from paraview import servermanager
-r = XDMFReader(FileNames=[sys.argv[1]])
+path = os.path.abspath(sys.argv[1])
+r = OpenDataFile(path) if sys.argv[2] == "default" else XDMFReader(FileNames=[path])
+print("reader", r.GetXMLName())
 r.UpdatePipelineInformation()
 times = r.TimestepValues
-r.UpdatePipeline(times[-1])
+points = []
+for t in times:
+    r.UpdatePipeline(t)
+    points.append(servermanager.Fetch(r).GetNumberOfPoints())
 data = servermanager.Fetch(r)
 print("frames", len(times))
-print("points", data.GetNumberOfPoints())
+print("points", min(points), max(points))
 print("x7", *data.GetPoint(7))
 names = [data.GetPointData().GetArrayName(i) for i in range(data.GetPointData().GetNumberOfArrays())]
 print("arrays", len(names), " ".join(names))
 "#;
     let work = h5.parent().unwrap();
     std::fs::write(work.join("check.py"), script).unwrap();
-    let out = Command::new("pvpython").args([path(&work.join("check.py")), path(&xdmf)]).output().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert_eq!(numbers(&out.stdout, "frames ")[0] as usize, frames);
-    assert_eq!(numbers(&out.stdout, "points ")[0] as usize, n);
-    let x = numbers(&out.stdout, "x7 ");
-    for k in 0..3 {
-        assert!((x[k] - x7[k]).abs() <= 1e-12 * x7[k].abs().max(1e-9), "ParaView {x:?} against HDF5 {x7:?}");
-    }
-    let text = String::from_utf8_lossy(&out.stdout);
-    for array in ["radius", "species", "velocity", "angular_velocity", "moment"] {
-        assert!(text.contains(array), "{array} in {text}");
+    for (reader, name) in [("default", "Xdmf3ReaderS"), ("legacy", "XdmfReader")] {
+        let out = Command::new("pvpython").args([path(&work.join("check.py")), path(&xdmf), reader]).output().unwrap();
+        assert!(out.status.success(), "{reader}: {}", String::from_utf8_lossy(&out.stderr));
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(text.contains(&format!("reader {name}")), "{reader}: {text}");
+        assert_eq!(numbers(&out.stdout, "frames ")[0] as usize, frames, "{reader}");
+        assert_eq!(numbers(&out.stdout, "points "), [n as f64, n as f64], "{reader}: every frame's points");
+        let x = numbers(&out.stdout, "x7 ");
+        for k in 0..3 {
+            assert!((x[k] - x7[k]).abs() <= 1e-12 * x7[k].abs().max(1e-9), "{reader}: {x:?} against HDF5 {x7:?}");
+        }
+        for array in ["radius", "species", "velocity", "angular_velocity", "moment"] {
+            assert!(text.contains(array), "{reader}: {array} in {text}");
+        }
     }
     if !has("Xvfb", &["-help"]) {
         println!("skipped the render: Xvfb (Debian's xvfb) is not installed");

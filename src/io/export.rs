@@ -1,8 +1,12 @@
 //! Trajectories for the tools of the field: an XDMF sidecar (`OUT.xdmf` beside `OUT.h5`) that
 //! ParaView reads, describing each frame as points with radius, species, velocity, angular
-//! velocity and moment by reference to the HDF5 datasets in place (hyperslabs, no copy), and a
-//! LAMMPS text dump (`id type x y z vx vy vz radius mux muy muz`) that OVITO and LAMMPS' own
-//! tools read.
+//! velocity and moment, and a LAMMPS text dump (`id type x y z vx vy vz radius mux muy muz`) that
+//! OVITO and LAMMPS' own tools read.
+//!
+//! ParaView's two XDMF readers name a frame of `/frames/<name>` differently (the legacy reader a
+//! `HyperSlab` item, the default `Xdmf3ReaderS` a `path|start:stride:count:dims` suffix), and
+//! neither reads the other's form. So the sidecar names plain datasets `/xdmf/<name>/<frame>`:
+//! HDF5 virtual datasets, each mapping one frame of `/frames/<name>` (no copy of the data).
 
 use super::trajectory::Trajectory;
 use crate::scene::Scene;
@@ -21,13 +25,42 @@ pub fn beside(path: &Path, ext: &str) -> PathBuf {
 }
 
 /// A hyperslab of frame `k` of the (F, N, 3) dataset `name` of `file`.
-fn slab(file: &str, name: &str, k: usize, frames: usize, n: usize) -> String {
+/// The sidecar's item for frame `k` of `/frames/<name>`: its virtual dataset.
+fn slab(file: &str, name: &str, k: usize, n: usize) -> String {
     format!(
-        "<DataItem ItemType=\"HyperSlab\" Dimensions=\"{n} 3\" Type=\"HyperSlab\">\
-         <DataItem Dimensions=\"3 3\" Format=\"XML\">{k} 0 0 1 1 1 1 {n} 3</DataItem>\
-         <DataItem Dimensions=\"{frames} {n} 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">{file}:/frames/{name}</DataItem>\
-         </DataItem>"
+        "<DataItem Dimensions=\"{n} 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">{file}:/{VIEWS}/{name}/{k}</DataItem>"
     )
+}
+
+/// The group of the per-frame virtual datasets the sidecar names.
+pub const VIEWS: &str = "xdmf";
+
+/// Frame `k` of a `frames × n × 3` dataset.
+fn frame_of(k: usize, n: usize) -> hdf5::Hyperslab {
+    vec![(k..k + 1).into(), (0..n).into(), (0..3).into()].into()
+}
+
+/// Adds to `h5` the virtual dataset `/xdmf/<name>/<k>` of every frame `k` and per-frame vector
+/// `name` that it lacks: an `n × 3` view of `/frames/<name>[k]` in the same file.
+fn write_frame_views(h5: &Path, frames: usize, n: usize) -> Result<(), Error> {
+    let file = hdf5::File::open_rw(h5)?;
+    let views = file.group(VIEWS).or_else(|_| file.create_group(VIEWS))?;
+    for name in std::iter::once("position").chain(VECTORS.iter().map(|(name, _)| *name)) {
+        let group = views.group(name).or_else(|_| views.create_group(name))?;
+        let source = format!("frames/{name}");
+        let extents = file.dataset(&source)?.shape();
+        for k in 0..frames {
+            if group.link_exists(&k.to_string()) {
+                continue;
+            }
+            group
+                .new_dataset::<f64>()
+                .shape((n, 3))
+                .virtual_map(".", &source, extents.clone(), frame_of(k, n), (n, 3), ..)
+                .create(k.to_string().as_str())?;
+        }
+    }
+    Ok(())
 }
 
 /// Writes the XDMF sidecar of trajectory `h5` (every frame it holds); returns its path.
@@ -35,6 +68,8 @@ pub fn write_xdmf(h5: &Path) -> Result<PathBuf, Error> {
     let t = Trajectory::open(h5)?;
     let (frames, n) = (t.frames()?, t.attr::<u64>("n_particles")? as usize);
     let times = t.times()?;
+    drop(t);
+    write_frame_views(h5, frames, n)?;
     // The sidecar sits beside the file and names it relatively, so the pair can move together.
     let file = h5.file_name().and_then(|f| f.to_str()).ok_or("trajectory path has no file name")?;
     let mut x = String::from(
@@ -51,13 +86,13 @@ pub fn write_xdmf(h5: &Path) -> Result<PathBuf, Error> {
              <DataItem Dimensions=\"{n}\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">{file}:/particles/radius</DataItem></Attribute>\n\
              <Attribute Name=\"species\" AttributeType=\"Scalar\" Center=\"Node\">\
              <DataItem Dimensions=\"{n}\" NumberType=\"UInt\" Precision=\"2\" Format=\"HDF\">{file}:/particles/species</DataItem></Attribute>\n",
-            slab(file, "position", k, frames, n)
+            slab(file, "position", k, n)
         );
         for (name, label) in VECTORS {
             let _ = writeln!(
                 x,
                 "<Attribute Name=\"{label}\" AttributeType=\"Vector\" Center=\"Node\">{}</Attribute>",
-                slab(file, name, k, frames, n)
+                slab(file, name, k, n)
             );
         }
         x += "</Grid>\n";

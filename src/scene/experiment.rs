@@ -147,6 +147,19 @@ impl Experiment {
             if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '.') {
                 return Err(invalid(&format!("variants.{name}"), name, "names use letters, digits, '-' and '.'"));
             }
+            // `[variants.mu-r-12.3]` is the table `3` inside the variant `mu-r-12`: its keys are
+            // dotted scene keys, which no scene section has.
+            for (key, value) in table {
+                if let toml::Value::Table(inner) = value {
+                    if inner.keys().any(|k| k.contains('.')) || key.parse::<f64>().is_ok() {
+                        return Err(invalid(
+                            &format!("variants.{name}.{key}"),
+                            value,
+                            format!("a variant's name with a dot needs quotes: [variants.\"{name}.{key}\"]"),
+                        ));
+                    }
+                }
+            }
             variants.push((Some(name.clone()), table.iter().map(|(k, v)| (k.clone(), v.clone())).collect()));
         }
         if variants.is_empty() {

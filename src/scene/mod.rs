@@ -135,6 +135,9 @@ impl Scene {
             }
             None => (place_particles(&spec, &domain, &species)?, ContactHistory::default()),
         };
+        if initial.is_empty() {
+            return Err(invalid("particles", 0, NO_PARTICLES));
+        }
         let hash = hasher.finalize().iter().map(|b| format!("{b:02x}")).collect();
         check_integration(&spec)?;
 
@@ -660,6 +663,9 @@ fn contact_law(c: &ContactSpec) -> ContactLaw {
     ContactLaw { normal, tangential }
 }
 
+/// The most steps a run may take: 2^53, below which every step number is exact in an f64.
+pub const MAX_STEPS: u64 = 1 << 53;
+
 fn check_integration(spec: &SceneSpec) -> Result<(), SceneError> {
     let i = &spec.integration;
     if i.slow_every == 0 || (i.slow_every > 1 && !i.scheme.multiple_time_stepping()) {
@@ -696,6 +702,18 @@ fn check_integration(spec: &SceneSpec) -> Result<(), SceneError> {
             "integration.tolerance",
             i.tolerance,
             "must lie in (0, 1): a fraction of a particle radius",
+        ));
+    }
+    // A step's time is `step as f64 * dt`: exact only while the step count fits in 53 bits.
+    let steps = (i.end_time / i.dt).round();
+    if steps > MAX_STEPS as f64 {
+        return Err(invalid(
+            "integration.end_time",
+            format!("{:e}", i.end_time),
+            format!(
+                "gives {steps:.3e} steps of integration.dt = {:e}; magdem counts at most 2^53 = {:.3e} steps",
+                i.dt, MAX_STEPS as f64
+            ),
         ));
     }
     if i.dt > i.end_time {
@@ -1004,6 +1022,9 @@ fn place_explicit(
     Ok(())
 }
 
+/// Why a scene without particles is refused.
+const NO_PARTICLES: &str = "the scene places no particles: a run needs at least one";
+
 fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Result<Particles, SceneError> {
     let mut particles = Particles::default();
     if spec.particles.is_empty() {
@@ -1020,6 +1041,9 @@ fn place_particles(spec: &SceneSpec, domain: &Domain, species: &[Species]) -> Re
             ));
         };
         let s = &species[si];
+        if group.count == Some(0) {
+            return Err(invalid(key("count"), 0, NO_PARTICLES));
+        }
         let given =
             [group.positions.is_some(), group.count.is_some(), group.concentration.is_some(), group.lattice.is_some()];
         if given.iter().filter(|&&b| b).count() != 1 {
