@@ -268,8 +268,9 @@ enum Command {
     /// Time magdem against LIGGGHTS and LAMMPS on the same scenes (contact forces alone in packed,
     /// loose and dilute beds of 300–30 000 particles, dipole forces at case-1 parameters), the
     /// paper's physics at 10³–10⁵ particles, the cost per particle against N and the second
-    /// thread; writes reports/performance.md (30–60 minutes on a 2-core machine with the default
-    /// repeats, the MPI demonstration included).
+    /// thread; saves the measurements as performance.json and writes reports/performance.md from
+    /// them (30–60 minutes on a 2-core machine with the default repeats, the MPI demonstration
+    /// included).
     Bench {
         /// Report directory.
         #[arg(long, default_value = "reports")]
@@ -288,7 +289,8 @@ enum Command {
         /// `mpirun -np 1` and `-np 2`, about 5 minutes).
         #[arg(long)]
         no_mpi: bool,
-        /// Only redraw performance-scaling.png from the performance.csv in --out (no timing).
+        /// Only rewrite performance.md and performance-scaling.png from the performance.json in
+        /// --out (no timing).
         #[arg(long)]
         redraw: bool,
     },
@@ -373,7 +375,7 @@ fn main() -> ExitCode {
         }
         Command::Info { file } => cli::trajectory::info(&file),
         Command::Export { files, format, output } => cli::trajectory::export(&files, format, output.as_deref()),
-        Command::Bench { out, redraw: true, .. } => cli::report_written(magdem::bench::report::redraw(&out)),
+        Command::Bench { out, redraw: true, .. } => cli::report::redraw_bench(&out),
         Command::Bench { out, work, repeats, max_particles, no_mpi, redraw: false } => {
             cli::report::bench(magdem::bench::Options { out, work, repeats, max_particles, mpi: !no_mpi })
         }

@@ -1,12 +1,13 @@
 //! `magdem bench`: magdem against LIGGGHTS and LAMMPS on the same scenes, the cost per particle
-//! as N grows, and what a second thread buys; writes `reports/performance.md` and its figure.
-//! Outside the physics core.
+//! as N grows, and what a second thread buys. [`measure`] runs the cases into a [`record`];
+//! `report::performance` writes `reports/performance.md` from it. Outside the physics core.
 //!
 //! Every case is a scene (TOML, written beside the runs so that it can be rerun by hand). magdem
 //! is timed around its step loop only (no output), like the "Loop time" LIGGGHTS and LAMMPS
 //! print; the engines run their generated decks as separate processes.
 
-pub mod report;
+pub mod measure;
+pub mod record;
 
 use crate::core::parallel;
 use crate::core::simulation::Simulation;
@@ -67,19 +68,51 @@ impl Packing {
     }
 }
 
-const SPECIES: &str = "[[species]]\nname = \"fe3o4\"\ndiameter = 11.0e-6\ndensity = 1087.0\nyoungs_modulus = 1.0e9\npoisson_ratio = 0.5\n\
-                       friction = 0.5\nrestitution = 0.5\nrelative_permeability = 12.3\n";
+/// Time step of every bench scene (s).
+pub const DT: f64 = 1.0e-8;
+/// The Fe₃O₄ spheres of every bench scene: diameter (m), Young's modulus (Pa), restitution and
+/// friction.
+pub const DIAMETER: f64 = 11.0e-6;
+pub const YOUNGS_MODULUS: f64 = 1.0e9;
+pub const RESTITUTION: f64 = 0.5;
+pub const FRICTION: f64 = 0.5;
+/// The magnetic scenes' field along x (T).
+pub const FIELD: f64 = 0.4;
+/// The paper's dipole cut-off (diameters).
+pub const CUTOFF_DIAMETERS: f64 = 15.0;
+/// The paper-physics scene's r-RESPA interval of the magnetic forces (steps).
+pub const PAPER_SLOW_EVERY: u64 = 10;
+
+fn species() -> String {
+    format!(
+        "[[species]]\nname = \"fe3o4\"\ndiameter = {DIAMETER:e}\ndensity = 1087.0\nyoungs_modulus = {YOUNGS_MODULUS:e}\n\
+         poisson_ratio = 0.5\nfriction = {FRICTION:e}\nrestitution = {RESTITUTION:e}\nrelative_permeability = 12.3\n"
+    )
+}
+
+/// Edge of the random packings' box for 300 particles (m).
+fn edge_for_300(packing: Packing) -> f64 {
+    if packing == Packing::Dilute {
+        5.0e-4
+    } else {
+        1.0e-4
+    }
+}
+
+/// Solid fraction of a random packing (the packed bed's is the lattice's).
+pub fn solid_fraction(packing: Packing) -> f64 {
+    300.0 * std::f64::consts::PI / 6.0 * DIAMETER.powi(3) / edge_for_300(packing).powi(3)
+}
 
 /// The contact-only scene of docs/model.md §10.6 (11 µm Hertz spheres, walls, gravity,
 /// dt = 1e-8 s) for about `n` particles over `steps` steps: `n` at random for the dilute and
 /// loose packings; for the packed bed the largest FCC block of c cubic cells per edge (sites on
 /// its faces included: 4c³ + 6c² + 3c + 1 particles) with 4c³ ≤ n.
 pub fn contact_scene(packing: Packing, n: usize, steps: u64) -> String {
-    let d = 11.0e-6; // the diameter of SPECIES
+    let d = DIAMETER;
     let (edge, placement) = match packing {
         Packing::Dilute | Packing::Loose => {
-            let edge_for_300 = if packing == Packing::Dilute { 5.0e-4 } else { 1.0e-4 };
-            (edge_for_300 * (n as f64 / 300.0).cbrt(), format!("count = {n}\norder = \"spatial\"\n"))
+            (edge_for_300(packing) * (n as f64 / 300.0).cbrt(), format!("count = {n}\norder = \"spatial\"\n"))
         }
         Packing::Packed => {
             let cells = ((n as f64 / 4.0).cbrt() * (1.0 + 1e-12)).floor().max(1.0);
@@ -90,12 +123,12 @@ pub fn contact_scene(packing: Packing, n: usize, steps: u64) -> String {
             )
         }
     };
-    let end = steps as f64 * 1e-8;
+    let (end, species) = (steps as f64 * DT, species());
     format!(
         "version = 1\nname = \"bench-contact-{}-{n}\"\nseed = 1\n[domain]\nlo = [0.0, 0.0, 0.0]\nhi = [{edge:e}, {edge:e}, {edge:e}]\n\
-         [fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n{SPECIES}[[particles]]\nspecies = \"fe3o4\"\n{placement}\
+         [fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n{species}[[particles]]\nspecies = \"fe3o4\"\n{placement}\
          [forces.contact]\nwalls = true\n[forces.gravity]\ng = [0.0, 0.0, -9.81]\n\
-         [integration]\nscheme = \"velocity-verlet\"\ndt = 1.0e-8\nend_time = {end:e}\n[output]\ninterval = {end:e}\n",
+         [integration]\nscheme = \"velocity-verlet\"\ndt = {DT:e}\nend_time = {end:e}\n[output]\ninterval = {end:e}\n",
         packing.name()
     )
 }
@@ -106,16 +139,21 @@ pub fn contact_scene(packing: Packing, n: usize, steps: u64) -> String {
 /// Without contact forces its particles cannot be stepped for long: it is timed as force
 /// evaluations ([`Work::Forces`]).
 pub fn magnetic_scene(n: usize, cutoff: Option<f64>, steps: u64) -> String {
-    let scale = (n as f64 / 307.0).cbrt();
-    let (lx, lz) = (3.96e-4 * scale, 3.3e-4 * scale);
-    let end = steps as f64 * 1e-8;
+    let [lx, _, lz] = magnetic_box(n);
+    let (end, species) = (steps as f64 * DT, species());
     let cutoff = cutoff.map_or(String::new(), |c| format!("cutoff_diameters = {c:?}\n"));
     format!(
         "version = 1\nname = \"bench-dipole-{n}\"\nseed = 1\n[domain]\nlo = [0.0, 0.0, 0.0]\nhi = [{lx:e}, {lx:e}, {lz:e}]\n\
-         [fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n[field]\nb0 = [0.4, 0.0, 0.0]\n{SPECIES}[[particles]]\nspecies = \"fe3o4\"\ncount = {n}\norder = \"spatial\"\n\
+         [fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n[field]\nb0 = [{FIELD:e}, 0.0, 0.0]\n{species}[[particles]]\nspecies = \"fe3o4\"\ncount = {n}\norder = \"spatial\"\n\
          [forces.dipole]\ninduction = \"none\"\n{cutoff}\
-         [integration]\nscheme = \"velocity-verlet\"\ndt = 1.0e-8\nend_time = {end:e}\n[output]\ninterval = {end:e}\n"
+         [integration]\nscheme = \"velocity-verlet\"\ndt = {DT:e}\nend_time = {end:e}\n[output]\ninterval = {end:e}\n"
     )
+}
+
+/// The box of [`magnetic_scene`] for `n` particles (m).
+pub fn magnetic_box(n: usize) -> [f64; 3] {
+    let scale = (n as f64 / 307.0).cbrt();
+    [3.96e-4 * scale, 3.96e-4 * scale, 3.3e-4 * scale]
 }
 
 /// Particles per chain of the paper-physics scene ([`paper_scene`]).
@@ -137,7 +175,7 @@ pub const PAPER_CHAIN_OVERLAP: f64 = 1e-3;
 /// is the drag's `refactor_every` (1: coefficients renewed every step, as the paper's runs).
 pub fn paper_scene(n: usize, steps: u64, drag_every: u64) -> String {
     use rand::{RngExt, SeedableRng};
-    let d = 11.0e-6;
+    let d = DIAMETER;
     let edge = 4.84e-4 * (n as f64 / 336.0).cbrt();
     let spacing = d * (1.0 - PAPER_CHAIN_OVERLAP);
     let chains = n.div_ceil(PAPER_CHAIN);
@@ -169,20 +207,20 @@ pub fn paper_scene(n: usize, steps: u64, drag_every: u64) -> String {
             positions.push(format!("[{x:e}, {:e}, {:e}]", chain[1], chain[2]));
         }
     }
-    let end = steps as f64 * 1e-8;
+    let (end, species) = (steps as f64 * DT, species());
     format!(
         "version = 1\nname = \"bench-paper-{n}\"\nseed = 1\n[domain]\nlo = [0.0, 0.0, 0.0]\nhi = [{edge:e}, {edge:e}, {edge:e}]\n\
          boundary = {{ x = \"periodic\", y = \"periodic\", z = \"wall\" }}\n\
-         [fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n[field]\nb0 = [0.4, 0.0, 0.0]\n{SPECIES}[[particles]]\nspecies = \"fe3o4\"\n\
-         positions = [{}]\n[forces.contact]\nwalls = true\n[forces.dipole]\ninduction = \"paper\"\ncutoff_diameters = 15.0\n\
+         [fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n[field]\nb0 = [{FIELD:e}, 0.0, 0.0]\n{species}[[particles]]\nspecies = \"fe3o4\"\n\
+         positions = [{}]\n[forces.contact]\nwalls = true\n[forces.dipole]\ninduction = \"paper\"\ncutoff_diameters = {CUTOFF_DIAMETERS:e}\n\
          [forces.drag]\nlaw = \"schiller-naumann\"\nshielding = \"paper\"\nrefactor_every = {drag_every}\n[forces.gravity]\ng = [0.0, 0.0, -9.81]\n\
-         [integration]\nscheme = \"respa\"\nslow_every = 10\ndt = 1.0e-8\nend_time = {end:e}\n[output]\ninterval = {end:e}\n",
+         [integration]\nscheme = \"respa\"\nslow_every = {PAPER_SLOW_EVERY}\ndt = {DT:e}\nend_time = {end:e}\n[output]\ninterval = {end:e}\n",
         positions.join(", ")
     )
 }
 
 /// Min, median and max of repeated measurements.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Spread {
     pub min: f64,
     pub median: f64,

@@ -15,10 +15,19 @@ pub fn hydrodynamics(options: &magdem::report::hydrodynamics::HydrodynamicsRepor
     report_written(magdem::report::hydrodynamics::write_report(options))
 }
 
-/// `magdem bench` (at least one repeat per measurement).
+/// `magdem bench` (at least one repeat per measurement): measures, saves the record, then
+/// writes the report from it.
 pub fn bench(options: magdem::bench::Options) -> ExitCode {
     let options = magdem::bench::Options { repeats: options.repeats.max(1), ..options };
-    report_written(magdem::bench::report::write(&options))
+    match magdem::bench::measure::run(&options) {
+        Ok(record) => report_written(magdem::report::performance::write(&record, &options.out)),
+        Err(e) => super::fail(e, 1),
+    }
+}
+
+/// `magdem bench --redraw`: the report and its figure from the saved record in `out`.
+pub fn redraw_bench(out: &std::path::Path) -> ExitCode {
+    report_written(magdem::report::performance::redraw(out))
 }
 
 /// `magdem report digests`: names the experiments whose digest changed.

@@ -49,6 +49,7 @@ pub const TEMPLATES: &[(&str, &str)] = templates![
     "verification/magnetic.md",
     "hydrodynamics/README.md",
     "hydrodynamics/macros.md",
+    "performance/README.md",
 ];
 
 type Error = Box<dyn std::error::Error>;
