@@ -1,5 +1,5 @@
 //! The subcommands of the `magdem` binary, one function each; `main` parses the command line and
-//! dispatches here. Every function prints its own messages and returns the exit code (README's
+//! dispatches here. Every function prints its own messages and returns the exit code (docs/running.md's
 //! table: 0 done, 1 I/O or engine failure, 2 invalid input, 3 unstable, 130 interrupted).
 
 pub mod experiment;
