@@ -3,7 +3,7 @@
 
 use crate::core::simulation::{RunError, Simulation};
 use crate::core::timers::PhaseTimers;
-use crate::io::trajectory::{status, Cost, RunInfo, TrajectoryError, TrajectoryWriter};
+use crate::io::trajectory::{status, Cost, RunHeader, RunInfo, TrajectoryError, TrajectoryWriter};
 use crate::scene::Scene;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::path::Path;
@@ -43,6 +43,23 @@ pub enum RunFailure {
          frames 0-{last} and their checkpoint: free space and rerun with --resume"
     )]
     DiskFull { path: String, frame: usize, last: usize, free: u64, needed: u64 },
+}
+
+impl<'a> From<&'a Scene> for RunHeader<'a> {
+    fn from(scene: &'a Scene) -> Self {
+        RunHeader {
+            scene_text: &scene.text,
+            scene_hash: &scene.hash,
+            scene_name: scene.spec.name.as_deref().unwrap_or(""),
+            species_names: scene.species.iter().map(|s| s.name.as_str()).collect(),
+            initial: &scene.initial,
+            dt: scene.dt(),
+            total_steps: scene.total_steps(),
+            steps_per_frame: scene.steps_per_frame(),
+            forces: scene.spec.output.forces,
+            contacts: scene.spec.output.contacts,
+        }
+    }
 }
 
 /// Free bytes for an unprivileged writer on the file system holding `path` (its directory).
@@ -206,10 +223,10 @@ fn run_in_pool(scene: &Scene, output: &Path, options: &RunOptions) -> Result<Run
     let info = RunInfo { engine: "magdem", integrator: scene.spec.integration.scheme.name() };
 
     let (mut writer, mut sim) = if options.resume && output.exists() {
-        let (writer, state) = TrajectoryWriter::resume(output, scene)?;
+        let (writer, state) = TrajectoryWriter::resume(output, &scene.into())?;
         (writer, scene.simulation(Some(state)))
     } else {
-        let writer = TrajectoryWriter::create(output, scene, &info)?;
+        let writer = TrajectoryWriter::create(output, &scene.into(), &info)?;
         let mut sim = scene.simulation(None);
         if let Err(e) = sim.initialise() {
             writer.finish(status::UNSTABLE, &e.to_string(), cost(&start))?;

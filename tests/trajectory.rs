@@ -573,7 +573,7 @@ fn every_state_field_round_trips_through_the_checkpoint() {
     let work = workdir("round-trip");
     let file = work.path().join("round.h5");
     let info = RunInfo { engine: "magdem", integrator: "velocity-verlet" };
-    let writer = TrajectoryWriter::create(&file, &scene, &info).unwrap();
+    let writer = TrajectoryWriter::create(&file, &(&scene).into(), &info).unwrap();
     writer.write_checkpoint(&state).unwrap();
     drop(writer);
     let (restored, _) = Trajectory::open(&file).unwrap().checkpoint().unwrap();

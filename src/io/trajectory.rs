@@ -1,4 +1,4 @@
-//! HDF5 trajectory files (schema in the README, "Trajectory files").
+//! HDF5 trajectory files (schema in docs/outputs.md).
 //!
 //! Frames are appended one at a time into chunked datasets (deflate-compressed where a chunk is one
 //! frame's row) and the file is
@@ -7,7 +7,6 @@
 //! rewritten in place with every frame and on interruption; `--resume` continues from it.
 
 use crate::core::state::{ContactHistory, Particles, State, Vec3};
-use crate::scene::Scene;
 use hdf5::types::VarLenUnicode;
 use hdf5::{Dataset, Extent, File, Group, SimpleExtents};
 use ndarray::{s, Array1, Array2, Array3};
@@ -127,6 +126,23 @@ pub struct RunInfo<'a> {
     pub integrator: &'a str,
 }
 
+/// What a trajectory records of the scene it runs: its text, hash and name, its species' names,
+/// the particles it starts from, its clock and which optional datasets it writes.
+pub struct RunHeader<'a> {
+    pub scene_text: &'a str,
+    pub scene_hash: &'a str,
+    pub scene_name: &'a str,
+    pub species_names: Vec<&'a str>,
+    pub initial: &'a Particles,
+    pub dt: f64,
+    pub total_steps: u64,
+    pub steps_per_frame: u64,
+    /// Write each frame's forces and torques.
+    pub forces: bool,
+    /// Write each frame's contacts.
+    pub contacts: bool,
+}
+
 /// Appends frames to a trajectory file and keeps its checkpoint current.
 pub struct TrajectoryWriter {
     path: String,
@@ -142,15 +158,14 @@ impl TrajectoryWriter {
         move |source| TrajectoryError::Hdf5 { path: self.path.clone(), source }
     }
 
-    /// Creates (overwrites) `path` for a fresh run of `scene`.
-    pub fn create(path: &Path, scene: &Scene, info: &RunInfo) -> Result<Self, TrajectoryError> {
+    /// Creates (overwrites) `path` for a fresh run described by `header`.
+    pub fn create(path: &Path, header: &RunHeader, info: &RunInfo) -> Result<Self, TrajectoryError> {
         let p = path.display().to_string();
         let wrap = |source| TrajectoryError::Hdf5 { path: p.clone(), source };
         disable_file_locking();
         let file = File::create(path).map_err(wrap)?;
-        let n = scene.initial.len();
-        let forces = scene.spec.output.forces;
-        let contacts = scene.spec.output.contacts;
+        let n = header.initial.len();
+        let (forces, contacts) = (header.forces, header.contacts);
         (|| -> H5Result<()> {
             write_str_attr(&file, "format", FORMAT)?;
             write_scalar_attr(&file, "format_version", FORMAT_VERSION)?;
@@ -158,24 +173,24 @@ impl TrajectoryWriter {
             write_str_attr(&file, "git_commit", env!("MAGDEM_GIT_COMMIT"))?;
             write_str_attr(&file, "engine", info.engine)?;
             write_str_attr(&file, "integrator", info.integrator)?;
-            write_str_attr(&file, "scene_sha256", &scene.hash)?;
-            write_str_attr(&file, "scene_name", scene.spec.name.as_deref().unwrap_or(""))?;
+            write_str_attr(&file, "scene_sha256", header.scene_hash)?;
+            write_str_attr(&file, "scene_name", header.scene_name)?;
             write_str_attr(&file, "units", "SI: m, s, kg, N, A m^2, T")?;
-            write_scalar_attr(&file, "dt", scene.dt())?;
-            write_scalar_attr(&file, "total_steps", scene.total_steps())?;
-            write_scalar_attr(&file, "steps_per_frame", scene.steps_per_frame())?;
+            write_scalar_attr(&file, "dt", header.dt)?;
+            write_scalar_attr(&file, "total_steps", header.total_steps)?;
+            write_scalar_attr(&file, "steps_per_frame", header.steps_per_frame)?;
             write_scalar_attr(&file, "n_particles", n as u64)?;
             write_str_attr(&file, "status", status::RUNNING)?;
             write_str_attr(&file, "status_message", "")?;
-            let text: VarLenUnicode = scene.text.parse().expect("scene text has no NUL");
+            let text: VarLenUnicode = header.scene_text.parse().expect("scene text has no NUL");
             file.new_dataset::<VarLenUnicode>().shape(()).create("scene")?.write_scalar(&text)?;
 
             let particles = file.create_group("particles")?;
-            let p = &scene.initial;
+            let p = header.initial;
             particles.new_dataset_builder().with_data(&Array1::from(p.radius.clone())).create("radius")?;
             particles.new_dataset_builder().with_data(&Array1::from(p.mass.clone())).create("mass")?;
             particles.new_dataset_builder().with_data(&Array1::from(p.species.clone())).create("species")?;
-            let names = scene.species.iter().map(|s| s.name.as_str()).collect::<Vec<_>>().join(",");
+            let names = header.species_names.join(",");
             write_str_attr(&particles, "species_names", &names)?;
 
             let frames = file.create_group("frames")?;
@@ -208,18 +223,18 @@ impl TrajectoryWriter {
 
     /// Opens a trajectory to continue it: checks it belongs to `scene`, drops frames written
     /// after the checkpoint, and returns the checkpointed state.
-    pub fn resume(path: &Path, scene: &Scene) -> Result<(Self, State), TrajectoryError> {
+    pub fn resume(path: &Path, header: &RunHeader) -> Result<(Self, State), TrajectoryError> {
         let p = path.display().to_string();
         let wrap = |source| TrajectoryError::Hdf5 { path: p.clone(), source };
         disable_file_locking();
         let file = File::open_rw(path).map_err(wrap)?;
         let hash = read_str_attr(&file, "scene_sha256").map_err(wrap)?;
-        if hash != scene.hash {
+        if hash != header.scene_hash {
             return Err(TrajectoryError::Mismatch {
                 path: p,
                 message: format!(
                     "was written for a different scene (sha256 {hash}, this scene {}); refusing to resume into it",
-                    scene.hash
+                    header.scene_hash
                 ),
             });
         }
@@ -228,7 +243,7 @@ impl TrajectoryWriter {
         let Trajectory { file, .. } = reader;
         let forces = file.link_exists("frames/force");
         let contacts = file.link_exists("contacts");
-        let writer = Self { path: p, file, n: scene.initial.len(), frames, forces, contacts };
+        let writer = Self { path: p, file, n: header.initial.len(), frames, forces, contacts };
         writer.truncate(frames).map_err(writer.err())?;
         write_str_attr(&writer.file, "status", status::RUNNING).map_err(writer.err())?;
         Ok((writer, state))

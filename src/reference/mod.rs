@@ -155,7 +155,7 @@ fn store(
     frames: &[crate::core::state::State],
     cost: Cost,
 ) -> Result<(), ReferenceError> {
-    let mut writer = TrajectoryWriter::create(output, scene, &RunInfo { engine: engine.name(), integrator })?;
+    let mut writer = TrajectoryWriter::create(output, &scene.into(), &RunInfo { engine: engine.name(), integrator })?;
     for state in frames {
         writer.write_frame(state)?;
     }

@@ -17,7 +17,7 @@ use crate::core::state::Vec3;
 use crate::io::trajectory::status;
 use polars::prelude::*;
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 type Error = Box<dyn std::error::Error>;
 
@@ -329,6 +329,15 @@ pub fn provenance(runs: &[Run]) -> String {
              so the figures that need positions use the runs read there only"
         ),
     }
+}
+
+/// As [`super::runs::load_runs`], with the report's digests in `digests`: the finished runs read
+/// from trajectories are recorded there, and the runs whose trajectories are not here are read
+/// from there.
+pub fn load_runs_digested(files: &[PathBuf], gap: f64, digests: &Path) -> Result<Vec<Run>, Box<dyn std::error::Error>> {
+    let mut runs = super::runs::load_runs(files, gap)?;
+    sync(&mut runs, digests, gap)?;
+    Ok(runs)
 }
 
 #[cfg(test)]

@@ -5,8 +5,9 @@
 //! `experiments/hydrodynamics/*.toml`. The numbers, tables and figures are computed here; the words
 //! are `templates/hydrodynamics/README.md`.
 
+use super::digest::load_runs_digested;
 use super::estimate::{log_slope, sizes_and_velocities};
-use super::runs::{experiment_files, load_runs_digested, Run};
+use super::runs::{experiment_files, Run};
 use super::tables::{col, floats, frame, markdown, read_csv, scol, write};
 use super::template::render;
 use crate::analysis::aggregates::BOX_LIMITED_FRACTION;

@@ -360,12 +360,3 @@ pub fn load_runs(files: &[PathBuf], gap: f64) -> Result<Vec<Run>, Box<dyn std::e
     let runs: Result<Vec<Run>, _> = jobs.par_iter().map(|(e, p)| load(e, p, gap)).collect();
     runs.map_err(|e| e.to_string().into())
 }
-
-/// As [`load_runs`], with the report's digests in `digests` ([`super::digest`]): the finished
-/// runs read from trajectories are recorded there, and the runs whose trajectories are not here
-/// are read from there.
-pub fn load_runs_digested(files: &[PathBuf], gap: f64, digests: &Path) -> Result<Vec<Run>, Box<dyn std::error::Error>> {
-    let mut runs = load_runs(files, gap)?;
-    super::digest::sync(&mut runs, digests, gap)?;
-    Ok(runs)
-}

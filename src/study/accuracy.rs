@@ -389,7 +389,7 @@ fn observable_section(dir: &Path, o: &Observable) -> Result<minijinja::Value, Er
     use crate::analysis::stats::{ci95_half_width, summary};
     // Runs whose trajectories are not here are read from the report's digests, where every
     // finished run read here is recorded (`reports/accuracy/digests/`).
-    let runs = crate::report::runs::load_runs_digested(
+    let runs = crate::report::digest::load_runs_digested(
         &[std::path::PathBuf::from(o.experiment)],
         OBSERVABLE_GAP,
         &dir.join("digests"),
@@ -411,16 +411,16 @@ fn observable_section(dir: &Path, o: &Observable) -> Result<minijinja::Value, Er
     }
     let mut points = vec![];
     let mut all_zero = vec![];
+    let mut failed = vec![];
+    let mut resolved = vec![];
     for variant in variants {
         let mine: Vec<_> = runs.iter().filter(|r| r.variant == variant).collect();
         let done: Vec<_> = mine.iter().filter(|r| r.completed()).collect();
-        let setting = mine.first().map_or(String::new(), |r| r.variant_overrides.join(", "));
+        let setting = mine.first().map_or(String::new(), |r| integration_label(&r.scene_text, &r.id));
         if done.is_empty() {
-            let why = mine
-                .iter()
-                .find(|r| !r.message.is_empty())
-                .map_or(mine.first().map_or("missing".into(), |r| r.status.clone()), |r| r.message.clone());
+            let why = failure_cell(&mine.iter().map(|r| r.message.as_str()).collect::<Vec<_>>());
             let _ = writeln!(table, "| {variant} | {setting} | 0 of {} | – | – | – | – | {why} |", mine.len());
+            failed.push(format!("`{variant}` ({setting})"));
             continue;
         }
         let values: Vec<f64> = done.iter().map(|r| (o.value)(r)).collect();
@@ -463,6 +463,9 @@ fn observable_section(dir: &Path, o: &Observable) -> Result<minijinja::Value, Er
             if !paired.is_empty() && paired.iter().all(|d| d.abs() < 0.05) {
                 all_zero.push(variant.to_string());
             }
+            if diff.abs() > ci && !all_zero.iter().any(|v| v == variant) {
+                resolved.push(variant.to_string());
+            }
             points.push((variant.to_string(), wall.median, diff, ci));
         }
     }
@@ -498,7 +501,45 @@ fn observable_section(dir: &Path, o: &Observable) -> Result<minijinja::Value, Er
         reference_k => integration.slow_every,
         resolve_pct => RESOLVE_PCT,
         unchanged => all_zero,
+        failed => failed,
+        resolved => resolved,
+        compared => points.len(),
+        smallest_diff => points.iter().map(|p| p.2).fold(f64::INFINITY, f64::min),
+        largest_diff => points.iter().map(|p| p.2).fold(f64::NEG_INFINITY, f64::max),
+        largest_ci => points.iter().map(|p| p.3).fold(0.0, f64::max),
     })
+}
+
+/// "scheme, dt 5.0e-8 s" (with K for multiple time stepping) of a run's scene.
+fn integration_label(scene_text: &str, id: &str) -> String {
+    match Scene::parse(scene_text, id) {
+        Ok(scene) => {
+            let i = &scene.spec.integration;
+            let k = if i.slow_every > 1 { format!(", K = {}", i.slow_every) } else { String::new() };
+            format!("{}, dt {:.2e} s{k}", i.scheme.name(), i.dt)
+        }
+        Err(e) => e.to_string(),
+    }
+}
+
+/// What became of a variant none of whose runs completed: how many went unstable, the earliest
+/// time, and the stable step the solver estimated.
+fn failure_cell(messages: &[&str]) -> String {
+    let after = |m: &str, key: &str| {
+        m.find(key).and_then(|k| m[k + key.len()..].split_whitespace().next().and_then(|v| v.parse::<f64>().ok()))
+    };
+    let unstable: Vec<&&str> = messages.iter().filter(|m| m.starts_with("unstable")).collect();
+    if unstable.is_empty() {
+        return messages.iter().find(|m| !m.is_empty()).map_or("not run".into(), |m| m.to_string());
+    }
+    let earliest = unstable.iter().filter_map(|m| after(m, "(t = ")).fold(f64::INFINITY, f64::min);
+    let estimate = unstable.iter().find_map(|m| after(m, "Estimated stable dt "));
+    format!(
+        "unstable in {} of {} runs, the first at t = {earliest:.1e} s{}",
+        unstable.len(),
+        messages.len(),
+        estimate.map_or(String::new(), |dt| format!(" (estimated stable dt {dt:.1e} s)"))
+    )
 }
 
 /// One problem's results: its table, figure, orders by scheme, and errors by scheme.

@@ -15,7 +15,8 @@ mod engines;
 mod figures;
 mod why;
 
-use super::runs::{experiment_files, load_runs_digested, Run};
+use super::digest::load_runs_digested;
+use super::runs::{experiment_files, Run};
 use super::tables::{floats, read_csv};
 use crate::analysis::stats::summary;
 use convergence::{Effect, Targets};
