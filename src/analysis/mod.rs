@@ -3,4 +3,5 @@
 pub mod aggregates;
 pub mod image;
 pub mod stats;
+pub mod timing;
 pub mod trajectory;

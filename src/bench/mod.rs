@@ -9,6 +9,7 @@
 pub mod measure;
 pub mod record;
 
+pub use crate::analysis::timing::Spread;
 use crate::core::parallel;
 use crate::core::simulation::Simulation;
 use crate::core::timers::PhaseTimers;
@@ -217,23 +218,6 @@ pub fn paper_scene(n: usize, steps: u64, drag_every: u64) -> String {
          [integration]\nscheme = \"respa\"\nslow_every = {PAPER_SLOW_EVERY}\ndt = {DT:e}\nend_time = {end:e}\n[output]\ninterval = {end:e}\n",
         positions.join(", ")
     )
-}
-
-/// Min, median and max of repeated measurements.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Spread {
-    pub min: f64,
-    pub median: f64,
-    pub max: f64,
-}
-
-impl Spread {
-    pub fn of(values: &[f64]) -> Self {
-        let mut v = values.to_vec();
-        v.sort_by(f64::total_cmp);
-        let median = if v.len() % 2 == 1 { v[v.len() / 2] } else { 0.5 * (v[v.len() / 2 - 1] + v[v.len() / 2]) };
-        Spread { min: v[0], median, max: v[v.len() - 1] }
-    }
 }
 
 /// One timed magdem run: loop seconds, the finished simulation, and the heap memory the

@@ -3,7 +3,8 @@
 //!
 //! Seconds are loop times; an absent value (an engine not installed, a check not run) is `null`.
 
-use super::{Error, Spread};
+use super::Error;
+use crate::analysis::timing::Spread;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::Path;

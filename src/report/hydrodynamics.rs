@@ -12,12 +12,12 @@ use super::tables::{col, floats, frame, markdown, read_csv, scol, write};
 use super::template::render;
 use crate::analysis::aggregates::BOX_LIMITED_FRACTION;
 use crate::analysis::stats::{ci95_half_width, summary};
+use crate::analysis::timing::timed;
 use crate::core::forces::hydrodynamics::Resistance;
 use crate::core::forces::wall_drag::{parallel_factor, PlaneWall};
 use crate::core::state::Vec3;
 use crate::plot::{chart, palette, Legend, RGBColor, Scale, Series, SeriesLabelPosition};
 use crate::scene::Scene;
-use crate::study::timed;
 use minijinja::{context, Value};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -367,12 +367,14 @@ fn cost_section(tables: &Path) -> Result<Cost, Error> {
         let factor = timed(repeats, || {
             std::hint::black_box(Resistance::new(&x, &radii, mu, None).expect("RPY is positive definite"));
         })
-        .1;
+        .1
+        .median;
         let r = Resistance::new(&x, &radii, mu, None)?;
         let solve = timed(COST_REPEATS.2, || {
             std::hint::black_box(r.drag(&velocity, Vec3::zeros()));
         })
-        .1;
+        .1
+        .median;
         rows[0].push(n as f64);
         rows[1].push(1e3 * factor);
         rows[2].push(1e3 * solve);

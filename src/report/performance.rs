@@ -3,7 +3,7 @@
 //! `templates/performance/README.md`.
 
 use crate::bench::record::*;
-use crate::bench::Spread;
+use crate::analysis::timing::Spread;
 use crate::plot::{line_chart_with_legend, palette, Legend, RGBColor, Series};
 use serde::Serialize;
 use std::path::{Path, PathBuf};

@@ -11,8 +11,8 @@
 //!   dt = 1e-10 s (second order, checked in tests/integrators.rs), relative to the distance
 //!   travelled.
 
-use super::timed;
 use crate::analysis::stats::slope_ci95;
+use crate::analysis::timing::timed;
 use crate::core::integrators::Scheme;
 use crate::plot::{line_chart_with_legend, Series};
 use crate::scene::Scene;
@@ -278,7 +278,7 @@ fn work_precision(dir: &Path, problem: &Problem, reference: f64) -> Result<minij
         let settings: Vec<f64> = if scheme == adaptive { TOLERANCES.to_vec() } else { problem.dts.clone() };
         let mut line = vec![];
         for value in settings {
-            let (result, median, lo, hi) = timed(TIMING_RUNS, || {
+            let (result, spread) = timed(TIMING_RUNS, || {
                 if scheme == adaptive {
                     let text =
                         dipoles_scene(adaptive, ADAPTIVE_DT).replace("dt = ", &format!("tolerance = {value:e}\ndt = "));
@@ -287,6 +287,7 @@ fn work_precision(dir: &Path, problem: &Problem, reference: f64) -> Result<minij
                     run_problem(problem, scheme, value, Some(reference))
                 }
             });
+            let (median, lo, hi) = (spread.median, spread.min, spread.max);
             if let Ok(err) = result {
                 let label =
                     if scheme == adaptive { format!("tolerance {value:.0e}") } else { format!("dt {value:.1e}") };
@@ -434,7 +435,7 @@ fn observable_section(dir: &Path, o: &Observable) -> Result<minijinja::Value, Er
             })
             .collect();
         let times: Vec<f64> = done.iter().map(|r| r.wall_time).filter(|t| t.is_finite()).collect();
-        let wall = crate::bench::Spread::of(&times);
+        let wall = crate::analysis::timing::Spread::of(&times);
         let (diff, ci) = (summary(&paired).mean, ci95_half_width(&paired));
         let is_reference = variant == "reference";
         let needed = if is_reference {

@@ -13,15 +13,3 @@ pub fn fe3o4(youngs_modulus: f64, restitution: f64, extra: &str) -> String {
     )
 }
 
-/// Wall times of `runs` repetitions of `f`: its last result and the (median, min, max) in seconds.
-pub fn timed<T>(runs: usize, mut f: impl FnMut() -> T) -> (T, f64, f64, f64) {
-    let mut times = vec![];
-    let mut out = None;
-    for _ in 0..runs {
-        let start = std::time::Instant::now();
-        out = Some(f());
-        times.push(start.elapsed().as_secs_f64());
-    }
-    times.sort_by(f64::total_cmp);
-    (out.expect("at least one run"), times[times.len() / 2], times[0], times[times.len() - 1])
-}
