@@ -1,6 +1,6 @@
 //! The simulation box: each axis is either bounded by two walls or periodic.
 
-use super::state::Vec3;
+use super::vector::Vec3;
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct Domain {

@@ -5,7 +5,6 @@ pub mod domain;
 pub mod forces;
 pub mod integrators;
 pub mod lanes;
-pub mod magnetisation;
 pub mod neighbours;
 pub mod parallel;
 pub mod renumber;
@@ -13,5 +12,8 @@ pub mod simulation;
 pub mod stability;
 pub mod state;
 pub mod timers;
+pub mod vector;
 
-pub use state::Vec3;
+/// The moments term, also reached here (μ0 and the moments' helpers).
+pub use forces::magnetisation;
+pub use vector::Vec3;

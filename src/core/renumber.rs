@@ -9,7 +9,7 @@
 //! ([`crate::core::integrators::Integrator::renumber`]), each a required method.
 
 use super::domain::Domain;
-use super::state::Vec3;
+use super::vector::Vec3;
 
 /// A permutation of the particles' slots: new slot k holds the particle of old slot `from[k]`.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -6,9 +6,8 @@
 //! each is timed.
 
 use super::domain::Domain;
-use super::forces::{ConstantForce, Context, ForceGroup, ForceTerm, Forces};
+use super::forces::{ConstantForce, Context, ForceGroup, ForceTerm, Forces, TermError};
 use super::integrators::Integrator;
-use super::magnetisation::InductionError;
 use super::neighbours::{Neighbours, RangeUsage};
 use super::parallel;
 use super::renumber::Renumbering;
@@ -28,7 +27,7 @@ pub struct ForceField {
     /// Time spent in evaluations, to separate integration time from force time.
     evaluation_time: Duration,
     /// A term's failure inside an evaluation (reported after the step).
-    induction_error: Option<InductionError>,
+    term_error: Option<TermError>,
 }
 
 impl ForceField {
@@ -43,7 +42,7 @@ impl ForceField {
             neighbours,
             timers: PhaseTimers::default(),
             evaluation_time: Duration::ZERO,
-            induction_error: None,
+            term_error: None,
         }
     }
 
@@ -53,9 +52,9 @@ impl ForceField {
         self.terms.iter_mut().for_each(|t| t.renumber(r));
     }
 
-    /// The first induction failure since the last call, if any.
-    pub fn take_induction_error(&mut self) -> Option<InductionError> {
-        self.induction_error.take()
+    /// The first term failure since the last call, if any.
+    pub fn take_term_error(&mut self) -> Option<TermError> {
+        self.term_error.take()
     }
 
     /// Computes `force`, `torque` and `moment` for the current state.
@@ -83,7 +82,7 @@ impl ForceField {
         for term in self.terms.iter_mut().filter(|t| group.has(t.as_ref())) {
             let t0 = self.timers.start();
             if let Err(e) = term.prepare(&ctx, state) {
-                self.induction_error.get_or_insert(e);
+                self.term_error.get_or_insert(e);
             }
             self.timers.stop(term.name(), t0);
         }
@@ -236,8 +235,8 @@ impl Simulation {
     }
 
     fn check(&mut self) -> Result<(), RunError> {
-        let cause = match self.field.take_induction_error() {
-            Some(e) => Err(Instability::Induction(e)),
+        let cause = match self.field.take_term_error() {
+            Some(e) => Err(Instability::Term(e)),
             None => self.monitor.check(&self.state, &self.field.domain, self.dt),
         };
         cause.map_err(|cause| RunError {

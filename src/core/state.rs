@@ -3,9 +3,7 @@
 //! Everything a run needs to continue bit for bit lives here, so a checkpoint is this struct.
 
 use super::renumber::Renumbering;
-
-/// Three-vector of f64 used throughout the core (SI units).
-pub type Vec3 = nalgebra::Vector3<f64>;
+pub use super::vector::Vec3;
 
 /// Saturation of the induced magnetisation at Ms (A/m).
 #[derive(Debug, Clone, Copy, PartialEq)]

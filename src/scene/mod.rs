@@ -7,22 +7,17 @@ pub mod spec;
 mod start;
 
 use crate::core::domain::Domain;
-use crate::core::forces::contact::law::{ContactLaw, Normal, Tangential};
-use crate::core::forces::contact::Contact;
-use crate::core::forces::dipole::DipoleForce;
-use crate::core::forces::drag::{Drag, DragLaw, Fluid, Shielding};
-use crate::core::forces::gradient::GradientForce;
-use crate::core::forces::gravity::GravityBuoyancy;
-use crate::core::forces::hydrodynamics::RpyDrag;
-use crate::core::forces::wall_drag::{PlaneWall, WallCorrection};
+use crate::core::forces::drag::Drag;
+use crate::core::forces::magnetisation::{held_bound, impact_speed, isolated_moment, Induction, Magnetisation};
+use crate::core::forces::setup::{self, Fluid, Invalid, Pairs, SceneContext, StepBound, StepContext, TermSpec};
 use crate::core::forces::ForceTerm;
 use crate::core::integrators;
-use crate::core::magnetisation::{Induction, Magnetisation, MU0};
 use crate::core::neighbours::{PairRange, Skins};
 use crate::core::simulation::{ForceField, RenumberSchedule, Simulation};
-use crate::core::stability::{Monitor, StepEstimate, StepEstimateInput};
+use crate::core::stability::{Monitor, StepEstimate};
 use crate::core::state::{
-    ContactHistory, Particles, Saturation, SaturationLaw, SizeDistribution, SizeLaw, Species, State, Vec3,
+    largest_diameter, ContactHistory, Particles, Saturation, SaturationLaw, SizeDistribution, SizeLaw, Species, State,
+    Vec3,
 };
 use nalgebra::Matrix3;
 use rand::SeedableRng;
@@ -41,8 +36,14 @@ pub enum SceneError {
     Invalid { key: String, value: String, reason: String },
 }
 
+impl From<Invalid> for SceneError {
+    fn from(Invalid { key, value, reason }: Invalid) -> Self {
+        SceneError::Invalid { key, value, reason }
+    }
+}
+
 fn invalid(key: impl Into<String>, value: impl std::fmt::Display, reason: impl Into<String>) -> SceneError {
-    SceneError::Invalid { key: key.into(), value: value.to_string(), reason: reason.into() }
+    setup::invalid(key, value, reason).into()
 }
 
 fn fmt3(v: &[f64; 3]) -> String {
@@ -141,18 +142,7 @@ impl Scene {
         let hash = hasher.finalize().iter().map(|b| format!("{b:02x}")).collect();
         check_integration(&spec)?;
 
-        // A polydisperse species counts at its smallest radius, the strictest for every bound.
-        let smallest: Vec<Species> = species.iter().map(Species::smallest).collect();
-        let moments = smallest.iter().map(|s| isolated_moment(&spec, &domain, s)).collect();
-        let estimate = StepEstimate::new(&StepEstimateInput {
-            species: &smallest,
-            scheme: spec.integration.scheme,
-            contact: spec.forces.contact.as_ref().map(contact_law),
-            drag_viscosity: spec.forces.drag.as_ref().and(spec.fluid.as_ref()).map(|f| f.viscosity),
-            moments,
-            max_initial_speed: initial.velocity.iter().map(|v| v.norm()).fold(0.0, f64::max),
-            slow_every: spec.integration.slow_every,
-        });
+        let estimate = estimate(&spec, &domain, &species, &initial);
         let dt = spec.integration.dt;
         // The adaptive integrator's dt is only its largest step.
         if dt > estimate.stable_dt && !spec.integration.scheme.dt_is_a_cap() {
@@ -229,46 +219,6 @@ impl Scene {
         Some(state)
     }
 
-    fn largest_diameter(&self) -> f64 {
-        crate::core::state::largest_diameter(&self.species)
-    }
-
-    /// The magnetic terms the scene lists: the moments (first: the others read them), dipole,
-    /// gradient.
-    fn magnetic_terms(&self, skins: Skins) -> Vec<Box<dyn ForceTerm>> {
-        let f = &self.spec.forces;
-        let (b0, gradient) = field_of(&self.spec);
-        if !(f.dipole.is_some() || f.gradient.is_some()) {
-            return vec![];
-        }
-        let induction = match &f.dipole {
-            None => Induction::None,
-            Some(d) => match d.induction {
-                InductionSpec::None => Induction::None,
-                InductionSpec::Paper => Induction::Paper { radius: d.paper_radius_diameters * self.largest_diameter() },
-                InductionSpec::Exact => Induction::Exact {
-                    tolerance: d.tolerance,
-                    max_iterations: d.max_iterations,
-                    dense_max: d.dense_max,
-                },
-            },
-        };
-        let mut terms: Vec<Box<dyn ForceTerm>> =
-            vec![Box::new(Magnetisation::new(induction, b0, gradient, &self.species, skins))];
-        if let Some(d) = &f.dipole {
-            terms.push(Box::new(DipoleForce::new(
-                d.cutoff_diameters.map(|c| c * self.largest_diameter()),
-                b0,
-                gradient,
-                skins,
-            )));
-        }
-        if f.gradient.is_some() {
-            terms.push(Box::new(GradientForce { gradient }));
-        }
-        terms
-    }
-
     /// The scene's integrator; the exponential one gets each particle's Stokes coefficients.
     fn integrator(&self) -> Box<dyn integrators::Integrator> {
         let i = &self.spec.integration;
@@ -291,57 +241,24 @@ impl Scene {
         })
     }
 
-    /// Only the magnetic forces (moments, dipole and gradient terms): what magdem supplies to a
-    /// reference code in lock step. `None` when the scene has no magnetic term.
+    /// Only the magnetic forces (the moments and the terms that read them): what magdem supplies
+    /// to a reference code in lock step. `None` when the scene has no magnetic term.
     pub fn magnetic_force_field(&self) -> Option<ForceField> {
-        let terms = self.magnetic_terms(Skins::default());
+        let ctx = term_context(&self.spec, &self.domain, &self.species, Skins::default());
+        let magnetic: Vec<_> = self.spec.forces.terms().into_iter().filter(|t| t.moments(&ctx).is_some()).collect();
+        let terms = build_terms(&magnetic, &ctx);
         (!terms.is_empty()).then(|| ForceField::new(self.domain.clone(), terms))
     }
 
     /// A simulation at t = 0 (call `initialise` before stepping), or around `state` if given.
     pub fn simulation(&self, state: Option<State>) -> Simulation {
         let spec = &self.spec;
-        let fluid = spec.fluid.clone().unwrap_or(FluidSpec { density: 0.0, viscosity: 0.0, velocity: [0.0; 3] });
-        let f = &spec.forces;
-        // One near-pair search for contact and shielding: the largest contact distance, times
-        // 1 + the shielding's touch tolerance.
-        let touch_tolerance = f.drag.as_ref().map_or(0.0, |d| d.touch_tolerance);
-        let range = self.largest_diameter() * (1.0 + touch_tolerance.max(1e-9));
+        // One near-pair search for contact and shielding (see `term_context`).
+        let range = near_range(spec, &self.species);
         let volume: f64 = self.domain.length().iter().product();
         let skins = Skins::for_density(self.initial.len() as f64 / volume, range);
-        let mut terms = self.magnetic_terms(skins);
-        let near = PairRange::Within { range, skin: skins.near * range };
-        let medium = Fluid { density: fluid.density, viscosity: fluid.viscosity, velocity: Vec3::from(fluid.velocity) };
-        let drag_wall = f.drag.as_ref().and_then(|d| d.wall.as_ref()).map(|w| {
-            let (axis, high) = w.face.axis_and_side();
-            let position = if high { self.domain.hi[axis] } else { self.domain.lo[axis] };
-            PlaneWall { axis, position, side: if high { -1.0 } else { 1.0 }, min_gap: w.min_gap }
-        });
-        if let Some(d) = f.drag.as_ref().filter(|d| d.law == DragLawSpec::Rpy) {
-            let mut rpy = RpyDrag::new(medium, d.rotational, d.refactor_every);
-            rpy.wall = drag_wall;
-            terms.push(Box::new(rpy));
-        } else if let Some(d) = &f.drag {
-            let law = match d.law {
-                DragLawSpec::Stokes => DragLaw::Stokes,
-                DragLawSpec::SchillerNaumann => DragLaw::SchillerNaumann,
-                DragLawSpec::Rpy => unreachable!("built above"),
-            };
-            let shielding = match d.shielding {
-                ShieldingSpec::None => Shielding::None,
-                ShieldingSpec::Paper => Shielding::Paper { touch_tolerance: d.touch_tolerance, near },
-            };
-            let mut drag = Drag::new(law, shielding, d.rotational, medium).renewed_every(d.refactor_every);
-            drag.exclude_linear = spec.integration.scheme.integrates_linear_drag();
-            drag.wall = drag_wall.map(WallCorrection::new);
-            terms.push(Box::new(drag));
-        }
-        if let Some(g) = &f.gravity {
-            terms.push(Box::new(GravityBuoyancy::new(Vec3::from(g.g), fluid.density)));
-        }
-        if let Some(c) = &f.contact {
-            terms.push(Box::new(Contact::new(&self.species, contact_law(c), c.walls, near)));
-        }
+        let ctx = term_context(spec, &self.domain, &self.species, skins);
+        let terms = build_terms(&spec.forces.terms(), &ctx);
         let field = ForceField::new(self.domain.clone(), terms);
         Simulation {
             state: state.unwrap_or_else(|| self.initial_state()),
@@ -368,27 +285,83 @@ fn steps_per_frame(spec: &SceneSpec) -> u64 {
     ((interval / spec.integration.dt).round() as u64).max(1)
 }
 
-fn field_of(spec: &SceneSpec) -> (Vec3, Matrix3<f64>) {
-    match &spec.field {
-        Some(f) => (Vec3::from(f.b0), Matrix3::from_fn(|r, c| f.gradient[r][c])),
-        None => (Vec3::zeros(), Matrix3::zeros()),
+/// The near pair range: the largest diameter times 1 + the largest gap a term counts as near
+/// (the shielding's touch tolerance), at least 1e-9.
+fn near_range(spec: &SceneSpec, species: &[Species]) -> f64 {
+    let tolerance = spec.forces.terms().iter().map(|t| t.near_tolerance()).fold(0.0, f64::max);
+    largest_diameter(species) * (1.0 + tolerance.max(1e-9))
+}
+
+/// What the terms' specs see of the scene, their pair ranges padded by `skins`.
+fn term_context<'a>(spec: &SceneSpec, domain: &'a Domain, species: &'a [Species], skins: Skins) -> SceneContext<'a> {
+    let range = near_range(spec, species);
+    SceneContext {
+        domain,
+        species,
+        fluid: spec.fluid.as_ref().map(|f| Fluid {
+            density: f.density,
+            viscosity: f.viscosity,
+            velocity: Vec3::from(f.velocity),
+        }),
+        field: spec.field.as_ref().map(|f| (Vec3::from(f.b0), Matrix3::from_fn(|r, c| f.gradient[r][c]))),
+        scheme: spec.integration.scheme,
+        slow_every: spec.integration.slow_every,
+        steps_per_frame: steps_per_frame(spec),
+        pairs: Pairs { near: PairRange::Within { range, skin: skins.near * range }, skins },
     }
+}
+
+/// The stable-step estimate: each term's bound, with the species at their smallest radius (the
+/// strictest for every bound) and the moment of an isolated particle at the box centre.
+fn estimate(spec: &SceneSpec, domain: &Domain, species: &[Species], initial: &Particles) -> StepEstimate {
+    let terms = spec.forces.terms();
+    let ctx = term_context(spec, domain, species, Skins::default());
+    let induction = induction(&terms, &ctx);
+    let centre = 0.5 * (domain.lo + domain.hi);
+    let smallest: Vec<Species> = species.iter().map(Species::smallest).collect();
+    let moments: Vec<f64> = smallest.iter().map(|s| isolated_moment(induction, ctx.field(), centre, s)).collect();
+    let drag_viscosity = spec.forces.drag.as_ref().and(spec.fluid.as_ref()).map(|f| f.viscosity);
+    let max_initial_speed = initial.velocity.iter().map(|v| v.norm()).fold(0.0, f64::max);
+    let step = StepContext {
+        species: &smallest,
+        scheme: spec.integration.scheme,
+        impact_speeds: smallest
+            .iter()
+            .zip(&moments)
+            .map(|(s, &m)| impact_speed(s, m, drag_viscosity, max_initial_speed))
+            .collect(),
+        moments,
+        drag_viscosity,
+        max_initial_speed,
+        slow_every: spec.integration.slow_every,
+    };
+    // The moments' bound (held over several steps), then each term's.
+    let bounds: Vec<StepBound> =
+        held_bound(&step).into_iter().chain(terms.iter().filter_map(|t| t.stable_dt(&step))).collect();
+    StepEstimate::new(&step, bounds)
+}
+
+/// The induction of the moments the terms read: the first asked for other than none, or `None`
+/// when no term reads moments.
+fn induction(terms: &[&dyn TermSpec], ctx: &SceneContext) -> Option<Induction> {
+    terms.iter().filter_map(|t| t.moments(ctx)).reduce(|a, b| if a == Induction::None { b } else { a })
+}
+
+/// The force terms in registry order, after the moments term when any of them reads moments.
+fn build_terms(terms: &[&dyn TermSpec], ctx: &SceneContext) -> Vec<Box<dyn ForceTerm>> {
+    let moments = induction(terms, ctx).map(|induction| {
+        let (b0, gradient) = ctx.field();
+        Box::new(Magnetisation::new(induction, b0, gradient, ctx.species, ctx.pairs.skins)) as Box<dyn ForceTerm>
+    });
+    moments.into_iter().chain(terms.iter().map(|t| t.build(ctx))).collect()
 }
 
 fn positive(key: &str, v: f64) -> Result<(), SceneError> {
-    if v > 0.0 && v.is_finite() {
-        Ok(())
-    } else {
-        Err(invalid(key, v, "must be a positive finite number"))
-    }
+    Ok(setup::positive(key, v)?)
 }
 
 fn non_negative(key: &str, v: f64) -> Result<(), SceneError> {
-    if v >= 0.0 && v.is_finite() {
-        Ok(())
-    } else {
-        Err(invalid(key, v, "must be zero or positive"))
-    }
+    Ok(setup::non_negative(key, v)?)
 }
 
 fn check_domain(d: &DomainSpec) -> Result<Domain, SceneError> {
@@ -502,138 +475,17 @@ fn check_size(key: &str, diameter: f64, size: &SizeSpec) -> Result<SizeDistribut
     Ok(SizeDistribution { law, mean: 0.5 * diameter, std: 0.5 * std, min: 0.5 * min, max: 0.5 * max })
 }
 
+/// Checks every force term's keys, and warns of an applied field that is not divergence- or
+/// curl-free.
 fn check_forces(
     spec: &SceneSpec,
     domain: &Domain,
     species: &[Species],
     warnings: &mut Vec<String>,
 ) -> Result<(), SceneError> {
-    let f = &spec.forces;
-    if (f.dipole.is_some() || f.gradient.is_some()) && spec.field.is_none() {
-        return Err(invalid("forces", "dipole/gradient", "magnetic terms need a [field] table"));
-    }
-    if f.drag.is_some() && spec.fluid.is_none() {
-        return Err(invalid("forces.drag", "{}", "drag needs a [fluid] table"));
-    }
-    let largest_diameter = crate::core::state::largest_diameter(species);
-    if let Some(d) = &f.dipole {
-        let tol = d.tolerance;
-        if !(1e-15..1.0).contains(&tol) {
-            return Err(invalid(
-                "forces.dipole.tolerance",
-                tol,
-                "impossible mutual-induction tolerance: double precision resolves relative changes \
-                 down to about 1e-15, and it must be below 1",
-            ));
-        }
-        if d.max_iterations == 0 {
-            return Err(invalid("forces.dipole.max_iterations", 0, "must be at least 1"));
-        }
-        let mut ranges = vec![];
-        if let Some(c) = d.cutoff_diameters {
-            positive("forces.dipole.cutoff_diameters", c)?;
-            ranges.push(("forces.dipole.cutoff_diameters", c));
-        }
-        if d.induction == InductionSpec::Paper {
-            positive("forces.dipole.paper_radius_diameters", d.paper_radius_diameters)?;
-            ranges.push(("forces.dipole.paper_radius_diameters", d.paper_radius_diameters));
-        }
-        for (key, diameters) in ranges {
-            for k in 0..3 {
-                let half = 0.5 * domain.length()[k];
-                if domain.periodic[k] && diameters * largest_diameter >= half {
-                    return Err(invalid(
-                        key,
-                        diameters,
-                        format!(
-                            "{:e} m is not below half the periodic box length {half:e} m along {}",
-                            diameters * largest_diameter,
-                            ["x", "y", "z"][k]
-                        ),
-                    ));
-                }
-            }
-        }
-    }
-    if let Some(d) = &f.drag {
-        non_negative("forces.drag.touch_tolerance", d.touch_tolerance)?;
-        if d.law == DragLawSpec::Rpy && d.shielding != ShieldingSpec::None {
-            return Err(invalid(
-                "forces.drag.shielding",
-                "paper",
-                "the RPY mobility replaces the shielded area; use shielding = \"none\" with law = \"rpy\"",
-            ));
-        }
-        if let Some(w) = &d.wall {
-            positive("forces.drag.wall.min_gap", w.min_gap)?;
-            if d.law == DragLawSpec::Rpy {
-                check_equal_spheres(spec)?;
-            }
-            let (axis, _) = w.face.axis_and_side();
-            if spec.domain.boundary.axis(axis) == Boundary::Periodic {
-                return Err(invalid("forces.drag.wall.face", w.face, "that face is periodic, not a wall"));
-            }
-            if spec.integration.scheme.integrates_linear_drag() {
-                return Err(invalid(
-                    "integration.scheme",
-                    spec.integration.scheme,
-                    "integrates a lone sphere's free-fluid Stokes drag exactly; a wall changes that drag",
-                ));
-            }
-        }
-        if d.refactor_every != 1 && d.law == DragLawSpec::Stokes && d.shielding == ShieldingSpec::None {
-            return Err(invalid(
-                "forces.drag.refactor_every",
-                d.refactor_every,
-                "Stokes drag without shielding has a constant coefficient, nothing to renew; remove the key or set it to 1",
-            ));
-        }
-        let per_frame = steps_per_frame(spec);
-        let integration = &spec.integration;
-        let per_call = if integration.scheme.multiple_time_stepping() { integration.slow_every } else { 1 };
-        if d.refactor_every > 1 && !d.refactor_every.is_multiple_of(per_call) {
-            return Err(invalid(
-                "forces.drag.refactor_every",
-                d.refactor_every,
-                format!(
-                    "must be a multiple of integration.slow_every = {per_call}: the drag is renewed at the start of \
-                     an outer step"
-                ),
-            ));
-        }
-        if d.refactor_every == 0 || !per_frame.is_multiple_of(d.refactor_every) {
-            return Err(invalid(
-                "forces.drag.refactor_every",
-                d.refactor_every,
-                format!(
-                    "must be a positive divisor of the {per_frame} steps per output frame, so that every checkpoint \
-                     falls on a renewal and a resumed run stays bitwise equal"
-                ),
-            ));
-        }
-        if d.law == DragLawSpec::Rpy && spec.integration.scheme.integrates_linear_drag() {
-            return Err(invalid(
-                "integration.scheme",
-                spec.integration.scheme,
-                "integrates a lone sphere's Stokes drag exactly; with law = \"rpy\" the drag couples all spheres",
-            ));
-        }
-    }
-    if let Some(c) = &f.contact {
-        match (c.normal, c.stiffness) {
-            (NormalSpec::Hooke, Some(k)) => positive("forces.contact.stiffness", k)?,
-            (NormalSpec::Hooke, None) => {
-                return Err(invalid("forces.contact.normal", "hooke", "needs forces.contact.stiffness (N/m)"))
-            }
-            (NormalSpec::Hertz, Some(k)) => {
-                return Err(invalid(
-                    "forces.contact.stiffness",
-                    k,
-                    "applies to normal = \"hooke\" only (Hertz's stiffness follows from the species)",
-                ))
-            }
-            (NormalSpec::Hertz, None) => {}
-        }
+    let ctx = term_context(spec, domain, species, Skins::default());
+    for term in spec.forces.terms() {
+        term.check(&ctx)?;
     }
     if let Some(field) = &spec.field {
         let g = field.gradient;
@@ -648,19 +500,6 @@ fn check_forces(
         }
     }
     Ok(())
-}
-
-/// The contact law a contact table chooses (validated: Hooke has its stiffness).
-fn contact_law(c: &ContactSpec) -> ContactLaw {
-    let normal = match c.normal {
-        NormalSpec::Hertz => Normal::Hertz,
-        NormalSpec::Hooke => Normal::Hooke { stiffness: c.stiffness.unwrap_or(f64::NAN) },
-    };
-    let tangential = match c.tangential {
-        TangentialSpec::Mindlin => Tangential::Mindlin,
-        TangentialSpec::None => Tangential::None,
-    };
-    ContactLaw { normal, tangential }
 }
 
 /// The most steps a run may take: 2^53, below which every step number is exact in an f64.
@@ -685,16 +524,6 @@ fn check_integration(spec: &SceneSpec) -> Result<(), SceneError> {
                 "must be a multiple of integration.slow_every = {}: particles are renumbered at the start of an outer step",
                 i.slow_every
             ),
-        ));
-    }
-    if i.scheme == integrators::Scheme::AdaptiveVerlet
-        && spec.forces.dipole.as_ref().is_some_and(|d| matches!(d.induction, InductionSpec::Paper))
-    {
-        return Err(invalid(
-            "integration.scheme",
-            i.scheme,
-            "needs forces that depend on the state alone, and the paper's induction advances its moments by one sweep per \
-             force evaluation (step doubling would compare one sweep with two); use forces.dipole.induction = \"exact\" or \"none\"",
         ));
     }
     if !(i.tolerance > 0.0 && i.tolerance < 1.0) {
@@ -733,27 +562,6 @@ fn check_integration(spec: &SceneSpec) -> Result<(), SceneError> {
         return Err(invalid("stability.max_step_fraction", s.max_step_fraction, "must lie in (0, 1]"));
     }
     Ok(())
-}
-
-/// Moment of an isolated particle at the box centre, enhanced by mutual induction with one
-/// touching neighbour along the field when induction is on: m/(1 − χ_eff/12). For the step estimate.
-fn isolated_moment(spec: &SceneSpec, domain: &Domain, s: &Species) -> f64 {
-    let f = &spec.forces;
-    if f.dipole.is_none() && f.gradient.is_none() {
-        return 0.0;
-    }
-    let (b0, gradient) = field_of(spec);
-    let centre = 0.5 * (domain.lo + domain.hi);
-    let h = ((b0 + gradient * centre) / MU0).norm();
-    let mut m = s.susceptibility * s.volume() * h;
-    if let Some(sat) = s.saturation {
-        m = m.min(sat.moment(s.susceptibility * h, s.volume()));
-    }
-    let induced = matches!(f.dipole.as_ref().map(|d| d.induction), Some(InductionSpec::Paper | InductionSpec::Exact));
-    if induced && s.saturation.is_none() {
-        m /= 1.0 - s.susceptibility / 12.0;
-    }
-    m + s.permanent_moment.map_or(0.0, |p| p.norm())
 }
 
 /// How many particles group `g` places at random in its region `lo..hi` (after `existing`
@@ -833,24 +641,6 @@ fn checked_count(
         )));
     }
     Ok(count)
-}
-
-/// The RPY mobility above a wall (Swan & Brady's) is that of equal spheres: one diameter, no size law.
-fn check_equal_spheres(spec: &SceneSpec) -> Result<(), SceneError> {
-    let why = "the RPY mobility above a wall (forces.drag.wall with law = \"rpy\") is written for equal spheres";
-    for (k, s) in spec.species.iter().enumerate() {
-        if s.size.is_some() {
-            return Err(invalid(format!("species[{k}].size"), s.name.as_str(), format!("{why}: give one diameter")));
-        }
-        if s.diameter != spec.species[0].diameter {
-            return Err(invalid(
-                format!("species[{k}].diameter"),
-                s.diameter,
-                format!("{why}: species[0] has {:e} m", spec.species[0].diameter),
-            ));
-        }
-    }
-    Ok(())
 }
 
 /// The largest sphere the group's species can have fits its region between the walls on every

@@ -14,10 +14,14 @@
 //! fixed order. Walled boxes skip the minimum-image arithmetic. Where the neighbour layer holds
 //! the cut-off's range (the paper's induction declares it), the term sums over its pairs instead.
 
+use super::magnetisation::{
+    needs_field, pair_dipole_field, pair_dipole_fields, pair_dipole_fields_four, Induction, MU0,
+};
+use super::setup::{invalid, positive, Invalid, SceneContext, TermSpec};
 use super::{Context, ForceTerm, Forces, Renumbering};
 use crate::core::domain::Domain;
+use crate::core::integrators::Scheme;
 use crate::core::lanes;
-use crate::core::magnetisation::{pair_dipole_field, pair_dipole_fields, pair_dipole_fields_four, MU0};
 use crate::core::neighbours::{CellList, Pair, PairList, RangePairs, Skins, VerletList};
 use crate::core::parallel;
 use crate::core::state::{Particles, Vec3};
@@ -381,6 +385,121 @@ impl DipoleForce {
             rows: Rows::default(),
             bands: vec![],
         }
+    }
+}
+
+/// `[forces.dipole]`: dipole–dipole forces and the moments they act between.
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DipoleSpec {
+    /// `none` | `paper` | `exact`.
+    pub induction: InductionSpec,
+    /// Pair cut-off of the force sum in diameters (largest species); absent = all pairs.
+    pub cutoff_diameters: Option<f64>,
+    /// Radius of the `paper` induction neighbourhood, in diameters (default 15, as the paper).
+    #[serde(default = "default_paper_radius")]
+    pub paper_radius_diameters: f64,
+    /// `exact`: relative change of the moments at which iteration stops (default 1e-10).
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+    /// `exact`: most fixed-point sweeps per step (default 500).
+    #[serde(default = "default_max_iterations")]
+    pub max_iterations: usize,
+    /// `exact`: largest N solved by a dense LU instead of iteration (default 150).
+    #[serde(default = "default_dense_max")]
+    pub dense_max: usize,
+}
+
+/// `forces.dipole.induction`: the moments' mutual induction ([`Induction`]).
+#[derive(Debug, Clone, Copy, serde::Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum InductionSpec {
+    None,
+    Paper,
+    Exact,
+}
+
+fn default_paper_radius() -> f64 {
+    15.0
+}
+fn default_tolerance() -> f64 {
+    1e-10
+}
+fn default_max_iterations() -> usize {
+    500
+}
+fn default_dense_max() -> usize {
+    150
+}
+
+impl TermSpec for DipoleSpec {
+    fn check(&self, ctx: &SceneContext) -> Result<(), Invalid> {
+        needs_field(ctx)?;
+        let tol = self.tolerance;
+        if !(1e-15..1.0).contains(&tol) {
+            return Err(invalid(
+                "forces.dipole.tolerance",
+                tol,
+                "impossible mutual-induction tolerance: double precision resolves relative changes \
+                 down to about 1e-15, and it must be below 1",
+            ));
+        }
+        if self.max_iterations == 0 {
+            return Err(invalid("forces.dipole.max_iterations", 0, "must be at least 1"));
+        }
+        let mut ranges = vec![];
+        if let Some(c) = self.cutoff_diameters {
+            positive("forces.dipole.cutoff_diameters", c)?;
+            ranges.push(("forces.dipole.cutoff_diameters", c));
+        }
+        if self.induction == InductionSpec::Paper {
+            positive("forces.dipole.paper_radius_diameters", self.paper_radius_diameters)?;
+            ranges.push(("forces.dipole.paper_radius_diameters", self.paper_radius_diameters));
+        }
+        let (domain, largest) = (ctx.domain, ctx.largest_diameter());
+        for (key, diameters) in ranges {
+            for k in 0..3 {
+                let half = 0.5 * domain.length()[k];
+                if domain.periodic[k] && diameters * largest >= half {
+                    return Err(invalid(
+                        key,
+                        diameters,
+                        format!(
+                            "{:e} m is not below half the periodic box length {half:e} m along {}",
+                            diameters * largest,
+                            ["x", "y", "z"][k]
+                        ),
+                    ));
+                }
+            }
+        }
+        if ctx.scheme == Scheme::AdaptiveVerlet && self.induction == InductionSpec::Paper {
+            return Err(invalid(
+                "integration.scheme",
+                ctx.scheme,
+                "needs forces that depend on the state alone, and the paper's induction advances its moments by one sweep per \
+                 force evaluation (step doubling would compare one sweep with two); use forces.dipole.induction = \"exact\" or \"none\"",
+            ));
+        }
+        Ok(())
+    }
+
+    fn moments(&self, ctx: &SceneContext) -> Option<Induction> {
+        Some(match self.induction {
+            InductionSpec::None => Induction::None,
+            InductionSpec::Paper => Induction::Paper { radius: self.paper_radius_diameters * ctx.largest_diameter() },
+            InductionSpec::Exact => Induction::Exact {
+                tolerance: self.tolerance,
+                max_iterations: self.max_iterations,
+                dense_max: self.dense_max,
+            },
+        })
+    }
+
+    fn build(&self, ctx: &SceneContext) -> Box<dyn ForceTerm> {
+        let (b0, gradient) = ctx.field();
+        let cutoff = self.cutoff_diameters.map(|c| c * ctx.largest_diameter());
+        Box::new(DipoleForce::new(cutoff, b0, gradient, ctx.pairs.skins))
     }
 }
 

@@ -9,8 +9,11 @@
 //! ([`Drag::renewed_every`]) and applied in between to each evaluation's velocity, F_i = −c_i u_i (as the RPY drag
 //! holds its factor, [`super::hydrodynamics`]).
 
+use super::hydrodynamics::RpyDrag;
+pub use super::setup::Fluid;
+use super::setup::{invalid, non_negative, positive, Invalid, SceneContext, StepBound, StepContext, TermSpec};
 use super::shielding::shadow_area;
-use super::wall_drag::WallCorrection;
+use super::wall_drag::{WallCorrection, WallDragSpec};
 use super::{ConstantForce, Context, ForceTerm, Forces, Renewal, Renumbering};
 use crate::core::neighbours::PairRange;
 use crate::core::parallel;
@@ -33,17 +36,6 @@ pub enum Shielding {
         touch_tolerance: f64,
         near: PairRange,
     },
-}
-
-/// The fluid the particles move in.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Fluid {
-    /// ρ_f (kg/m³).
-    pub density: f64,
-    /// μ (Pa s).
-    pub viscosity: f64,
-    /// u_f (m/s), uniform.
-    pub velocity: Vec3,
 }
 
 #[derive(Debug, Clone)]
@@ -365,4 +357,197 @@ mod tests {
             );
         }
     }
+}
+
+/// `[forces.drag]`: hydrodynamic drag (needs `[fluid]`).
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DragSpec {
+    /// `stokes` | `schiller-naumann` (default `schiller-naumann`, the paper's).
+    #[serde(default = "default_drag_law")]
+    pub law: DragLawSpec,
+    /// `none` | `paper` (default `paper`, the paper's A_eff).
+    #[serde(default = "default_shielding")]
+    pub shielding: ShieldingSpec,
+    /// Rotational drag −8π μ a³ ω (default true).
+    #[serde(default = "default_true")]
+    pub rotational: bool,
+    /// Gap below which two particles count as touching for shielding, as a fraction of the
+    /// smaller radius (default 1e-3).
+    #[serde(default = "default_touch_tolerance")]
+    pub touch_tolerance: f64,
+    /// Steps between renewals of the drag's configuration-dependent part (default 1, every force
+    /// evaluation): with `law = "rpy"` the mobility's factor, otherwise each particle's coefficient
+    /// (shielded area and Schiller–Naumann factor). The drag uses each evaluation's velocities with
+    /// the part renewed at the last step divisible by it. Must divide the steps per output frame
+    /// (and be a multiple of `integration.slow_every` under multiple time stepping).
+    #[serde(default = "default_refactor_every")]
+    pub refactor_every: u64,
+    /// Stokes drag near one plane wall of the box (with `law` stokes or schiller-naumann).
+    pub wall: Option<WallDragSpec>,
+}
+
+#[derive(Debug, Clone, Copy, serde::Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum DragLawSpec {
+    Stokes,
+    SchillerNaumann,
+    /// Stokes flow with hydrodynamic interactions: the Rotne–Prager–Yamakawa mobility of all
+    /// spheres, factorised every `refactor_every` steps (dense, O(N³)).
+    Rpy,
+}
+
+#[derive(Debug, Clone, Copy, serde::Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum ShieldingSpec {
+    None,
+    Paper,
+}
+
+fn default_drag_law() -> DragLawSpec {
+    DragLawSpec::SchillerNaumann
+}
+fn default_shielding() -> ShieldingSpec {
+    ShieldingSpec::Paper
+}
+fn default_true() -> bool {
+    true
+}
+fn default_touch_tolerance() -> f64 {
+    1e-3
+}
+fn default_refactor_every() -> u64 {
+    1
+}
+
+impl TermSpec for DragSpec {
+    fn check(&self, ctx: &SceneContext) -> Result<(), Invalid> {
+        if ctx.fluid.is_none() {
+            return Err(invalid("forces.drag", "{}", "drag needs a [fluid] table"));
+        }
+        non_negative("forces.drag.touch_tolerance", self.touch_tolerance)?;
+        let rpy = self.law == DragLawSpec::Rpy;
+        if rpy && self.shielding != ShieldingSpec::None {
+            return Err(invalid(
+                "forces.drag.shielding",
+                "paper",
+                "the RPY mobility replaces the shielded area; use shielding = \"none\" with law = \"rpy\"",
+            ));
+        }
+        if let Some(w) = &self.wall {
+            positive("forces.drag.wall.min_gap", w.min_gap)?;
+            if rpy {
+                equal_spheres(ctx)?;
+            }
+            let (axis, _) = w.face.axis_and_side();
+            if ctx.domain.periodic[axis] {
+                return Err(invalid("forces.drag.wall.face", w.face, "that face is periodic, not a wall"));
+            }
+            if ctx.scheme.integrates_linear_drag() {
+                return Err(invalid(
+                    "integration.scheme",
+                    ctx.scheme,
+                    "integrates a lone sphere's free-fluid Stokes drag exactly; a wall changes that drag",
+                ));
+            }
+        }
+        let every = self.refactor_every;
+        if every != 1 && self.law == DragLawSpec::Stokes && self.shielding == ShieldingSpec::None {
+            return Err(invalid(
+                "forces.drag.refactor_every",
+                every,
+                "Stokes drag without shielding has a constant coefficient, nothing to renew; remove the key or set it to 1",
+            ));
+        }
+        let per_call = if ctx.scheme.multiple_time_stepping() { ctx.slow_every } else { 1 };
+        if every > 1 && !every.is_multiple_of(per_call) {
+            return Err(invalid(
+                "forces.drag.refactor_every",
+                every,
+                format!(
+                    "must be a multiple of integration.slow_every = {per_call}: the drag is renewed at the start of \
+                     an outer step"
+                ),
+            ));
+        }
+        let per_frame = ctx.steps_per_frame;
+        if every == 0 || !per_frame.is_multiple_of(every) {
+            return Err(invalid(
+                "forces.drag.refactor_every",
+                every,
+                format!(
+                    "must be a positive divisor of the {per_frame} steps per output frame, so that every checkpoint \
+                     falls on a renewal and a resumed run stays bitwise equal"
+                ),
+            ));
+        }
+        if rpy && ctx.scheme.integrates_linear_drag() {
+            return Err(invalid(
+                "integration.scheme",
+                ctx.scheme,
+                "integrates a lone sphere's Stokes drag exactly; with law = \"rpy\" the drag couples all spheres",
+            ));
+        }
+        Ok(())
+    }
+
+    fn near_tolerance(&self) -> f64 {
+        self.touch_tolerance
+    }
+
+    /// The drag relaxation time τ = m/(6π μ a) of the fastest-relaxing species: explicit schemes
+    /// are stable for dt < 2τ (a scheme that integrates the linear drag exactly has no bound).
+    fn stable_dt(&self, ctx: &StepContext) -> Option<StepBound> {
+        let mu = ctx.drag_viscosity?;
+        let tau =
+            ctx.species.iter().map(|s| s.mass() / Drag::stokes_coefficient(mu, s.radius)).fold(f64::INFINITY, f64::min);
+        Some(StepBound {
+            term: "drag",
+            dt: (!ctx.scheme.integrates_linear_drag()).then_some(2.0 * tau),
+            limited_by: "drag relaxation",
+            collision: None,
+            summary: format!("; drag relaxation {tau:.3e} s"),
+        })
+    }
+
+    fn build(&self, ctx: &SceneContext) -> Box<dyn ForceTerm> {
+        let fluid = ctx.fluid.expect("checked: drag has a [fluid] table");
+        let wall = self.wall.as_ref().map(|w| w.wall(ctx.domain));
+        let law = match self.law {
+            DragLawSpec::Stokes => DragLaw::Stokes,
+            DragLawSpec::SchillerNaumann => DragLaw::SchillerNaumann,
+            DragLawSpec::Rpy => {
+                let mut rpy = RpyDrag::new(fluid, self.rotational, self.refactor_every);
+                rpy.wall = wall;
+                return Box::new(rpy);
+            }
+        };
+        let shielding = match self.shielding {
+            ShieldingSpec::None => Shielding::None,
+            ShieldingSpec::Paper => Shielding::Paper { touch_tolerance: self.touch_tolerance, near: ctx.pairs.near },
+        };
+        let mut drag = Drag::new(law, shielding, self.rotational, fluid).renewed_every(self.refactor_every);
+        drag.exclude_linear = ctx.scheme.integrates_linear_drag();
+        drag.wall = wall.map(WallCorrection::new);
+        Box::new(drag)
+    }
+}
+
+/// The RPY mobility above a wall (Swan & Brady's) is that of equal spheres: one diameter, no size law.
+fn equal_spheres(ctx: &SceneContext) -> Result<(), Invalid> {
+    let why = "the RPY mobility above a wall (forces.drag.wall with law = \"rpy\") is written for equal spheres";
+    let first = 2.0 * ctx.species[0].radius;
+    for (k, s) in ctx.species.iter().enumerate() {
+        if s.size.is_some() {
+            return Err(invalid(format!("species[{k}].size"), s.name.as_str(), format!("{why}: give one diameter")));
+        }
+        if 2.0 * s.radius != first {
+            return Err(invalid(
+                format!("species[{k}].diameter"),
+                2.0 * s.radius,
+                format!("{why}: species[0] has {first:e} m"),
+            ));
+        }
+    }
+    Ok(())
 }

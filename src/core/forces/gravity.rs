@@ -1,5 +1,6 @@
 //! Weight minus buoyancy, F = V (ρ_p − ρ_f) g (paper eq. 11).
 
+use super::setup::{Invalid, SceneContext, TermSpec};
 use super::{ConstantForce, Context, ForceTerm, Forces, Renumbering};
 use crate::core::parallel;
 use crate::core::state::{sphere_volume, Particles, Vec3};
@@ -55,5 +56,28 @@ impl ForceTerm for GravityBuoyancy {
     }
     fn renumber(&mut self, r: &Renumbering) {
         r.permute(&mut self.weights);
+    }
+}
+
+/// `[forces.gravity]`: weight minus buoyancy.
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GravitySpec {
+    /// m/s² (default [0, 0, −9.81]).
+    #[serde(default = "default_g")]
+    pub g: [f64; 3],
+}
+
+fn default_g() -> [f64; 3] {
+    [0.0, 0.0, -9.81]
+}
+
+impl TermSpec for GravitySpec {
+    fn check(&self, _ctx: &SceneContext) -> Result<(), Invalid> {
+        Ok(())
+    }
+    /// Buoyancy in the `[fluid]` table's density, none without one.
+    fn build(&self, ctx: &SceneContext) -> Box<dyn ForceTerm> {
+        Box::new(GravityBuoyancy::new(Vec3::from(self.g), ctx.fluid.map_or(0.0, |f| f.density)))
     }
 }

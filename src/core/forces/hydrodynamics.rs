@@ -12,9 +12,9 @@
 //! (above a wall, [`super::blake`], for spheres that do not overlap); the drag is
 //! F_h = −R (U − u_f) with R = M⁻¹, formed from a Cholesky factor of M (faer). docs/model.md §7.
 
-use super::drag::Fluid;
+use super::setup::Fluid;
 use super::wall_drag::PlaneWall;
-use super::{Context, ForceTerm, Forces, InductionError, Renewal, Renumbering};
+use super::{Context, ForceTerm, Forces, Renewal, Renumbering, TermError};
 use crate::core::state::{Particles, State, Vec3};
 use faer::linalg::solvers::DenseSolveCore;
 use nalgebra::Matrix3;
@@ -142,7 +142,7 @@ impl ForceTerm for RpyDrag {
     fn begin_step(&mut self, state: &State) {
         self.renewal.begin_step(state.step);
     }
-    fn prepare(&mut self, _ctx: &Context, state: &State) -> Result<(), InductionError> {
+    fn prepare(&mut self, _ctx: &Context, state: &State) -> Result<(), TermError> {
         if self.renewal.now(self.resistance.is_some()) {
             let p = &state.particles;
             self.resistance = Some(Resistance::new(&p.position, &p.radius, self.fluid.viscosity, self.wall.as_ref()));

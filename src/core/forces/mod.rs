@@ -1,6 +1,8 @@
-//! Force terms. Each term is one file behind [`ForceTerm`]; a scene includes only the terms it
-//! lists, so an absent term costs nothing. A term reads the particles (never writes them),
-//! declares the pairs it needs, and adds its contribution into [`Forces`].
+//! Force terms. Each term is one file: the force behind [`ForceTerm`], its scene keys behind
+//! [`setup::TermSpec`]; it is declared here, in the module list and in the registry
+//! ([`ForcesSpec`]). A scene includes only the terms it lists, so an absent term costs nothing. A
+//! term reads the particles (never writes them), declares the pairs it needs, and adds its
+//! contribution into [`Forces`].
 
 pub mod blake;
 pub mod contact;
@@ -9,6 +11,8 @@ pub mod drag;
 pub mod gradient;
 pub mod gravity;
 pub mod hydrodynamics;
+pub mod magnetisation;
+pub mod setup;
 pub mod shielding;
 pub mod wall_drag;
 
@@ -16,6 +20,39 @@ use super::domain::Domain;
 use super::neighbours::{Neighbours, PairRange};
 pub use super::renumber::Renumbering;
 use super::state::{ContactDiagnostics, ContactHistory, Particles, State, Vec3};
+
+/// [`ForcesSpec`] with the table `[forces.$name]` of each term, read as its module's `$spec`.
+macro_rules! registry {
+    ($($name:ident: $spec:ident,)*) => {
+        /// `[forces.*]`: the terms of the model; a term absent here is not computed.
+        #[derive(Debug, Clone, Default, serde::Deserialize)]
+        #[serde(deny_unknown_fields)]
+        pub struct ForcesSpec {
+            $(pub $name: Option<$name::$spec>,)*
+        }
+
+        impl ForcesSpec {
+            /// The terms present, in build (and summation) order.
+            pub fn terms(&self) -> Vec<&dyn setup::TermSpec> {
+                [$(self.$name.as_ref().map(|t| t as &dyn setup::TermSpec)),*].into_iter().flatten().collect()
+            }
+
+            /// The keys of the terms present, in build order.
+            pub fn names(&self) -> Vec<&'static str> {
+                [$(self.$name.as_ref().map(|_| stringify!($name))),*].into_iter().flatten().collect()
+            }
+        }
+    };
+}
+
+// The registry of force terms, in build (and summation) order.
+registry! {
+    dipole: DipoleSpec,
+    gradient: GradientSpec,
+    drag: DragSpec,
+    gravity: GravitySpec,
+    contact: ContactSpec,
+}
 
 /// What a term may read besides the particles during one force evaluation.
 pub struct Context<'a> {
@@ -38,16 +75,18 @@ pub struct Forces<'a> {
     pub diagnostics: &'a mut ContactDiagnostics,
 }
 
-/// Mutual induction failed to converge.
+/// Why a term could not evaluate its forces ([`ForceTerm::prepare`]); the run stops after the step.
 #[derive(Debug, Clone, thiserror::Error)]
-#[error(
-    "mutual induction did not converge: relative change {residual:.3e} after {iterations} sweeps \
-     (tolerance {tolerance:.1e}); the dipole coupling is near or beyond its limit"
-)]
-pub struct InductionError {
-    pub residual: f64,
-    pub iterations: usize,
-    pub tolerance: f64,
+pub enum TermError {
+    /// The moments' fixed-point iteration (exact induction) did not reach its tolerance.
+    #[error(
+        "mutual induction did not converge: relative change {residual:.3e} after {iterations} sweeps \
+         (tolerance {tolerance:.1e}); the dipole coupling is near or beyond its limit"
+    )]
+    Induction { residual: f64, iterations: usize, tolerance: f64 },
+    /// Any other term: its name and what went wrong.
+    #[error("{term}: {reason}")]
+    Failed { term: &'static str, reason: String },
 }
 
 /// A force that does not change during a run (see [`ForceTerm::constant_force`]).
@@ -97,7 +136,7 @@ pub trait ForceTerm: Send {
     fn begin_step(&mut self, _state: &State) {}
     /// Work that reads the whole state before any term adds forces (the moments' induction
     /// solve); an error stops the run after the step.
-    fn prepare(&mut self, _ctx: &Context, _state: &State) -> Result<(), InductionError> {
+    fn prepare(&mut self, _ctx: &Context, _state: &State) -> Result<(), TermError> {
         Ok(())
     }
     /// Adds this term's contribution into `out`.

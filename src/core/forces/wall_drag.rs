@@ -137,3 +137,67 @@ mod tests {
         }
     }
 }
+
+/// `[forces.drag.wall]`: the parallel-wall drag factor (Faxén; Goldman, Cox & Brenner) on the
+/// velocity components parallel to one face of the box.
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WallDragSpec {
+    /// The face that is the wall (case 2's substrate: `z-`).
+    pub face: FaceSpec,
+    /// Smallest sphere–wall gap used, as a fraction of the radius (default 0.01): a sphere
+    /// resting on the wall keeps a gap set by its roughness; the factor diverges at contact.
+    #[serde(default = "default_min_gap")]
+    pub min_gap: f64,
+}
+
+fn default_min_gap() -> f64 {
+    1e-2
+}
+
+impl WallDragSpec {
+    /// The wall in `domain`.
+    pub fn wall(&self, domain: &crate::core::domain::Domain) -> PlaneWall {
+        let (axis, high) = self.face.axis_and_side();
+        let position = if high { domain.hi[axis] } else { domain.lo[axis] };
+        PlaneWall { axis, position, side: if high { -1.0 } else { 1.0 }, min_gap: self.min_gap }
+    }
+}
+
+/// A face of the box.
+#[derive(Debug, Clone, Copy, serde::Deserialize, PartialEq, Eq)]
+pub enum FaceSpec {
+    #[serde(rename = "x-")]
+    XLow,
+    #[serde(rename = "x+")]
+    XHigh,
+    #[serde(rename = "y-")]
+    YLow,
+    #[serde(rename = "y+")]
+    YHigh,
+    #[serde(rename = "z-")]
+    ZLow,
+    #[serde(rename = "z+")]
+    ZHigh,
+}
+
+impl FaceSpec {
+    /// The face's axis and whether it is the high one.
+    pub fn axis_and_side(self) -> (usize, bool) {
+        match self {
+            FaceSpec::XLow => (0, false),
+            FaceSpec::XHigh => (0, true),
+            FaceSpec::YLow => (1, false),
+            FaceSpec::YHigh => (1, true),
+            FaceSpec::ZLow => (2, false),
+            FaceSpec::ZHigh => (2, true),
+        }
+    }
+}
+
+impl std::fmt::Display for FaceSpec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let (axis, high) = self.axis_and_side();
+        write!(f, "{}{}", ["x", "y", "z"][axis], if high { "+" } else { "-" })
+    }
+}

@@ -4,6 +4,7 @@
 //! (normal_model_hertz.h, tangential_model_history.h).
 
 pub mod law;
+mod spec;
 mod walls;
 
 use super::{Context, ForceTerm, Forces, Renumbering};
@@ -15,6 +16,7 @@ use crate::core::state::{
 };
 pub use law::PairMaterial;
 use law::{ContactLaw, Lanes, LANES};
+pub use spec::{ContactSpec, NormalSpec, TangentialSpec};
 use std::sync::Mutex;
 use walls::{WallScan, WallTouch};
 

@@ -15,26 +15,20 @@
 //!   (I − D T) m = m_perm + D H_ext for N ≤ `dense_max` without saturation, otherwise fixed-point
 //!   sweeps warm-started from the previous moments until max|Δm| ≤ tolerance · max|m|.
 
-pub use super::forces::InductionError;
-use super::forces::{Context, ForceTerm, Forces, Renumbering};
-use super::lanes::{self, Vec3x4};
-use super::neighbours::{Pair, PairRange, RangePairs, Skins};
-use super::parallel;
-use super::parallel::Pieced;
-use super::state::{sphere_volume, Particles, Saturation, Species, State, Vec3};
+pub use super::setup::Induction;
+use super::setup::{invalid, Invalid, SceneContext, StepBound, StepContext};
+use super::{Context, ForceTerm, Forces, Renumbering, TermError};
+use crate::core::lanes::{self, Vec3x4};
+use crate::core::neighbours::{Pair, PairRange, RangePairs, Skins};
+use crate::core::parallel;
+use crate::core::parallel::Pieced;
+use crate::core::state::{sphere_volume, Particles, Saturation, Species, State, Vec3};
 use nalgebra::Matrix3;
 use std::f64::consts::PI;
 use wide::f64x4;
 
 /// Vacuum permeability μ0 (T·m/A).
 pub const MU0: f64 = 4.0e-7 * PI;
-
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Induction {
-    None,
-    Paper { radius: f64 },
-    Exact { tolerance: f64, max_iterations: usize, dense_max: usize },
-}
 
 /// Fields of a pair's dipoles on each other, with r = x_i − x_j: on i from m_j and on j from m_i,
 /// H = [3(m·r̂)r̂ − m]/(4π r³) (A/m; even in r̂, so both share r̂ and 1/(4π r³)).
@@ -67,6 +61,80 @@ pub fn pair_dipole_fields_four(moment: &[Vec3], q: [&Pair; 4]) -> [(Vec3, Vec3);
     let on_i = field(lanes::gather(q.map(|q| &moment[q.j as usize])));
     let on_j = field(lanes::gather(q.map(|q| &moment[q.i as usize])));
     std::array::from_fn(|k| (on_i[k], on_j[k]))
+}
+
+/// Refuses a term that reads the moments in a scene without an applied field.
+pub fn needs_field(ctx: &SceneContext) -> Result<(), Invalid> {
+    match ctx.field {
+        Some(_) => Ok(()),
+        None => Err(invalid("forces", "dipole/gradient", "magnetic terms need a [field] table")),
+    }
+}
+
+/// Moment magnitude of an isolated sphere of species `s` at `centre` in the applied `field`
+/// (zero without moments), saturated, enhanced by mutual induction with one touching neighbour
+/// along the field when induction is on: m/(1 − χ_eff/12); plus its permanent moment. For the
+/// step estimate.
+pub fn isolated_moment(induction: Option<Induction>, field: (Vec3, Matrix3<f64>), centre: Vec3, s: &Species) -> f64 {
+    let Some(induction) = induction else {
+        return 0.0;
+    };
+    let (b0, gradient) = field;
+    let h = ((b0 + gradient * centre) / MU0).norm();
+    let mut m = s.susceptibility * s.volume() * h;
+    if let Some(sat) = s.saturation {
+        m = m.min(sat.moment(s.susceptibility * h, s.volume()));
+    }
+    if induction != Induction::None && s.saturation.is_none() {
+        m /= 1.0 - s.susceptibility / 12.0;
+    }
+    m + s.permanent_moment.map_or(0.0, |p| p.norm())
+}
+
+/// Fastest expected impact speed of two touching spheres of species `s` with moments `moment`:
+/// all the magnetic energy μ0 m²/(2π d³) into motion, v = √(2E/m*), capped by the drag-limited
+/// closing speed 2F/(6π μ a) under the contact attraction F = 3μ0 m²/(2π d⁴) in a fluid of
+/// `drag_viscosity`; at least `least` (the fastest initial speed) and 1 µm/s.
+pub fn impact_speed(s: &Species, moment: f64, drag_viscosity: Option<f64>, least: f64) -> f64 {
+    let m_eff = 0.5 * s.mass();
+    let d = 2.0 * s.radius;
+    let magnetic_energy = MU0 * moment * moment / (2.0 * PI * d.powi(3));
+    let mut v = (2.0 * magnetic_energy / m_eff).sqrt();
+    if let Some(mu) = drag_viscosity {
+        let attraction = 3.0 * MU0 * moment * moment / (2.0 * PI * d.powi(4));
+        v = v.min(2.0 * attraction / (6.0 * PI * mu * s.radius));
+    }
+    v.max(least).max(1e-6)
+}
+
+/// The bound of magnetic forces held over K = `slow_every` steps (r-RESPA, sub-cycled Euler):
+/// the dipole attraction at contact, F = 3μ0 m²/(2π d⁴), is a spring of stiffness |dF/dr| = 4F/d
+/// between touching particles, integrated with the outer step K·dt: stable for K·dt < 2/ω_m,
+/// ω_m = √(k_m/m*) (the Verlet bound on that spring, for r-RESPA; sub-cycled Euler holds the
+/// force as forward Euler does and is bounded more tightly; the stability map measures r-RESPA).
+pub fn held_bound(ctx: &StepContext) -> Option<StepBound> {
+    if ctx.slow_every <= 1 {
+        return None;
+    }
+    let bound = ctx
+        .species
+        .iter()
+        .zip(&ctx.moments)
+        .filter(|(_, &m)| m > 0.0)
+        .map(|(s, &m)| {
+            let d = 2.0 * s.radius;
+            let stiffness = 4.0 * 3.0 * MU0 * m * m / (2.0 * PI * d.powi(5));
+            let omega = (stiffness / (0.5 * s.mass())).sqrt();
+            2.0 / (omega * ctx.slow_every as f64)
+        })
+        .fold(f64::INFINITY, f64::min);
+    bound.is_finite().then(|| StepBound {
+        term: "moments",
+        dt: Some(bound),
+        limited_by: "magnetic contact spring held over slow_every steps",
+        collision: None,
+        summary: format!("; magnetic forces held over slow_every steps: bound {bound:.3e} s"),
+    })
 }
 
 pub struct Magnetisation {
@@ -151,7 +219,7 @@ impl Magnetisation {
 
     /// Computes the moments for the current positions into `self.moments`; `previous` are the
     /// last evaluation's (the paper's lagged sweep reads them, the iteration starts from them).
-    fn update(&mut self, p: &Particles, previous: &[Vec3], pairs: &RangePairs) -> Result<(), InductionError> {
+    fn update(&mut self, p: &Particles, previous: &[Vec3], pairs: &RangePairs) -> Result<(), TermError> {
         match self.induction {
             Induction::None => {
                 let mut field = std::mem::take(&mut self.field);
@@ -184,7 +252,7 @@ impl Magnetisation {
         pairs: &RangePairs,
         tolerance: f64,
         max_iterations: usize,
-    ) -> Result<(), InductionError> {
+    ) -> Result<(), TermError> {
         let mut residual = f64::INFINITY;
         let mut moments = std::mem::take(&mut self.moments);
         for iteration in 1..=max_iterations {
@@ -204,7 +272,7 @@ impl Magnetisation {
             }
         }
         self.moments = moments;
-        Err(InductionError { residual, iterations: max_iterations, tolerance })
+        Err(TermError::Induction { residual, iterations: max_iterations, tolerance })
     }
 
     /// Dense solve of (I − D T) m = m_perm + D H_ext (no saturation).
@@ -248,7 +316,7 @@ impl ForceTerm for Magnetisation {
     fn pairs(&self) -> Option<PairRange> {
         self.range
     }
-    fn prepare(&mut self, ctx: &Context, state: &State) -> Result<(), InductionError> {
+    fn prepare(&mut self, ctx: &Context, state: &State) -> Result<(), TermError> {
         // Without induction no pairs are read (and none declared).
         let pairs = ctx.neighbours.range_pairs(self.range.unwrap_or(PairRange::All));
         self.update(&state.particles, &state.fields.moment, &pairs)
