@@ -9,9 +9,8 @@
 //!   √(kt/Sn) = 2√(G*/E*), which sets x_t. Remaining differences: LAMMPS keeps the magnitude of
 //!   the shear history when projecting it and includes damping in its Coulomb check.
 
+use super::lammps::electric_per_magnetic;
 use super::{Engine, ReferenceError};
-use crate::core::forces::contact::law::restitution_beta;
-use crate::core::forces::contact::PairMaterial;
 use crate::scene::{
     Boundary, BoundarySpec, ContactSpec, DipoleSpec, DomainSpec, DragLawSpec, DragSpec, FieldSpec, FluidSpec,
     ForcesSpec, GradientSpec, GravitySpec, IntegrationSpec, NormalSpec, OutputSpec, ParticleGroupSpec, Scene,
@@ -27,32 +26,6 @@ pub struct WrittenDeck {
     pub data: PathBuf,
     /// Name of the dump file the deck writes.
     pub dump: String,
-}
-
-/// Tsuji's damping coefficient α(e) as LAMMPS evaluates it (pair_granular.cpp).
-pub fn tsuji_alpha(e: f64) -> f64 {
-    let c = [1.2728, -4.2783, 11.087, -22.348, 27.467, -18.022, 4.8218];
-    c.iter().rev().fold(0.0, |acc, k| acc * e + k)
-}
-
-/// LAMMPS tsuji input e_in whose damping equals LIGGGHTS' damping for restitution `e`; `None`
-/// below e ≈ 0.11, where LIGGGHTS damps more than tsuji's α(0) = 1.2728 can.
-pub fn lammps_tsuji_input(e: f64) -> Option<f64> {
-    let target = 5.0_f64.sqrt() * restitution_beta(e).abs();
-    if target > tsuji_alpha(0.0) {
-        return None;
-    }
-    // α decreases monotonically from α(0) = 1.27 to α(1) ≈ 0: bisection.
-    let (mut lo, mut hi) = (1e-6, 1.0);
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if tsuji_alpha(mid) > target {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    Some(0.5 * (lo + hi))
 }
 
 fn unsupported(engine: Engine, term: &str, why: &str) -> ReferenceError {
@@ -268,19 +241,10 @@ fn check_species(engine: Engine, species: &[SpeciesSpec], wall_contacts: bool) -
             "magdem gives each particle a wall of its own material; the decks' walls have one material",
         ));
     }
-    if engine == Engine::Liggghts && species.iter().any(|s| s.restitution <= 0.05) {
-        return Err(unsupported(engine, "species.restitution ≤ 0.05", "LIGGGHTS requires 0.05 < e ≤ 1"));
+    match engine.dialect().refuse_species(species) {
+        Some((term, why)) => Err(unsupported(engine, term, why)),
+        None => Ok(()),
     }
-    if engine == Engine::Lammps
-        && species.iter().any(|s| s.restitution < 1.0 && lammps_tsuji_input(s.restitution).is_none())
-    {
-        return Err(unsupported(
-            engine,
-            "species.restitution below 0.11",
-            "LAMMPS' tsuji damping cannot reach LIGGGHTS' damping there",
-        ));
-    }
-    Ok(())
 }
 
 /// How magdem's magnetic forces reach the engine.
@@ -346,22 +310,13 @@ pub const SCENE_COPY: &str = "scene.toml";
 /// addforce` by the files route); the in-process route finds the fix by it to set the callback.
 pub const FIX_ID: &str = "magnetic";
 
-/// LAMMPS' Coulomb constant in SI units (its `qqr2e`, force.cpp, `units si`).
-const LAMMPS_COULOMB: f64 = 8.9876e9;
-
-/// The electric dipole p that LAMMPS' dipole styles need per unit magnetic moment m for the
-/// same force: p = m √(μ0/(4π k_e)) = m √(1e-7/k_e) (REFERENCE-CODES.md).
-pub fn electric_per_magnetic() -> f64 {
-    (1e-7 / LAMMPS_COULOMB).sqrt()
-}
-
 /// The moments of the native deck: magdem's at t = 0 (induction `none`: χ_eff V H_ext, capped
 /// by any saturation law), refused for what LAMMPS' fixed dipoles cannot hold.
 fn native_moments(engine: Engine, scene: &Scene) -> Result<Vec<crate::core::state::Vec3>, ReferenceError> {
     use crate::scene::InductionSpec;
     let native = |term: &str, why: &str| Err(unsupported(engine, term, why));
-    if engine != Engine::Lammps {
-        return native("a native magnetic deck", "LIGGGHTS has no dipole pair style; only LAMMPS' deck is native");
+    if !engine.dialect().native_dipoles() {
+        return native("a native magnetic deck", "the engine has no dipole pair style; only LAMMPS' deck is native");
     }
     let f = &scene.spec.forces;
     let Some(dipole) = &f.dipole else {
@@ -451,12 +406,9 @@ fn input_deck(engine: Engine, scene: &Scene, data: &Path, dump: &str, coupling: 
         scene.hash
     );
     let native = *coupling == Coupling::Native;
-    let atom_style = match engine {
-        Engine::Liggghts => "granular",
-        Engine::Lammps if native => "hybrid sphere dipole",
-        Engine::Lammps => "sphere",
-    };
-    let comm = if engine == Engine::Liggghts { "communicate single vel yes" } else { "comm_modify vel yes" };
+    let dialect = engine.dialect();
+    let atom_style = dialect.atom_style(native);
+    let comm = dialect.communicate();
     // The callback and the files route exchange forces in atom order, so atoms stay unsorted; a
     // native deck lets LAMMPS sort them in space (2.4-2.7x faster at 34 000 atoms, §10.7).
     let sort = if native { "" } else { " sort 0 0" };
@@ -468,9 +420,7 @@ fn input_deck(engine: Engine, scene: &Scene, data: &Path, dump: &str, coupling: 
         bflag(periodic[1]),
         bflag(periodic[2])
     );
-    if engine == Engine::Liggghts && species.iter().any(|s| s.youngs_modulus > 1e9 || s.youngs_modulus < 5e6) {
-        s += "# LIGGGHTS checks 5e6 <= E <= 1e9 unless told otherwise\nhard_particles yes\n";
-    }
+    s += dialect.settings(species);
     let _ = writeln!(s, "read_data {}", data.display());
     if !scene.initial_contacts.pairs.is_empty() || !scene.initial_contacts.walls.is_empty() {
         let _ = writeln!(
@@ -486,14 +436,7 @@ fn input_deck(engine: Engine, scene: &Scene, data: &Path, dump: &str, coupling: 
         "\n# Neighbour skin scaled to the particle size (0.2 diameters).\nneighbor {:.6e} bin",
         0.2 * largest_d
     );
-    match engine {
-        // LIGGGHTS resets a pair's shear history only while the pair is within
-        // contact_distance_factor x (r_i + r_j) but not touching; at its default 1.0 that never
-        // happens, and a pair that separates and touches again within the neighbour list starts
-        // with the stale history. magdem (and LAMMPS) reset it at separation; 1.1 makes LIGGGHTS do so.
-        Engine::Liggghts => s += "neigh_modify delay 0 contact_distance_factor 1.1\n",
-        Engine::Lammps => s += "neigh_modify delay 0\n",
-    }
+    s += dialect.neigh_modify();
     let magnetic = spec.forces.dipole.is_some() || spec.forces.gradient.is_some();
     let includes: Vec<(&'static str, String)> = [
         ("fix.contact", Some(contact_section(engine, scene, native))),
@@ -513,7 +456,7 @@ fn input_deck(engine: Engine, scene: &Scene, data: &Path, dump: &str, coupling: 
     let fmt = format!("%d %d{}", " %.17g".repeat(12));
     let _ = writeln!(s, "\n# Full-precision dump every {every} steps (one frame per magdem output interval).");
     let _ = writeln!(s, "dump trajectory all custom {every} {dump} {cols}");
-    let _ = writeln!(s, "dump_modify trajectory sort id {} \"{fmt}\"", format_keyword(engine));
+    let _ = writeln!(s, "dump_modify trajectory sort id {} \"{fmt}\"", dialect.dump_format());
     let _ = writeln!(s, "thermo {}", every.max(1000));
     match coupling {
         Coupling::Files { magdem, every: k } if magnetic => {
@@ -528,7 +471,7 @@ fn input_deck(engine: Engine, scene: &Scene, data: &Path, dump: &str, coupling: 
                  variable fx atomfile forces.x\nvariable fy atomfile forces.y\nvariable fz atomfile forces.z\n\
                  run {k}\nnext exchange\njump SELF exchange_loop",
                 scene.total_steps() / k,
-                format_keyword(engine),
+                dialect.dump_format(),
                 magdem.display()
             );
         }
@@ -539,89 +482,16 @@ fn input_deck(engine: Engine, scene: &Scene, data: &Path, dump: &str, coupling: 
     DeckText { main: s, includes }
 }
 
-fn format_keyword(engine: Engine) -> &'static str {
-    if engine == Engine::Liggghts {
-        "format"
-    } else {
-        "format line"
-    }
-}
-
 /// Materials, pair style and walls; `native`: with LAMMPS' dipole pair style overlaid.
 fn contact_section(engine: Engine, scene: &Scene, native: bool) -> String {
-    let species = &scene.species;
-    let n_types = species.len();
-    let mut s = String::new();
-    let dipole = native.then(|| DipolePair::of(scene));
+    let dialect = engine.dialect();
     if scene.spec.forces.contact.is_none() {
-        return match dipole {
-            Some(pair) => {
-                format!("# No contact term in the scene.\npair_style {}\n{}", pair.style(), pair.coeff(false))
-            }
-            None => "# No contact term in the scene.\npair_style none\n".into(),
-        };
+        return dialect.without_contact(scene, native);
     }
-    s += "# Contact: Hertz normal, Mindlin tangential with history and Coulomb limit, damping from restitution.\n";
-    match engine {
-        Engine::Liggghts => {
-            let list =
-                |f: &dyn Fn(usize) -> f64| (0..n_types).map(|k| format!("{:e}", f(k))).collect::<Vec<_>>().join(" ");
-            let matrix = |f: &dyn Fn(usize, usize) -> f64| {
-                (0..n_types * n_types)
-                    .map(|k| format!("{:e}", f(k / n_types, k % n_types)))
-                    .collect::<Vec<_>>()
-                    .join(" ")
-            };
-            let _ = writeln!(
-                s,
-                "fix m1 all property/global youngsModulus peratomtype {}",
-                list(&|k| species[k].youngs_modulus)
-            );
-            let _ = writeln!(
-                s,
-                "fix m2 all property/global poissonsRatio peratomtype {}",
-                list(&|k| species[k].poisson_ratio)
-            );
-            let _ = writeln!(
-                s,
-                "fix m3 all property/global coefficientRestitution peratomtypepair {n_types} {}",
-                matrix(&|a, b| 0.5 * (species[a].restitution + species[b].restitution))
-            );
-            let _ = writeln!(
-                s,
-                "fix m4 all property/global coefficientFriction peratomtypepair {n_types} {}",
-                matrix(&|a, b| 0.5 * (species[a].friction + species[b].friction))
-            );
-            s += "pair_style gran model hertz tangential history\npair_coeff * *\n";
-        }
-        Engine::Lammps => {
-            s += "# (E, nu) per pair solved so LAMMPS' effective moduli equal magdem's; tsuji input calibrated.\n";
-            let sub_style = match &dipole {
-                Some(pair) => {
-                    let _ = writeln!(s, "pair_style hybrid/overlay granular {}", pair.style());
-                    " granular"
-                }
-                None => {
-                    s += "pair_style granular\n";
-                    ""
-                }
-            };
-            for a in 0..n_types {
-                for b in a..n_types {
-                    let _ = writeln!(
-                        s,
-                        "pair_coeff {} {}{sub_style} {}",
-                        a + 1,
-                        b + 1,
-                        lammps_granular_model(&species[a], &species[b], false)
-                    );
-                }
-            }
-            if let Some(pair) = &dipole {
-                s += &pair.coeff(true);
-            }
-        }
-    }
+    let mut s = String::from(
+        "# Contact: Hertz normal, Mindlin tangential with history and Coulomb limit, damping from restitution.\n",
+    );
+    s += &dialect.contact_pairs(scene, native);
     let d = &scene.domain;
     let walls: Vec<(usize, &str)> =
         (0..3).filter(|&k| !d.periodic[k]).map(|k| (k, ["xplane", "yplane", "zplane"][k])).collect();
@@ -629,54 +499,9 @@ fn contact_section(engine: Engine, scene: &Scene, native: bool) -> String {
         s += "# Walls: planes of infinite radius and mass, of the first species' material.\n";
     }
     for (k, plane) in walls {
-        let (lo, hi) = (d.lo[k], d.hi[k]);
-        match engine {
-            Engine::Liggghts => {
-                let _ = writeln!(s, "fix wall_{plane}_lo all wall/gran model hertz tangential history primitive type 1 {plane} {lo:.17e}");
-                let _ = writeln!(s, "fix wall_{plane}_hi all wall/gran model hertz tangential history primitive type 1 {plane} {hi:.17e}");
-            }
-            Engine::Lammps => {
-                let _ = writeln!(
-                    s,
-                    "fix wall_{plane} all wall/gran granular {} {plane} {lo:.17e} {hi:.17e}",
-                    lammps_granular_model(&species[0], &species[0], true)
-                );
-            }
-        }
+        s += &dialect.walls(plane, d.lo[k], d.hi[k], &scene.species[0]);
     }
     s
-}
-
-/// The native deck's dipole pair style: `lj/cut/dipole/cut` with the scene's cut-off, ε = 0 (the
-/// dipole terms alone) and σ the largest diameter (unused at ε = 0).
-struct DipolePair {
-    cutoff: f64,
-    sigma: f64,
-}
-
-impl DipolePair {
-    const STYLE: &'static str = "lj/cut/dipole/cut";
-
-    fn of(scene: &Scene) -> Self {
-        let sigma = crate::core::state::largest_diameter(&scene.species);
-        let diameters = scene.spec.forces.dipole.as_ref().and_then(|p| p.cutoff_diameters);
-        DipolePair { cutoff: diameters.expect("native_moments refuses a dipole term without a cut-off") * sigma, sigma }
-    }
-
-    fn style(&self) -> String {
-        format!("{} {:.17e}", Self::STYLE, self.cutoff)
-    }
-
-    /// The coefficient line, with the sub-style's name inside `hybrid/overlay`.
-    fn coeff(&self, hybrid: bool) -> String {
-        let sub_style = if hybrid { format!(" {}", Self::STYLE) } else { String::new() };
-        format!(
-            "# Point dipoles as LAMMPS' electric dipoles (p = m sqrt(1e-7/k_e) in data.scene), fixed in the\n\
-             # lab frame (nve/sphere without update dipole); LJ switched off (epsilon 0).\n\
-             pair_coeff * *{sub_style} 0.0 {:.17e}\n",
-            self.sigma
-        )
-    }
 }
 
 fn gravity_section(scene: &Scene) -> Option<String> {
@@ -721,85 +546,9 @@ fn magnetic_section(engine: Engine, coupling: &Coupling) -> Option<String> {
     }
 }
 
-/// Young's modulus and Poisson ratio to give LAMMPS so that its effective moduli equal magdem's
-/// E* and G* for a pair of species, or for a particle against a wall.
-///
-/// LAMMPS 2021 forms them as E/(2(1 − ν²)) and E/(4(2 − ν)(1 + ν)) for an explicit pair
-/// coefficient, and as E/(2(1 − ν)) and E/(4(2 − ν)(1 + ν)) in `fix wall/gran` (fix_wall_gran.cpp);
-/// its automatic mixing of unlike types is not used (the 2021 build's mixing is broken). Solving
-/// for (E, ν) with r = E*/G*: pair ν = (r − 4)/(r − 2); wall 2ν² − (2 + r)ν + (r − 4) = 0.
-pub fn lammps_equivalent_moduli(m: &PairMaterial, wall: bool) -> (f64, f64) {
-    let r = m.e_star / m.g_star;
-    if wall {
-        let b = 2.0 + r;
-        let nu = (b - (b * b - 8.0 * (r - 4.0)).sqrt()) / 4.0;
-        (2.0 * (1.0 - nu) * m.e_star, nu)
-    } else {
-        let nu = (r - 4.0) / (r - 2.0);
-        (2.0 * (1.0 - nu * nu) * m.e_star, nu)
-    }
-}
-
-/// `hertz/material E η ν tangential mindlin NULL x_t μ damping …` for a pair of species (or a
-/// species against a wall): tsuji damping calibrated to LIGGGHTS, or no damping when e = 1
-/// (tsuji's polynomial is 3e-4, not 0, at e = 1).
-fn lammps_granular_model(a: &crate::core::state::Species, b: &crate::core::state::Species, wall: bool) -> String {
-    let m = PairMaterial::new(a, b);
-    let (e_mod, nu) = lammps_equivalent_moduli(&m, wall);
-    let x_t = 2.0 * (m.g_star / m.e_star).sqrt();
-    let restitution = 0.5 * (a.restitution + b.restitution);
-    let damping = if restitution >= 1.0 {
-        "0 {nu} tangential mindlin NULL 0 {mu} damping viscoelastic".to_string()
-    } else {
-        let e_in = lammps_tsuji_input(restitution).expect("checked by deck::check");
-        format!("{e_in:.17e} {{nu}} tangential mindlin NULL {x_t:.17e} {{mu}} damping tsuji")
-    };
-    format!(
-        "hertz/material {e_mod:.17e} {}",
-        damping.replace("{nu}", &format!("{nu:.17e}")).replace("{mu}", &m.friction.to_string())
-    )
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn lammps_moduli_reproduce_the_effective_ones() {
-        let sp = crate::scene::Scene::parse(
-            "version = 1\n[domain]\nlo = [0,0,0]\nhi = [1,1,1]\n[[species]]\nname = \"a\"\ndiameter = 0.1\ndensity = 1000.0\nyoungs_modulus = 2.0e9\npoisson_ratio = 0.3\nfriction = 0.5\nrestitution = 0.5\n\
-             [[species]]\nname = \"b\"\ndiameter = 0.1\ndensity = 1000.0\nyoungs_modulus = 1.0e9\npoisson_ratio = 0.5\nfriction = 0.5\nrestitution = 0.5\n\
-             [[particles]]\nspecies = \"a\"\npositions = [[0.5, 0.5, 0.5]]\n[integration]\ndt = 1e-6\nend_time = 1e-5\n",
-            "t",
-        )
-        .unwrap()
-        .species;
-        for (a, b) in [(&sp[0], &sp[0]), (&sp[0], &sp[1]), (&sp[1], &sp[1])] {
-            let m = PairMaterial::new(a, b);
-            let (e, nu) = lammps_equivalent_moduli(&m, false);
-            assert!((e / (2.0 * (1.0 - nu * nu)) / m.e_star - 1.0).abs() < 1e-12);
-            assert!((e / (4.0 * (2.0 - nu) * (1.0 + nu)) / m.g_star - 1.0).abs() < 1e-12);
-            let (e, nu) = lammps_equivalent_moduli(&m, true);
-            assert!((e / (2.0 * (1.0 - nu)) / m.e_star - 1.0).abs() < 1e-12);
-            assert!((e / (4.0 * (2.0 - nu) * (1.0 + nu)) / m.g_star - 1.0).abs() < 1e-12);
-        }
-        // Same material, pair: LAMMPS gets the material's own E and ν back.
-        let (e, nu) = lammps_equivalent_moduli(&PairMaterial::new(&sp[1], &sp[1]), false);
-        assert!((e / 1.0e9 - 1.0).abs() < 1e-12 && (nu - 0.5).abs() < 1e-12);
-    }
-
-    #[test]
-    fn tsuji_calibration_matches_liggghts_damping() {
-        assert_eq!(lammps_tsuji_input(0.1), None);
-        for e in [0.12, 0.3, 0.5, 0.7, 0.9, 0.99] {
-            let ln_e: f64 = f64::ln(e);
-            let beta = ln_e / (ln_e * ln_e + std::f64::consts::PI.powi(2)).sqrt();
-            let e_in = lammps_tsuji_input(e).unwrap();
-            assert!((tsuji_alpha(e_in) - 5.0_f64.sqrt() * beta.abs()).abs() < 1e-12, "e = {e}");
-        }
-        // REFERENCE-CODES.md measured input 0.365 for e = 0.5.
-        assert!((lammps_tsuji_input(0.5).unwrap() - 0.365).abs() < 0.003);
-    }
 
     /// `table` with each dotted key set to its value, or removed for `None`. A number in the key
     /// indexes an array, a final `+` appends to one; missing tables are created.
@@ -844,10 +593,7 @@ mod tests {
     /// Each term of the scene's `[forces]` has its fix or pair style in the deck, and none that is absent.
     fn assert_every_term_written(engine: Engine, scene: &Scene, coupling: &Coupling, text: &str, label: &str) {
         let ForcesSpec { contact, dipole, gradient, drag, gravity } = &scene.spec.forces;
-        let pair_style = match engine {
-            Engine::Liggghts => "pair_style gran model hertz tangential history",
-            Engine::Lammps => "pair_style granular",
-        };
+        let pair_style = engine.dialect().contact_pair_style();
         let magnetic_fix = match coupling {
             Coupling::Callback => "fix magnetic all external pf/callback 1 1",
             Coupling::Files { .. } => "fix magnetic all addforce v_fx v_fy v_fz",

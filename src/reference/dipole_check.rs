@@ -42,7 +42,7 @@ pub fn write_deck(
     std::fs::create_dir_all(dir)?;
     let p = &state.particles;
     let largest_d = p.radius.iter().fold(0.0_f64, |a, r| a.max(2.0 * r));
-    let scale = super::deck::electric_per_magnetic();
+    let scale = super::lammps::electric_per_magnetic();
     let mut data = format!("magdem dipole deck (scene sha256 {origin})\n\n{} atoms\n1 atom types\n\n", p.len());
     for k in 0..3 {
         let _ = writeln!(data, "{:.17e} {:.17e} {}lo {}hi", d.lo[k], d.hi[k], ["x", "y", "z"][k], ["x", "y", "z"][k]);

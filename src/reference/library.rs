@@ -23,10 +23,7 @@ type Callback = extern "C" fn(*mut c_void, i64, c_int, *mut c_int, *mut *mut f64
 static INSTANCE: Mutex<()> = Mutex::new(());
 
 fn library_name(engine: Engine) -> &'static str {
-    match engine {
-        Engine::Liggghts => "libliggghts.so.3",
-        Engine::Lammps => "liblammps.so.0",
-    }
+    engine.dialect().library()
 }
 
 /// Whether the in-process route can run for `engine` here (loads the library once).

@@ -8,10 +8,13 @@
 //! ([`library`]). Anything else is refused with a message naming the term.
 
 pub mod deck;
+pub mod dialect;
 pub mod dipole_check;
 pub mod dump;
 pub mod files_route;
+pub mod lammps;
 pub mod library;
+pub mod liggghts;
 
 use crate::io::trajectory::{status, Cost, RunInfo, TrajectoryError, TrajectoryWriter};
 use crate::scene::Scene;
@@ -25,18 +28,20 @@ pub enum Engine {
 }
 
 impl Engine {
-    pub fn name(self) -> &'static str {
+    /// What differs between the engines: decks, limits, binary and library.
+    pub fn dialect(self) -> &'static dyn dialect::Dialect {
         match self {
-            Engine::Liggghts => "liggghts",
-            Engine::Lammps => "lammps",
+            Engine::Liggghts => &liggghts::Liggghts,
+            Engine::Lammps => &lammps::Lammps,
         }
     }
 
+    pub fn name(self) -> &'static str {
+        self.dialect().name()
+    }
+
     pub fn binary(self) -> &'static str {
-        match self {
-            Engine::Liggghts => "liggghts",
-            Engine::Lammps => "lmp",
-        }
+        self.dialect().binary()
     }
 
     /// Whether the engine's binary is on the PATH.

@@ -5,7 +5,7 @@ use super::contact_cases::{
     POISSON, RESTITUTIONS, SOURCE, WALL_SPEED, YOUNGS,
 };
 use crate::plot::{engine_colour, line_chart, Series};
-use crate::reference::deck::tsuji_alpha;
+use crate::reference::lammps::tsuji_alpha;
 use crate::reference::Engine;
 use crate::report::template::render;
 use minijinja::context;
