@@ -66,12 +66,16 @@ fn hertz_elastic_impact_matches_closed_form() {
     let e_star = 1.0e9 / (2.0 * (1.0 - 0.25));
     let v = 2.0 * v_each;
     let delta = (15.0 * m_eff * v * v / (16.0 * e_star * r_eff.sqrt())).powf(0.4);
-    let t_c = 2.87 * (m_eff * m_eff / (r_eff * e_star * e_star * v)).powf(0.2);
+    // Johnson's 2.87 rounds the exact constant 2 ∫₀¹ (1 − x^(5/2))^(−1/2) dx (15/16)^(2/5)
+    // = 2 (2/5) Γ(2/5) Γ(1/2)/Γ(9/10) (15/16)^(2/5) = 2.86827 (2.87 alone would leave 6e-4).
+    let t_c = 2.868_265_699_195_33 * (m_eff * m_eff / (r_eff * e_star * e_star * v)).powf(0.2);
+    let (e_overlap, e_duration) = (max_overlap / delta - 1.0, duration / t_c - 1.0);
     println!(
-        "max overlap {max_overlap:.6e} (closed form {delta:.6e}); duration {duration:.6e} (closed form {t_c:.6e})"
+        "max overlap {max_overlap:.9e} (closed form {delta:.9e}, {e_overlap:.2e}); duration {duration:.9e} (closed form {t_c:.9e}, {e_duration:.2e})"
     );
-    assert!((max_overlap / delta - 1.0).abs() < 0.01, "max overlap {max_overlap:e} vs {delta:e}");
-    assert!((duration / t_c - 1.0).abs() < 0.01, "duration {duration:e} vs {t_c:e}");
+    // Measured at dt = 1e-11 s: overlap −2.5e-9, duration −1.5e-9.
+    assert!(e_overlap.abs() < 1e-8, "max overlap {max_overlap:e} vs {delta:e}");
+    assert!(e_duration.abs() < 1e-8, "duration {duration:e} vs {t_c:e}");
     // Elastic: the rebound speed equals the impact speed.
     let rebound = (sim.state.particles.velocity[1] - sim.state.particles.velocity[0]).x;
     assert!((rebound / v - 1.0).abs() < 1e-3, "rebound {rebound} vs {v}");
@@ -156,12 +160,14 @@ fn two_dipoles_close_in_the_closed_form_time_without_induction() {
     let c = MU0 * m * m / (2.0 * PI * PI * 1.0e-3 * 5.5e-6);
     let closed = (r0.powi(5) - d.powi(5)) / (5.0 * c);
     println!("time to contact {t:.6e} s, closed form {closed:.6e} s (ratio {:.5})", t / closed);
-    assert!((t / closed - 1.0).abs() < 0.005);
+    // Measured: 9.1e-5 (inertia at τ = 73 ns and the step).
+    assert!((t / closed - 1.0).abs() < 1e-3);
 
     let t_inertial = time_to_contact(&two_dipoles("none", r0, 1087.0));
     let reference = pair_ode_contact_time(r0, false);
     println!("paper density: {t_inertial:.6e} s, RK4 with inertia {reference:.6e} s, closed form {closed:.6e} s");
-    assert!((t_inertial / reference - 1.0).abs() < 1e-3);
+    // Measured: −3.9e-6.
+    assert!((t_inertial / reference - 1.0).abs() < 4e-5);
 }
 
 /// Independent solution of the collinear pair with self-consistent moments: the relative
@@ -230,8 +236,9 @@ fn terminal_velocity_under_a_gradient() {
     let a: f64 = 5.5e-6;
     let expected = 4.0 / 3.0 * PI * a.powi(3) * ms * g / (6.0 * PI * 1.0e-3 * a);
     let v = sim.state.particles.velocity[0].x;
-    println!("terminal velocity {v:.6e} m/s, V M G/(6π μ a) = {expected:.6e} m/s");
-    assert!((v / expected - 1.0).abs() < 0.005);
+    println!("terminal velocity {v:.9e} m/s, V M G/(6π μ a) = {expected:.9e} m/s ({:.2e})", v / expected - 1.0);
+    // Measured: −1.1e-12 (27 relaxation times: e^(−27) = 2e-12 of the start remains).
+    assert!((v / expected - 1.0).abs() < 1e-11);
 }
 
 /// The Fröhlich–Kennelly law: an isolated particle's moment is χ_eff H Ms/(Ms + χ_eff H) V, so
@@ -254,11 +261,15 @@ fn frohlich_kennelly_terminal_velocity() {
     let chi_eff = 3.0 * 11.3 / 14.3;
     let linear = chi_eff * (b0 + g * sim.state.particles.position[0].x) / magdem::core::magnetisation::MU0;
     let m = linear * ms / (ms + linear);
-    assert!(m < 0.6 * linear && m > 0.4 * linear, "the law bends here: M = {m:e}, linear {linear:e}");
+    // The law bends here: M is about half the linear χ_eff H (b0 and Ms chosen for it).
     let expected = 4.0 / 3.0 * PI * a.powi(3) * m * g / (6.0 * PI * 1.0e-3 * a);
     let v = sim.state.particles.velocity[0].x;
-    println!("terminal velocity {v:.6e} m/s, V M G/(6π μ a) = {expected:.6e} m/s (M = {m:.4e} A/m)");
-    assert!((v / expected - 1.0).abs() < 0.005);
+    println!(
+        "terminal velocity {v:.9e} m/s, V M G/(6π μ a) = {expected:.9e} m/s (M = {m:.4e} A/m, {:.2e})",
+        v / expected - 1.0
+    );
+    // Measured: −4.8e-8 (the moment follows the field along the path; the drag lags it by τ).
+    assert!((v / expected - 1.0).abs() < 5e-7);
 }
 
 fn chain(n: usize, mu_r: f64) -> (Particles, Species) {
@@ -326,7 +337,7 @@ fn five_sphere_chain_moments_match_a_direct_solve() {
         let mut field = ForceField::new(domain.clone(), vec![Box::new(mag) as Box<dyn ForceTerm>]);
         let mut state = State::new(p.clone());
         field.evaluate(&mut state, 1e-8);
-        assert!(field.take_induction_error().is_none(), "{label}: the induction converged");
+        assert!(field.take_term_error().is_none(), "{label}: the induction converged");
         let moment = &state.fields.moment;
         let ratios: Vec<f64> = moment.iter().map(|m| m.x / isolated).collect();
         println!("{label}: moments / isolated = {ratios:.4?}");
@@ -432,21 +443,37 @@ fn frictionless_oblique_impact_spins_nothing_and_keeps_its_energy() {
         let mut sim = s.simulation(None);
         sim.initialise().unwrap();
         let energy = sim.state.particles.kinetic_energy();
+        // Orbital and spin angular momentum about the origin, Σ m x × v and Σ I ω (z components).
+        let momenta = |p: &Particles| {
+            (0..2).fold((0.0, 0.0), |(o, w), i| {
+                (o + p.mass[i] * p.position[i].cross(&p.velocity[i]).z, w + p.inertia[i] * p.angular_velocity[i].z)
+            })
+        };
+        let before = momenta(&sim.state.particles);
         let mut spin = 0.0_f64;
         while sim.state.time < 1.0e-6 {
             sim.step().unwrap();
             spin = sim.state.particles.angular_velocity.iter().fold(spin, |s, w| s.max(w.norm()));
         }
-        (spin, sim.state.particles.kinetic_energy() / energy)
+        let after = momenta(&sim.state.particles);
+        // The spin taken from the orbit, relative to the spin's angular momentum.
+        let balance = (after.0 + after.1 - before.0 - before.1).abs() / after.1.abs().max(f64::MIN_POSITIVE);
+        (spin, sim.state.particles.kinetic_energy() / energy, after.1, balance)
     };
-    let (spin, energy_ratio) = run("none");
-    let (mindlin_spin, _) = run("mindlin");
+    let (spin, energy_ratio, _, _) = run("none");
+    let (mindlin_spin, _, spin_momentum, balance) = run("mindlin");
     println!(
-        "largest spin: none {spin:e} rad/s, mindlin {mindlin_spin:e} rad/s; energy after/before {energy_ratio:.6}"
+        "largest spin: none {spin:e} rad/s, mindlin {mindlin_spin:e} rad/s; energy after/before {energy_ratio:.6}; \
+         Mindlin: spin angular momentum {spin_momentum:.4e}, total angular momentum changed by {balance:.2e} of it"
     );
     // Only round-off: the tangential part of a normal force, |F| ε, times the lever arm.
     assert!(spin < 1e-9 * mindlin_spin, "frictionless spheres do not spin ({spin:e} rad/s)");
+    // The control spins, and the spin is what the tangential force took from the orbital angular
+    // momentum: the contact torques −c_i n × F_t with c_0 + c_1 = r balance r × F_t, so the total is
+    // conserved exactly by Verlet's kicks. Measured: 3.4e-11 (round-off). (The spin's size is checked against
+    // Maw, Barber & Fawcett's gross-sliding closed form in tests/independent_forces.rs.)
     assert!(mindlin_spin > 1e3, "Mindlin's spring spins the spheres ({mindlin_spin:e} rad/s)");
+    assert!(balance < 3e-10, "angular momentum changed by {balance:e} of the spin's");
     assert!((energy_ratio - 1.0).abs() < 1e-4, "kinetic energy after/before {energy_ratio}");
 }
 
@@ -560,8 +587,8 @@ fn rpy_chain_drag_matches_an_independent_dense_solve() {
             }
         }
     }
-    // Stimson & Jeffery (1926): two touching spheres along their line of centres, 0.6452 each.
-    assert!(((8.0_f64 / 13.0) / 0.6452 - 1.0).abs() < 0.05);
+    // Stimson & Jeffery (1926) give 0.6452 each for two touching spheres along their line of
+    // centres: RPY's 8/13 (asserted above) is 4.6 % below it, a property of the mobility.
 }
 
 /// The regularised RPY mobility is symmetric positive definite for random configurations with
@@ -813,33 +840,57 @@ fn drag_coefficients_renewed_every_k_steps_keep_the_terminal_velocity_with_a_fir
 
 /// A dense sphere sedimenting parallel to a plane wall (`forces.drag.wall`, face x-, gravity
 /// along −z) reaches U∞ / f_∥ with f_∥ the exact values of O'Neill (1964) / Goldman, Cox & Brenner
-/// (1967) at h/a = 1.1276 … 10.0677, to 1e-3 (the terminal velocity after 20 relaxation times);
-/// it does not drift towards or away from the wall (the normal component has no parallel
-/// factor); a sphere closer than the scene's smallest gap (1e-2 a) moves as one at that gap.
+/// (1967) at h/a = 1.1276 … 10.0677, to 1e-3 (the terminal velocity after 20 relaxation times).
+/// Between the table's points, where the model interpolates, it is held to independent values:
+/// Faxén's series at h/a = 3 (within 0.1 % of the exact values from h/a = 2.35 on) and Goldman,
+/// Cox & Brenner's lubrication asymptote −(8/15) ln(δ/a) + 0.9588 at δ/a = 0.02. Settling with a
+/// component towards the wall, the normal velocity keeps the free drag (no parallel factor); a
+/// sphere closer than the scene's smallest gap (1e-2 a) moves as one at that gap.
 #[test]
 fn a_sphere_sedimenting_beside_a_wall_slows_by_the_published_factor() {
     let (a, rho, mu) = (5.0e-6_f64, 5000.0, 1.0e-3);
-    let free = 2.0 / 9.0 * (rho - 1000.0) * 9.81 * a * a / mu;
-    let terminal = |h_over_a: f64| -> (f64, f64) {
+    let free = |g: f64| 2.0 / 9.0 * (rho - 1000.0) * g * a * a / mu;
+    // (U_z/U∞, U_x/U∞,x) under gravity (g_x, 0, −9.81).
+    let terminal = |h_over_a: f64, g_x: f64| -> (f64, f64) {
         let x = -1.0e-3 + h_over_a * a;
         let text = format!(
             "version = 1\n[domain]\nlo = [-1e-3, -1e-3, -1e-3]\nhi = [1e-3, 1e-3, 1e-3]\n{WATER}\
              [[species]]\nname = \"p\"\ndiameter = {:e}\ndensity = {rho}\nyoungs_modulus = 1.0e9\npoisson_ratio = 0.5\n\
              friction = 0.5\nrestitution = 0.5\n[[particles]]\nspecies = \"p\"\npositions = [[{x:e}, 0.0, 0.0]]\n\
-             [forces.gravity]\n[forces.drag]\nlaw = \"stokes\"\nshielding = \"none\"\n[forces.drag.wall]\nface = \"x-\"\n\
+             [forces.gravity]\ng = [{g_x:e}, 0, -9.81]\n[forces.drag]\nlaw = \"stokes\"\nshielding = \"none\"\n[forces.drag.wall]\nface = \"x-\"\n\
              [integration]\ndt = 1.0e-7\nend_time = 6.0e-4\n",
             2.0 * a
         );
         let sim = Scene::parse(&text, "wall").unwrap_or_else(|e| panic!("{e}")).run_to_end().unwrap();
-        (-sim.state.particles.velocity[0].z / free, sim.state.particles.position[0].x - x)
+        let v = sim.state.particles.velocity[0];
+        (-v.z / free(9.81), if g_x == 0.0 { 0.0 } else { v.x / free(g_x) })
     };
     for (h, f) in [(1.1276, 2.1514), (1.5431, 1.5675), (2.3524, 1.3079), (3.7622, 1.1738), (10.0677, 1.0591)] {
-        let (ratio, drift) = terminal(h);
+        let (ratio, _) = terminal(h, 0.0);
         println!("h/a = {h}: U/U∞ = {ratio:.5}, published 1/f = {:.5}", 1.0 / f);
         assert!((ratio * f - 1.0).abs() < 1e-3, "h/a = {h}: U/U∞ = {ratio}, published {}", 1.0 / f);
-        assert!(drift.abs() < 1e-15, "h/a = {h}: drifted {drift} m across the wall normal");
     }
-    assert_eq!(terminal(1.001).0.to_bits(), terminal(1.01).0.to_bits(), "the gap is not clamped at 1e-2 a");
+    // Between the points: Faxén at h/a = 3 and the lubrication asymptote at δ/a = 0.02.
+    let faxen = |l: f64| 1.0 / (1.0 - 9.0 / 16.0 * l + l.powi(3) / 8.0 - 45.0 / 256.0 * l.powi(4) - l.powi(5) / 16.0);
+    let lubrication = |gap: f64| -8.0 / 15.0 * gap.ln() + 0.9588;
+    for (h, f, tolerance) in [(3.0, faxen(1.0 / 3.0), 1e-2), (1.02, lubrication(0.02), 2e-2)] {
+        let (ratio, _) = terminal(h, 0.0);
+        let deviation = ratio * f - 1.0;
+        println!(
+            "h/a = {h} (between the table's points): U/U∞ = {ratio:.5}, independent 1/f = {:.5} ({deviation:.2e})",
+            1.0 / f
+        );
+        // Measured: −4.2e-3 at h/a = 3, 7.3e-3 at 1.02 (the interpolation's error, docs/model.md
+        // §7.2: about 1 %; the asymptote itself is a few 1e-3 below the exact value at 0.02).
+        assert!(deviation.abs() < tolerance, "h/a = {h}: U/U∞ = {ratio} vs {}", 1.0 / f);
+    }
+    // Settling towards the wall as well: the normal component moves at the free speed.
+    let (parallel, normal) = terminal(10.0677, -3.0);
+    println!("towards the wall: U_z f_∥ − 1 = {:.2e}, U_x/U∞,x − 1 = {:.2e}", parallel * 1.0591 - 1.0, normal - 1.0);
+    // Measured: −4.0e-10 (normal, 20 relaxation times), −5.4e-6 (parallel: 0.008 a closer).
+    assert!((normal - 1.0).abs() < 4e-9, "normal velocity {normal} of the free one");
+    assert!((parallel * 1.0591 - 1.0).abs() < 5e-5);
+    assert_eq!(terminal(1.001, 0.0).0.to_bits(), terminal(1.01, 0.0).0.to_bits(), "the gap is not clamped at 1e-2 a");
 }
 
 /// A polydisperse scene of `count` particles (or a concentration) in a 2 mm box, diameters from
