@@ -1,11 +1,14 @@
 //! The physics core: state, neighbour search, force terms, integrators, stability. It never reads
 //! files; the scene layer builds a [`simulation::Simulation`] from TOML.
 
+pub mod coils;
 pub mod domain;
+pub mod flow;
 pub mod forces;
 pub mod integrators;
 pub mod lanes;
 pub mod neighbours;
+pub mod noise;
 pub mod parallel;
 pub mod renumber;
 pub mod simulation;
