@@ -96,17 +96,22 @@ fn check_space(scene: &Scene, output: &Path, frame: usize, contacts: usize) -> R
     }
 }
 
-/// Refuses, before anything is written, a run whose frames (without contacts) alone exceed the
-/// free space of the output's disk.
+/// How far compression could shrink a run's frames at most, for the check before it starts.
+const COMPRESSION_LIMIT: f64 = 10.0;
+
+/// Refuses, before anything is written, a run whose frames (without contacts) would not fit on
+/// the output's disk even compressed tenfold: floating-point frames rarely compress below half
+/// their size, so such a run can only stop on a full disk. Nearer the limit the run starts, and
+/// stops cleanly before the frame that does not fit ([`RunFailure::DiskFull`]).
 fn check_run_space(scene: &Scene, output: &Path) -> Result<(), RunFailure> {
     let frames = scene.total_steps() / scene.steps_per_frame() + 1;
     let vectors = if scene.spec.output.forces { 6 } else { 4 };
     let frame = scene.initial.len() as f64 * 24.0 * vectors as f64;
     let needed = frames as f64 * frame;
     match free_space(output) {
-        Some(free) if needed > free as f64 => Err(RunFailure::Refused(format!(
+        Some(free) if needed > COMPRESSION_LIMIT * free as f64 => Err(RunFailure::Refused(format!(
             "integration.end_time = {:e} with output.interval = {:e} s gives {frames} frames of {:.3e} bytes ({needed:.3e} in all), \
-             and the disk of {} has {free} bytes free: shorten the run or write fewer frames",
+             uncompressed, more than ten times the {free} bytes free on the disk of {}: shorten the run or write fewer frames",
             scene.spec.integration.end_time,
             scene.steps_per_frame() as f64 * scene.dt(),
             frame,

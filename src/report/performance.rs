@@ -2,8 +2,8 @@
 //! (`magdem bench`, or `magdem bench --redraw` from a saved `performance.json`) with
 //! `templates/performance/README.md`.
 
-use crate::bench::record::*;
 use crate::analysis::timing::Spread;
+use crate::bench::record::*;
 use crate::plot::{line_chart_with_legend, palette, Legend, RGBColor, Series};
 use serde::Serialize;
 use std::path::{Path, PathBuf};

@@ -12,4 +12,3 @@ pub fn fe3o4(youngs_modulus: f64, restitution: f64, extra: &str) -> String {
          friction = 0.5\nrestitution = {restitution:?}\nrelative_permeability = 12.3\n{extra}"
     )
 }
-
