@@ -1,9 +1,9 @@
 //! Physics verification against closed forms and independent solutions (docs/model.md §11).
 
 use magdem::core::forces::drag::{Drag, DragLaw, Fluid, Shielding};
+use magdem::core::forces::magnetisation::{Induction, Magnetisation, MU0};
 use magdem::core::forces::shielding::lens_area;
 use magdem::core::forces::ForceTerm;
-use magdem::core::magnetisation::{Induction, Magnetisation, MU0};
 use magdem::core::neighbours::{PairRange, Skins};
 use magdem::core::simulation::ForceField;
 use magdem::core::state::{Particles, Species, State, Vec3};
@@ -259,7 +259,7 @@ fn frohlich_kennelly_terminal_velocity() {
     }
     let a: f64 = 5.5e-6;
     let chi_eff = 3.0 * 11.3 / 14.3;
-    let linear = chi_eff * (b0 + g * sim.state.particles.position[0].x) / magdem::core::magnetisation::MU0;
+    let linear = chi_eff * (b0 + g * sim.state.particles.position[0].x) / magdem::core::forces::magnetisation::MU0;
     let m = linear * ms / (ms + linear);
     // The law bends here: M is about half the linear χ_eff H (b0 and Ms chosen for it).
     let expected = 4.0 / 3.0 * PI * a.powi(3) * m * g / (6.0 * PI * 1.0e-3 * a);
@@ -940,7 +940,7 @@ fn a_polydisperse_placement_reproduces_its_distribution_and_masses() {
 
     let mut sim = normal.simulation(None);
     sim.initialise().unwrap();
-    let (p, h) = (&sim.state.particles, 0.1 / magdem::core::magnetisation::MU0);
+    let (p, h) = (&sim.state.particles, 0.1 / magdem::core::forces::magnetisation::MU0);
     let chi_eff = 3.0 * 1.0 / (1.0 + 3.0);
     for i in 0..p.len() {
         let v = 4.0 / 3.0 * PI * p.radius[i].powi(3);

@@ -20,19 +20,7 @@ fn describe(scene: &Scene) {
     let s = &scene.spec;
     println!("scene {} ({})", s.name.as_deref().unwrap_or("unnamed"), &scene.hash[..12]);
     println!("  particles: {}  box: {:?} .. {:?}", scene.initial.len(), s.domain.lo, s.domain.hi);
-    let f = &s.forces;
-    let terms: Vec<&str> = [
-        ("contact", f.contact.is_some()),
-        ("dipole", f.dipole.is_some()),
-        ("gradient", f.gradient.is_some()),
-        ("drag", f.drag.is_some()),
-        ("gravity", f.gravity.is_some()),
-    ]
-    .iter()
-    .filter(|t| t.1)
-    .map(|t| t.0)
-    .collect();
-    println!("  terms: {}", terms.join(", "));
+    println!("  terms: {}", s.forces.names().join(", "));
     println!(
         "  integrator {}: {} steps, a frame every {} steps",
         s.integration.scheme,

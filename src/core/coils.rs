@@ -5,12 +5,10 @@
 //! A coil here is a set of current paths; its field is their sum. Each value returns B (T) at a
 //! point (m); [`Coil::gradient`] gives G_ab = ∂B_a/∂x_b by central differences.
 
+pub use super::forces::magnetisation::MU0;
 use super::vector::Vec3;
 use nalgebra::{Matrix3, Rotation3, Unit};
 use std::f64::consts::PI;
-
-/// μ0 (T m / A).
-pub const MU0: f64 = 4e-7 * PI;
 
 /// Complete elliptic integrals of the first and second kind, K(m) and E(m), of parameter
 /// m = k² in [0, 1), by the arithmetic–geometric mean (Abramowitz & Stegun 17.6).

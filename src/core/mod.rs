@@ -18,5 +18,4 @@ pub mod timers;
 pub mod vector;
 
 /// The moments term, also reached here (μ0 and the moments' helpers).
-pub use forces::magnetisation;
 pub use vector::Vec3;

@@ -574,7 +574,7 @@ pub fn approach(inp: &Inputs) -> Result<Value, Error> {
         SeriesLabelPosition::UpperRight,
     )?;
     // The linear law's magnetisation in the applied field alone, against bulk magnetite's saturation.
-    let linear = species.susceptibility * b0 / crate::core::magnetisation::MU0;
+    let linear = species.susceptibility * b0 / crate::core::forces::magnetisation::MU0;
     let frame_us = times.get(1).map_or(f64::NAN, |t1| (t1 - times[0]) * 1e6);
     // The force models as the scene names them (`forces.dipole.induction`, `forces.drag.*`).
     let table: toml::Table = toml::from_str(&run.scene_text)?;

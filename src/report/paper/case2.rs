@@ -4,7 +4,7 @@
 
 use super::{completed, mean, seed_list, strings, Inputs};
 use crate::analysis::stats::summary;
-use crate::core::magnetisation::MU0;
+use crate::core::forces::magnetisation::MU0;
 use crate::plot::{
     category_panels, engine_colour, palette, BarGroup, BarPanel, Mark, RGBColor, Series, SeriesLabelPosition,
 };

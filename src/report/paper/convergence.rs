@@ -5,7 +5,7 @@
 
 use super::Inputs;
 use crate::analysis::stats::{ci95_half_width, slope_ci95, summary};
-use crate::core::magnetisation::MU0;
+use crate::core::forces::magnetisation::MU0;
 use crate::plot::{chart, palette, Legend, RGBColor, Scale, Series, SeriesLabelPosition};
 use crate::report::estimate::{paired, unpaired};
 pub use crate::report::estimate::{paired_change, Estimate};

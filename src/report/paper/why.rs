@@ -561,7 +561,7 @@ pub fn inputs(inp: &Inputs) -> Result<Value, Error> {
     let scene = Scene::parse(&r.scene_text, &r.id)?;
     let s = &scene.species[0];
     let b0 = scene.spec.field.as_ref().map_or(f64::NAN, |f| nalgebra::Vector3::from(f.b0).norm());
-    let linear = s.susceptibility * b0 / crate::core::magnetisation::MU0;
+    let linear = s.susceptibility * b0 / crate::core::forces::magnetisation::MU0;
     // Volume fraction of magnetite that gives the bead its density.
     let fraction = (s.density - POLYSTYRENE_DENSITY) / (MAGNETITE_DENSITY - POLYSTYRENE_DENSITY);
     let composite = fraction * MAGNETITE_MS;
