@@ -71,12 +71,18 @@ fn free_space(path: &Path) -> Option<u64> {
     (unsafe { libc::statvfs(c.as_ptr(), &mut stat) } == 0).then(|| stat.f_bavail as u64 * stat.f_frsize as u64)
 }
 
+/// Uncompressed bytes of one frame's per-particle vectors: position, velocity, angular velocity
+/// and moment, with force and torque when the scene writes them.
+fn frame_vector_bytes(scene: &Scene) -> u64 {
+    let vectors = if scene.spec.output.forces { 6 } else { 4 };
+    scene.initial.len() as u64 * 24 * vectors
+}
+
 /// Bytes the next frame may take: twice the uncompressed frame and checkpoint (HDF5 may
 /// allocate the new chunks before it frees anything) plus 256 KiB for metadata.
 fn frame_budget(scene: &Scene, contacts: usize) -> u64 {
     let n = scene.initial.len() as u64;
-    let vectors = if scene.spec.output.forces { 6 } else { 4 };
-    let frame = n * 24 * vectors + contacts as u64 * 16;
+    let frame = frame_vector_bytes(scene) + contacts as u64 * 16;
     let checkpoint = n * 24 * 9 + contacts as u64 * 40;
     2 * (frame + checkpoint) + 256 * 1024
 }
@@ -105,8 +111,7 @@ const COMPRESSION_LIMIT: f64 = 10.0;
 /// stops cleanly before the frame that does not fit ([`RunFailure::DiskFull`]).
 fn check_run_space(scene: &Scene, output: &Path) -> Result<(), RunFailure> {
     let frames = scene.total_steps() / scene.steps_per_frame() + 1;
-    let vectors = if scene.spec.output.forces { 6 } else { 4 };
-    let frame = scene.initial.len() as f64 * 24.0 * vectors as f64;
+    let frame = frame_vector_bytes(scene) as f64;
     let needed = frames as f64 * frame;
     match free_space(output) {
         Some(free) if needed > COMPRESSION_LIMIT * free as f64 => Err(RunFailure::Refused(format!(

@@ -1,7 +1,11 @@
 //! The committed paper report reads as a paper: its summary comes first and is short, its numbers
 //! are its tables', its body stays within its word limit and its sentences are short.
 
+#[path = "common/prose.rs"]
+mod prose;
+
 use polars::prelude::*;
+use prose::sentences;
 use std::path::{Path, PathBuf};
 
 fn report() -> PathBuf {
@@ -29,30 +33,6 @@ fn section<'a>(text: &'a str, heading: &str) -> Vec<&'a str> {
             hashes == 0 || hashes > level
         }))
         .collect()
-}
-
-/// Prose sentences: lines that are neither table rows, images, headings nor list markers alone,
-/// split at a full stop, question or exclamation mark followed by a space or the line's end.
-fn sentences(text: &str) -> Vec<String> {
-    let mut out = vec![];
-    for line in text.lines() {
-        let l = line.trim();
-        if l.is_empty() || l.starts_with('|') || l.starts_with("![") || l.starts_with('#') {
-            continue;
-        }
-        let mut current = String::new();
-        let chars: Vec<char> = l.chars().collect();
-        for (k, &c) in chars.iter().enumerate() {
-            current.push(c);
-            if matches!(c, '.' | '?' | '!') && chars.get(k + 1).is_none_or(|n| n.is_whitespace()) {
-                out.push(std::mem::take(&mut current));
-            }
-        }
-        if !current.trim().is_empty() {
-            out.push(current);
-        }
-    }
-    out
 }
 
 #[test]

@@ -2,8 +2,12 @@
 //! summary comes first and names every target, its sentences are short, and its tables hold the
 //! record's numbers.
 
+#[path = "common/prose.rs"]
+mod prose;
+
 use magdem::bench::record::BenchRecord;
 use magdem::report::performance;
+use prose::sentences;
 use std::path::Path;
 
 fn record() -> BenchRecord {
@@ -21,29 +25,6 @@ fn rendered() -> (tempfile::TempDir, String) {
 /// The lines of the section under `heading`, up to the next heading of that level.
 fn section<'a>(text: &'a str, heading: &str) -> Vec<&'a str> {
     text.lines().skip_while(|l| l.trim() != heading).skip(1).take_while(|l| !l.starts_with("## ")).collect()
-}
-
-/// Prose sentences: lines that are neither table rows, images nor headings, split at a full
-/// stop, question or exclamation mark followed by a space or the line's end.
-fn sentences(text: &str) -> Vec<String> {
-    let mut out = vec![];
-    for line in text.lines().map(str::trim) {
-        if line.is_empty() || line.starts_with('|') || line.starts_with("![") || line.starts_with('#') {
-            continue;
-        }
-        let chars: Vec<char> = line.chars().collect();
-        let mut current = String::new();
-        for (k, &c) in chars.iter().enumerate() {
-            current.push(c);
-            if matches!(c, '.' | '?' | '!') && chars.get(k + 1).is_none_or(|n| n.is_whitespace()) {
-                out.push(std::mem::take(&mut current));
-            }
-        }
-        if !current.trim().is_empty() {
-            out.push(current);
-        }
-    }
-    out
 }
 
 /// The cells of the Markdown table whose header holds `column`, by row: (first cell, that cell).
