@@ -2,13 +2,20 @@
 //! K = 1 and converges at second order in the outer step K·dt; the paper's pipeline (magnetic
 //! forces held over an explicit-Euler outer step, the rest sub-stepped) at first order.
 
+use magdem::core::integrators::{ExponentialVerletSpec, RespaSpec, Scheme, SubcycledEulerSpec, VelocityVerletSpec};
 use magdem::scene::Scene;
 
 /// Two dipoles 6 diameters apart closing under Stokes drag with exact induction, stopped before
 /// they touch (contact at ~0.1 ms).
 fn pair(scheme: &str, dt: f64, slow_every: u64) -> Scene {
-    let scheme = magdem::core::integrators::Scheme::from_name(scheme).expect("a scheme");
-    Scene::parse(&magdem::verify::magnetic::pair_before_contact(scheme, dt, slow_every), "pair").unwrap()
+    let scheme = match scheme {
+        "respa" => Scheme::Respa(RespaSpec { slow_every }),
+        "subcycled-euler" => Scheme::SubcycledEuler(SubcycledEulerSpec { slow_every }),
+        "velocity-verlet" if slow_every == 1 => Scheme::VelocityVerlet(VelocityVerletSpec {}),
+        "exponential-verlet" if slow_every == 1 => Scheme::ExponentialVerlet(ExponentialVerletSpec {}),
+        other => panic!("no pair scene for {other} with slow_every = {slow_every}"),
+    };
+    Scene::parse(&magdem::verify::magnetic::pair_before_contact(scheme, dt), "pair").unwrap()
 }
 
 fn final_separation(scene: &Scene) -> f64 {

@@ -136,7 +136,7 @@ fn cli_reports_instability_with_exit_code_3_and_keeps_the_file() {
 /// within a small factor above the estimate (the estimate is meant to be safe, not loose).
 #[test]
 fn stability_map_brackets_the_estimate_at_the_paper_setting() {
-    let p = magdem::study::stability::map_point(magdem::core::integrators::Scheme::VelocityVerlet, 1e9, 0.4).unwrap();
+    let p = magdem::study::stability::map_point(magdem::core::integrators::Scheme::default(), 1e9, 0.4).unwrap();
     println!("estimate {:.3e} s, measured {:.3e} s, Rayleigh {:.3e} s", p.estimate, p.measured, p.rayleigh);
     assert!(p.measured.is_finite());
     // The scan steps dt by √2 from the estimate/32, so the measured step is the last stable grid

@@ -1,6 +1,7 @@
 //! The physics core: state, neighbour search, force terms, integrators, stability. It never reads
 //! files; the scene layer builds a [`simulation::Simulation`] from TOML.
 
+pub mod checks;
 pub mod coils;
 pub mod domain;
 pub mod flow;
@@ -17,5 +18,4 @@ pub mod state;
 pub mod timers;
 pub mod vector;
 
-/// The moments term, also reached here (μ0 and the moments' helpers).
 pub use vector::Vec3;

@@ -98,7 +98,7 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
     // The engines integrate with nve/sphere (velocity Verlet) at dt up to end_time whatever the
     // scheme; their trajectories' `integrator` attribute says so. They order their atoms
     // themselves (LAMMPS' atom_modify sort), whatever renumber_every says.
-    let IntegrationSpec { scheme: _, slow_every: _, tolerance: _, dt: _, end_time: _, renumber_every: _ } = integration;
+    let IntegrationSpec { scheme: _, dt: _, end_time: _, renumber_every: _ } = integration;
     // A full-precision dump (with forces) every output interval; the engines record no contact lists.
     let OutputSpec { interval: _, forces: _, contacts: _ } = output;
     // on_unstable_dt applied when the scene was built; the engines have no stability monitor.

@@ -15,6 +15,7 @@ use crate::analysis::stats::{ci95_half_width, summary};
 use crate::analysis::timing::timed;
 use crate::core::forces::hydrodynamics::Resistance;
 use crate::core::forces::wall_drag::{parallel_factor, PlaneWall};
+use crate::core::integrators::Scheme;
 use crate::core::state::Vec3;
 use crate::plot::{chart, palette, Legend, RGBColor, Scale, Series, SeriesLabelPosition};
 use crate::scene::Scene;
@@ -130,7 +131,6 @@ fn scene_facts(scene: &Scene) -> SceneFacts {
     let spec = &scene.spec;
     let field = spec.field.as_ref();
     let fluid = spec.fluid.as_ref();
-    let scheme = spec.integration.scheme.to_string();
     SceneFacts {
         particles: scene.initial.position.len(),
         diameter_um: 1e6 * spec.species.first().map_or(f64::NAN, |s| s.diameter),
@@ -138,12 +138,12 @@ fn scene_facts(scene: &Scene) -> SceneFacts {
         gradient: field.map_or(f64::NAN, |f| f.gradient[0][0]),
         end_time: spec.integration.end_time,
         dt: spec.integration.dt,
-        scheme: match scheme.as_str() {
-            "respa" => "r-RESPA",
-            "velocity-verlet" => "velocity Verlet",
+        scheme: match spec.integration.scheme {
+            Scheme::Respa(_) => "r-RESPA",
+            Scheme::VelocityVerlet(_) => "velocity Verlet",
             _ => "another scheme",
         },
-        slow_every: spec.integration.slow_every,
+        slow_every: spec.integration.slow_every(),
         box_um: 1e6 * (spec.domain.hi[0] - spec.domain.lo[0]),
         seed: spec.seed,
         fluid_density: fluid.map_or(f64::NAN, |f| f.density),

@@ -145,7 +145,7 @@ impl Scene {
         let estimate = estimate(&spec, &domain, &species, &initial);
         let dt = spec.integration.dt;
         // The adaptive integrator's dt is only its largest step.
-        if dt > estimate.stable_dt && !spec.integration.scheme.dt_is_a_cap() {
+        if dt > estimate.stable_dt && !spec.integration.scheme.spec().dt_is_a_cap() {
             let why = format!("exceeds the estimated stable step: {}", estimate.summary(dt));
             match spec.stability.on_unstable_dt {
                 OnUnstable::Refuse => {
@@ -159,7 +159,7 @@ impl Scene {
             }
         }
         let scene = Self { spec, text, hash, domain, species, initial, initial_contacts, estimate, warnings };
-        let k = scene.spec.integration.slow_every;
+        let k = scene.spec.integration.slow_every();
         if !scene.steps_per_frame().is_multiple_of(k) || !scene.total_steps().is_multiple_of(k) {
             return Err(invalid(
                 "integration.slow_every",
@@ -219,24 +219,21 @@ impl Scene {
         Some(state)
     }
 
-    /// The scene's integrator; the exponential one gets each particle's Stokes coefficients.
+    /// The scene's integrator, given each particle's linear and rotational drag coefficients.
     fn integrator(&self) -> Box<dyn integrators::Integrator> {
-        let i = &self.spec.integration;
-        if let Some(integrator) = i.scheme.integrator(i.slow_every, i.tolerance) {
-            return integrator;
-        }
         let drag = self.spec.forces.drag.as_ref();
         let fluid = self.spec.fluid.as_ref();
         let mu = drag.and(fluid).map_or(0.0, |f| f.viscosity);
         let rotational = drag.is_some_and(|d| d.rotational);
-        let p = &self.initial;
-        Box::new(integrators::ExponentialVerlet {
-            gamma: p.radius.iter().map(|&a| Drag::stokes_coefficient(mu, a)).collect(),
-            gamma_rotational: p
-                .radius
-                .iter()
-                .map(|&a| if rotational { 8.0 * std::f64::consts::PI * mu * a.powi(3) } else { 0.0 })
-                .collect(),
+        let radius = &self.initial.radius;
+        let linear_drag: Vec<f64> = radius.iter().map(|&a| Drag::stokes_coefficient(mu, a)).collect();
+        let rotational_drag: Vec<f64> = radius
+            .iter()
+            .map(|&a| if rotational { 8.0 * std::f64::consts::PI * mu * a.powi(3) } else { 0.0 })
+            .collect();
+        self.spec.integration.scheme.spec().build(&integrators::IntegratorContext {
+            linear_drag: &linear_drag,
+            rotational_drag: &rotational_drag,
             fluid_velocity: fluid.map_or(Vec3::zeros(), |f| Vec3::from(f.velocity)),
         })
     }
@@ -305,7 +302,6 @@ fn term_context<'a>(spec: &SceneSpec, domain: &'a Domain, species: &'a [Species]
         }),
         field: spec.field.as_ref().map(|f| (Vec3::from(f.b0), Matrix3::from_fn(|r, c| f.gradient[r][c]))),
         scheme: spec.integration.scheme,
-        slow_every: spec.integration.slow_every,
         steps_per_frame: steps_per_frame(spec),
         pairs: Pairs { near: PairRange::Within { range, skin: skins.near * range }, skins },
     }
@@ -333,7 +329,6 @@ fn estimate(spec: &SceneSpec, domain: &Domain, species: &[Species], initial: &Pa
         moments,
         drag_viscosity,
         max_initial_speed,
-        slow_every: spec.integration.slow_every,
     };
     // The moments' bound (held over several steps), then each term's.
     let bounds: Vec<StepBound> =
@@ -507,30 +502,17 @@ pub const MAX_STEPS: u64 = 1 << 53;
 
 fn check_integration(spec: &SceneSpec) -> Result<(), SceneError> {
     let i = &spec.integration;
-    if i.slow_every == 0 || (i.slow_every > 1 && !i.scheme.multiple_time_stepping()) {
-        return Err(invalid(
-            "integration.slow_every",
-            i.slow_every,
-            "must be 1, or larger with scheme = \"respa\" or \"subcycled-euler\"",
-        ));
-    }
+    i.scheme.spec().check()?;
     positive("integration.dt", i.dt)?;
     positive("integration.end_time", i.end_time)?;
-    if i.scheme.multiple_time_stepping() && !i.renumber_every.is_multiple_of(i.slow_every) {
+    let k = i.slow_every();
+    if !i.renumber_every.is_multiple_of(k) {
         return Err(invalid(
             "integration.renumber_every",
             i.renumber_every,
             format!(
-                "must be a multiple of integration.slow_every = {}: particles are renumbered at the start of an outer step",
-                i.slow_every
+                "must be a multiple of integration.slow_every = {k}: particles are renumbered at the start of an outer step"
             ),
-        ));
-    }
-    if !(i.tolerance > 0.0 && i.tolerance < 1.0) {
-        return Err(invalid(
-            "integration.tolerance",
-            i.tolerance,
-            "must lie in (0, 1): a fraction of a particle radius",
         ));
     }
     // A step's time is `step as f64 * dt`: exact only while the step count fits in 53 bits.

@@ -260,32 +260,19 @@ pub struct RegionSpec {
     pub hi: [f64; 3],
 }
 
-/// `[integration]`
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// `[integration]`: the scheme, with its own keys beside it in the same table (see each
+/// scheme's spec in `core::integrators`), and the keys every scheme shares.
+#[derive(Debug, Clone)]
 pub struct IntegrationSpec {
-    /// `explicit-euler` | `semi-implicit-euler` | `velocity-verlet` (default) | `respa`
-    /// (multiple time stepping: magnetic forces every `slow_every` steps) | `exponential-verlet`
-    /// (linear drag integrated exactly) | `adaptive-verlet` (substeps under error control; dt is
-    /// the largest step) | `subcycled-euler` (the paper's pipeline: magnetic forces held over an
-    /// outer explicit-Euler step of `slow_every`·dt, contact, drag and gravity sub-stepped by Verlet).
-    #[serde(default = "default_scheme", deserialize_with = "scheme")]
+    /// `integration.scheme` (default `velocity-verlet`) and the scheme's own keys: `slow_every`
+    /// of `respa` and `subcycled-euler`, `tolerance` of `adaptive-verlet`.
     pub scheme: Scheme,
-    /// `respa`, `subcycled-euler`: fast steps per evaluation of the moments and magnetic forces
-    /// (default 1). Must divide the steps per output frame and the run.
-    #[serde(default = "default_slow_every")]
-    pub slow_every: u64,
-    /// `adaptive-verlet`: local error allowed per substep as a fraction of each particle's
-    /// radius (default 1e-6).
-    #[serde(default = "default_substep_tolerance")]
-    pub tolerance: f64,
     /// Renumber the particles along a Morton curve through their positions every this many
     /// steps (0, the default: never), so that particles close in space sit close in memory as
     /// they move (LAMMPS' `atom_modify sort`): faster per-step passes in large scenes. It changes
     /// the order of force sums, so a run is the same to round-off, not to the bit, as one without
     /// it; outputs are in particle id order either way. Under multiple time stepping a multiple
     /// of `slow_every`. magdem's own solver only (the reference engines keep their order).
-    #[serde(default)]
     pub renumber_every: u64,
     /// s
     pub dt: f64,
@@ -293,25 +280,84 @@ pub struct IntegrationSpec {
     pub end_time: f64,
 }
 
-fn default_slow_every() -> u64 {
-    1
+impl IntegrationSpec {
+    /// K: steps over which the magnetic forces are held (1 unless the scheme steps them apart).
+    pub fn slow_every(&self) -> u64 {
+        self.scheme.spec().slow_every()
+    }
 }
 
-fn default_substep_tolerance() -> f64 {
-    1e-6
+/// `scheme = "<name>"` and the scheme's own keys, as lines of an `[integration]` table.
+pub fn scheme_lines(scheme: &Scheme) -> String {
+    struct Keys<'a>(&'a Scheme);
+    impl serde::Serialize for Keys<'_> {
+        fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+            self.0.keys(s)
+        }
+    }
+    let own = toml::Table::try_from(Keys(scheme)).expect("a scheme's keys are plain numbers");
+    let mut lines = format!("scheme = \"{scheme}\"\n");
+    for (key, value) in own {
+        lines += &format!("{key} = {value}\n");
+    }
+    lines
 }
 
-fn default_scheme() -> Scheme {
-    Scheme::VelocityVerlet
+/// The `[integration]` keys every scheme shares.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Shared {
+    #[serde(default)]
+    renumber_every: u64,
+    dt: f64,
+    end_time: f64,
 }
 
-/// `integration.scheme` by name.
-fn scheme<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Scheme, D::Error> {
-    let name = String::deserialize(d)?;
-    Scheme::from_name(&name).ok_or_else(|| {
-        let names: Vec<&str> = Scheme::ALL.iter().map(|s| s.name()).collect();
-        serde::de::Error::custom(format!("unknown scheme `{name}`, expected one of {}", names.join(", ")))
-    })
+/// A scheme's keys that did not read, by key: a key the scheme does not take names the schemes
+/// that take it.
+fn scheme_error(name: &str, own: &toml::Table, message: &str) -> String {
+    let read = |scheme: &str, key: &String, value: &toml::Value| {
+        let keys = toml::Value::Table([(key.clone(), value.clone())].into_iter().collect());
+        Scheme::deserialize_named(scheme, keys).err().map(|e| e.message().to_string())
+    };
+    let unknown = |message: &Option<String>| message.as_ref().is_some_and(|m| m.starts_with("unknown field"));
+    let Some((key, value, why)) = own.iter().find_map(|(k, v)| read(name, k, v).map(|why| (k, v, why))) else {
+        return format!("scheme \"{name}\": {message}");
+    };
+    if !unknown(&Some(why.clone())) {
+        return format!("{key} = {value}: {why}");
+    }
+    let takers: Vec<&str> = Scheme::NAMES.iter().copied().filter(|&other| !unknown(&read(other, key, value))).collect();
+    let takers = if takers.is_empty() { "none".to_string() } else { takers.join(", ") };
+    format!("{key} = {value} is not a key of scheme \"{name}\" (schemes that take {key}: {takers})")
+}
+
+const SHARED: [&str; 3] = ["renumber_every", "dt", "end_time"];
+
+/// The table read as the shared keys, `scheme`, and the named scheme's own keys from the rest.
+impl<'de> Deserialize<'de> for IntegrationSpec {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        let mut own = toml::Table::deserialize(d)?;
+        let names = Scheme::NAMES.join(", ");
+        let name = match own.remove("scheme") {
+            None => Scheme::default().name().to_string(),
+            Some(toml::Value::String(name)) => name,
+            Some(other) => return Err(D::Error::custom(format!("scheme = {other}: expected one of {names}"))),
+        };
+        let shared: toml::Table = SHARED.iter().filter_map(|&k| own.remove(k).map(|v| (k.to_string(), v))).collect();
+        let Shared { renumber_every, dt, end_time } =
+            Shared::deserialize(toml::Value::Table(shared)).map_err(|e| D::Error::custom(e.message()))?;
+        let scheme = |keys: toml::Table| Scheme::deserialize_named(&name, toml::Value::Table(keys));
+        let scheme = match scheme(own.clone()) {
+            Ok(Some(scheme)) => scheme,
+            Ok(None) => {
+                return Err(D::Error::custom(format!("scheme = \"{name}\": unknown scheme, expected one of {names}")))
+            }
+            Err(e) => return Err(D::Error::custom(scheme_error(&name, &own, e.message()))),
+        };
+        Ok(Self { scheme, renumber_every, dt, end_time })
+    }
 }
 
 /// `[output]`

@@ -13,8 +13,12 @@
 
 use crate::analysis::stats::slope_ci95;
 use crate::analysis::timing::timed;
-use crate::core::integrators::Scheme;
+use crate::core::integrators::{
+    AdaptiveVerletSpec, ExplicitEulerSpec, ExponentialVerletSpec, RespaSpec, Scheme, SemiImplicitEulerSpec,
+    VelocityVerletSpec,
+};
 use crate::plot::{line_chart_with_legend, Series};
+use crate::scene::spec::scheme_lines;
 use crate::scene::Scene;
 use minijinja::context;
 use plotters::prelude::SeriesLabelPosition;
@@ -26,17 +30,28 @@ use std::path::Path;
 
 type Error = Box<dyn std::error::Error>;
 
-/// The fixed-step schemes of the stability map.
-pub use super::stability::SCHEMES;
+/// The fixed-step schemes of the stability map, r-RESPA at this study's [`RESPA_K`].
+pub fn schemes() -> [Scheme; 5] {
+    super::stability::SCHEMES.map(|s| match s {
+        Scheme::Respa(_) => RESPA,
+        s => s,
+    })
+}
+
+const RESPA: Scheme = Scheme::Respa(RespaSpec { slow_every: RESPA_K });
+const EXPONENTIAL: Scheme = Scheme::ExponentialVerlet(ExponentialVerletSpec {});
+const VERLET: Scheme = Scheme::VelocityVerlet(VelocityVerletSpec {});
+const EULER: Scheme = Scheme::ExplicitEuler(ExplicitEulerSpec {});
+const SEMI_IMPLICIT: Scheme = Scheme::SemiImplicitEuler(SemiImplicitEulerSpec {});
 
 fn colour(scheme: Scheme) -> RGBColor {
     match scheme {
-        Scheme::ExplicitEuler => RGBColor(200, 30, 30),
-        Scheme::SemiImplicitEuler => RGBColor(230, 140, 20),
-        Scheme::VelocityVerlet => RGBColor(20, 90, 200),
-        Scheme::ExponentialVerlet => RGBColor(30, 150, 60),
-        Scheme::AdaptiveVerlet => crate::plot::palette(6),
-        Scheme::Respa | Scheme::SubcycledEuler => RGBColor(130, 60, 170),
+        Scheme::ExplicitEuler(_) => RGBColor(200, 30, 30),
+        Scheme::SemiImplicitEuler(_) => RGBColor(230, 140, 20),
+        Scheme::VelocityVerlet(_) => RGBColor(20, 90, 200),
+        Scheme::ExponentialVerlet(_) => RGBColor(30, 150, 60),
+        Scheme::Respa(_) | Scheme::SubcycledEuler(_) => RGBColor(130, 60, 170),
+        _ => crate::plot::palette(6),
     }
 }
 
@@ -74,8 +89,8 @@ pub struct Problem {
 }
 
 fn integration(scheme: Scheme, dt: f64, end: f64) -> String {
-    let k = if scheme == Scheme::Respa { format!("slow_every = {RESPA_K}\n") } else { String::new() };
-    format!("[integration]\nscheme = \"{scheme}\"\ndt = {dt:e}\nend_time = {end:e}\n{k}[output]\ninterval = {end:e}\n[stability]\nmax_step_fraction = 1.0\nmax_overlap = 0.5\n")
+    let scheme = scheme_lines(&scheme);
+    format!("[integration]\n{scheme}dt = {dt:e}\nend_time = {end:e}\n[output]\ninterval = {end:e}\n[stability]\nmax_step_fraction = 1.0\nmax_overlap = 0.5\n")
 }
 
 fn terminal_scene(scheme: Scheme, dt: f64) -> String {
@@ -107,8 +122,7 @@ fn hertz_scene(scheme: Scheme, dt: f64) -> String {
 }
 
 fn dipoles_scene(scheme: Scheme, dt: f64) -> String {
-    let slow_every = if scheme == Scheme::Respa { RESPA_K } else { 1 };
-    crate::verify::magnetic::pair_before_contact(scheme, dt, slow_every) + "[stability]\nmax_step_fraction = 1.0\n"
+    crate::verify::magnetic::pair_before_contact(scheme, dt) + "[stability]\nmax_step_fraction = 1.0\n"
 }
 
 fn separation(sim: &crate::core::simulation::Simulation) -> f64 {
@@ -273,15 +287,15 @@ fn work_precision(dir: &Path, problem: &Problem, reference: f64) -> Result<minij
         String::from("| scheme | dt or tolerance | error | run time, median (min–max) |\n|---|---|---|---|\n");
     let mut series = vec![];
     let mut all: Vec<Timed> = vec![];
-    let adaptive = Scheme::AdaptiveVerlet;
-    for scheme in SCHEMES.into_iter().chain([adaptive]) {
+    let adaptive = Scheme::AdaptiveVerlet(AdaptiveVerletSpec::default());
+    for scheme in schemes().into_iter().chain([adaptive]) {
         let settings: Vec<f64> = if scheme == adaptive { TOLERANCES.to_vec() } else { problem.dts.clone() };
         let mut line = vec![];
         for value in settings {
             let (result, spread) = timed(TIMING_RUNS, || {
                 if scheme == adaptive {
                     let text =
-                        dipoles_scene(adaptive, ADAPTIVE_DT).replace("dt = ", &format!("tolerance = {value:e}\ndt = "));
+                        dipoles_scene(Scheme::AdaptiveVerlet(AdaptiveVerletSpec { tolerance: value }), ADAPTIVE_DT);
                     run_text(&text, adaptive.name()).map(|sim| dipoles_error(&sim, reference))
                 } else {
                     run_problem(problem, scheme, value, Some(reference))
@@ -313,10 +327,10 @@ fn work_precision(dir: &Path, problem: &Problem, reference: f64) -> Result<minij
     )?;
     let of = |name: &str| all.iter().filter(|t| t.scheme == name).cloned().collect::<Vec<_>>();
     let by_error = |a: &&Timed, b: &&Timed| a.error.total_cmp(&b.error);
-    let exponential = of(Scheme::ExponentialVerlet.name());
+    let exponential = of(EXPONENTIAL.name());
     let ev_worst = exponential.iter().max_by(by_error).cloned();
-    let others_best = all.iter().filter(|t| t.scheme != Scheme::ExponentialVerlet.name()).min_by(by_error).cloned();
-    let (respa, verlet) = (of(Scheme::Respa.name()), of(Scheme::VelocityVerlet.name()));
+    let others_best = all.iter().filter(|t| t.scheme != EXPONENTIAL.name()).min_by(by_error).cloned();
+    let (respa, verlet) = (of(RESPA.name()), of(VERLET.name()));
     let pairs: Vec<(&Timed, &Timed)> =
         respa.iter().filter_map(|r| verlet.iter().find(|v| v.setting == r.setting).map(|v| (r, v))).collect();
     let fold = |xs: &mut dyn Iterator<Item = f64>| {
@@ -499,7 +513,7 @@ fn observable_section(dir: &Path, o: &Observable) -> Result<minijinja::Value, Er
         end_time => integration.end_time,
         reference_scheme => integration.scheme.name(),
         reference_dt => integration.dt,
-        reference_k => integration.slow_every,
+        reference_k => integration.slow_every(),
         resolve_pct => RESOLVE_PCT,
         unchanged => all_zero,
         failed => failed,
@@ -516,7 +530,7 @@ fn integration_label(scene_text: &str, id: &str) -> String {
     match Scene::parse(scene_text, id) {
         Ok(scene) => {
             let i = &scene.spec.integration;
-            let k = if i.slow_every > 1 { format!(", K = {}", i.slow_every) } else { String::new() };
+            let k = if i.slow_every() > 1 { format!(", K = {}", i.slow_every()) } else { String::new() };
             format!("{}, dt {:.2e} s{k}", i.scheme.name(), i.dt)
         }
         Err(e) => e.to_string(),
@@ -554,10 +568,10 @@ fn solve(dir: &Path, problem: &Problem, reference: Option<f64>) -> Result<Solved
     let mut table = String::from("| scheme | observed order | ± CI95 | errors (dt: error) |\n|---|---|---|---|\n");
     let mut series = vec![];
     let (mut orders, mut errors) = (BTreeMap::new(), BTreeMap::new());
-    for scheme in SCHEMES {
+    for scheme in schemes() {
         // Without a magnetic force respa is velocity Verlet (and would sample the overlap only
         // every K steps).
-        if scheme == Scheme::Respa && problem.name == "hertz" {
+        if matches!(scheme, Scheme::Respa(_)) && problem.name == "hertz" {
             continue;
         }
         // Unstable runs (the solver stopped them) leave no point.
@@ -577,7 +591,7 @@ fn solve(dir: &Path, problem: &Problem, reference: Option<f64>) -> Result<Solved
             label: format!("{scheme} ({})", order.legend()),
             points: points.iter().filter(|p| p.1 > 0.0).map(|(dt, e)| (dt.log10(), e.log10())).collect(),
             color: colour(scheme),
-            markers: if matches!(scheme, Scheme::ExponentialVerlet | Scheme::Respa) { Some(4) } else { None },
+            markers: if matches!(scheme, Scheme::ExponentialVerlet(_) | Scheme::Respa(_)) { Some(4) } else { None },
             errors: vec![],
         });
         orders.insert(scheme.name().to_string(), order);
@@ -603,7 +617,7 @@ pub fn study(dir: &Path) -> Result<String, Error> {
     let mut dipole_time = f64::NAN;
     for problem in problems() {
         let reference = if problem.name == "dipoles" {
-            let text = dipoles_scene(Scheme::ExponentialVerlet, REFERENCE_DT);
+            let text = dipoles_scene(EXPONENTIAL, REFERENCE_DT);
             dipole_time = Scene::parse(&text, "reference")?.spec.integration.end_time;
             Some(separation(&run_text(&text, "reference")?))
         } else {
@@ -615,9 +629,9 @@ pub fn study(dir: &Path) -> Result<String, Error> {
         }
     }
     let errors = |problem: &str, scheme: Scheme| solved[problem].errors[scheme.name()].clone();
-    let (ev, vv, ee) = (Scheme::ExponentialVerlet, Scheme::VelocityVerlet, Scheme::ExplicitEuler);
+    let (ev, vv, ee) = (EXPONENTIAL, VERLET, EULER);
     // Explicit Euler against each symplectic scheme on the Hertz impact.
-    let euler_vs_symplectic = [Scheme::SemiImplicitEuler, vv, ev]
+    let euler_vs_symplectic = [SEMI_IMPLICIT, vv, ev]
         .iter()
         .filter_map(|&s| ratio_range(&errors("hertz", ee), &errors("hertz", s)))
         .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)));
@@ -656,7 +670,7 @@ pub fn study(dir: &Path) -> Result<String, Error> {
             problems => problems,
             ev_vs_verlet => ratio_range(&errors("dipoles", vv), &errors("dipoles", ev)).map(range),
             euler_vs_symplectic => euler_vs_symplectic.map(range),
-            hertz_same_as_verlet => [Scheme::SemiImplicitEuler, ev]
+            hertz_same_as_verlet => [SEMI_IMPLICIT, ev]
                 .iter()
                 .filter(|&&s| same_errors(&errors("hertz", s), &errors("hertz", vv)))
                 .map(|s| s.name())

@@ -11,8 +11,11 @@
 //! (a dissipative collision cannot gain energy). dt is scanned on a grid of factor √2 upward
 //! from 1/32 of the estimate; the largest stable dt is the last one before the first failure.
 
-use crate::core::integrators::Scheme;
+use crate::core::integrators::{
+    ExplicitEulerSpec, ExponentialVerletSpec, RespaSpec, Scheme, SemiImplicitEulerSpec, VelocityVerletSpec,
+};
 use crate::plot::{line_chart_with_legend, palette, Legend, RGBColor, Series};
+use crate::scene::spec::scheme_lines;
 use crate::scene::Scene;
 use minijinja::context;
 use serde::Serialize;
@@ -22,11 +25,11 @@ use std::path::Path;
 /// The fixed-step integrators. `adaptive-verlet` is not mapped: its dt is only a cap that its
 /// error control splits into substeps, so a largest stable dt is not a property of it.
 pub const SCHEMES: [Scheme; 5] = [
-    Scheme::ExplicitEuler,
-    Scheme::SemiImplicitEuler,
-    Scheme::VelocityVerlet,
-    Scheme::ExponentialVerlet,
-    Scheme::Respa,
+    Scheme::ExplicitEuler(ExplicitEulerSpec {}),
+    Scheme::SemiImplicitEuler(SemiImplicitEulerSpec {}),
+    Scheme::VelocityVerlet(VelocityVerletSpec {}),
+    Scheme::ExponentialVerlet(ExponentialVerletSpec {}),
+    Scheme::Respa(RespaSpec { slow_every: RESPA_K }),
 ];
 /// `respa` in the map evaluates the moments and dipole forces every `RESPA_K` steps (the
 /// paper-scene setting).
@@ -71,15 +74,14 @@ const WATER: &str = "[fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n";
 /// The collision scene; `speed` is the closing speed (m/s), `end` the run time (s).
 fn collision(scheme: Scheme, youngs_modulus: f64, b0: f64, dt: f64, speed: f64, end: f64) -> String {
     // respa runs whole slow steps: the run is rounded up to a multiple of K dt.
-    let (slow_every, end) = match scheme {
-        Scheme::Respa => (RESPA_K, (end / (RESPA_K as f64 * dt)).ceil() * RESPA_K as f64 * dt),
-        _ => (1, end),
-    };
+    let k = scheme.spec().slow_every();
+    let end = if k > 1 { (end / (k as f64 * dt)).ceil() * k as f64 * dt } else { end };
+    let scheme = scheme_lines(&scheme);
     format!(
         "version = 1\n[domain]\nlo = [-1e-4, -5e-5, -5e-5]\nhi = [1e-4, 5e-5, 5e-5]\n{WATER}[field]\nb0 = [{b0:e}, 0.0, 0.0]\n{}\
          [[particles]]\nspecies = \"p\"\npositions = [[-1.1e-5, 0.0, 0.0], [1.1e-5, 0.0, 0.0]]\n\
          velocities = [[{v:e}, 0.0, 0.0], [-{v:e}, 0.0, 0.0]]\n[forces.contact]\n[forces.dipole]\ninduction = \"exact\"\n\
-         [forces.drag]\nlaw = \"stokes\"\nshielding = \"none\"\n[integration]\nscheme = \"{scheme}\"\nslow_every = {slow_every}\ndt = {dt:e}\nend_time = {end:e}\n\
+         [forces.drag]\nlaw = \"stokes\"\nshielding = \"none\"\n[integration]\n{scheme}dt = {dt:e}\nend_time = {end:e}\n\
          [output]\ninterval = {end:e}\n[stability]\nmax_overlap = {MAX_OVERLAP:?}\nmax_step_fraction = 1.0\n",
         species(youngs_modulus, ""),
         v = 0.5 * speed
@@ -420,7 +422,7 @@ fn map_section(dir: &Path, points: &[MapPoint], scheme: Scheme) -> Result<miniji
         .map(|p| (p.youngs_modulus.log10(), p.rayleigh.log10()))
         .collect();
     series.push(Series::line("Rayleigh time", rayleigh, palette(6)));
-    if scheme == Scheme::ExplicitEuler {
+    if matches!(scheme, Scheme::ExplicitEuler(_)) {
         series.push(Series::markers(
             format!("the paper: E = {PAPER_E:.0e} Pa, dt = {PAPER_DT:.0e} s"),
             vec![(PAPER_E.log10(), PAPER_DT.log10())],
@@ -454,7 +456,7 @@ pub struct PaperPoint {
 /// below the bound, and where it is above a bound that is only a lower bound (undecided).
 pub fn paper_setting(points: &[MapPoint]) -> (Vec<PaperPoint>, Vec<PaperPoint>, Vec<PaperPoint>, Vec<PaperPoint>) {
     let (mut above, mut none, mut below, mut undecided) = (vec![], vec![], vec![], vec![]);
-    for p in points.iter().filter(|p| p.scheme == Scheme::ExplicitEuler && p.youngs_modulus == PAPER_E) {
+    for p in points.iter().filter(|p| matches!(p.scheme, Scheme::ExplicitEuler(_)) && p.youngs_modulus == PAPER_E) {
         let point = PaperPoint { b0: p.b0, measured: p.measured, lower_bound: p.at_grid_top };
         if p.measured.is_nan() {
             none.push(point);

@@ -172,10 +172,11 @@ pub fn compare(
 }
 
 /// The pair approach without contact, stopped at 96 µs (before the spheres would touch), with
-/// the given scheme, dt and multiple-time-stepping ratio: the integrator convergence problem.
-pub fn pair_before_contact(scheme: crate::core::integrators::Scheme, dt: f64, slow_every: u64) -> String {
+/// the given scheme (with its keys) and dt: the integrator convergence problem.
+pub fn pair_before_contact(scheme: crate::core::integrators::Scheme, dt: f64) -> String {
+    let scheme = crate::scene::spec::scheme_lines(&scheme);
     PAIR.replace("[forces.contact]\n", "")
-        .replace("dt = 1.0e-9", &format!("scheme = \"{scheme}\"\ndt = {dt:e}\nslow_every = {slow_every}"))
+        .replace("dt = 1.0e-9", &format!("{scheme}dt = {dt:e}"))
         .replace("end_time = 2.0e-4", "end_time = 9.6e-5")
         .replace("interval = 2.0e-6", "interval = 9.6e-5")
 }

@@ -20,7 +20,6 @@ use super::magnetisation::{
 use super::setup::{invalid, positive, Invalid, SceneContext, TermSpec};
 use super::{Context, ForceTerm, Forces, Renumbering};
 use crate::core::domain::Domain;
-use crate::core::integrators::Scheme;
 use crate::core::lanes;
 use crate::core::neighbours::{CellList, Pair, PairList, RangePairs, Skins, VerletList};
 use crate::core::parallel;
@@ -473,7 +472,7 @@ impl TermSpec for DipoleSpec {
                 }
             }
         }
-        if ctx.scheme == Scheme::AdaptiveVerlet && self.induction == InductionSpec::Paper {
+        if ctx.scheme.spec().compares_evaluations() && self.induction == InductionSpec::Paper {
             return Err(invalid(
                 "integration.scheme",
                 ctx.scheme,

@@ -443,7 +443,7 @@ impl TermSpec for DragSpec {
             if ctx.domain.periodic[axis] {
                 return Err(invalid("forces.drag.wall.face", w.face, "that face is periodic, not a wall"));
             }
-            if ctx.scheme.integrates_linear_drag() {
+            if ctx.scheme.spec().integrates_linear_drag() {
                 return Err(invalid(
                     "integration.scheme",
                     ctx.scheme,
@@ -459,7 +459,7 @@ impl TermSpec for DragSpec {
                 "Stokes drag without shielding has a constant coefficient, nothing to renew; remove the key or set it to 1",
             ));
         }
-        let per_call = if ctx.scheme.multiple_time_stepping() { ctx.slow_every } else { 1 };
+        let per_call = ctx.scheme.spec().slow_every();
         if every > 1 && !every.is_multiple_of(per_call) {
             return Err(invalid(
                 "forces.drag.refactor_every",
@@ -481,7 +481,7 @@ impl TermSpec for DragSpec {
                 ),
             ));
         }
-        if rpy && ctx.scheme.integrates_linear_drag() {
+        if rpy && ctx.scheme.spec().integrates_linear_drag() {
             return Err(invalid(
                 "integration.scheme",
                 ctx.scheme,
@@ -503,7 +503,7 @@ impl TermSpec for DragSpec {
             ctx.species.iter().map(|s| s.mass() / Drag::stokes_coefficient(mu, s.radius)).fold(f64::INFINITY, f64::min);
         Some(StepBound {
             term: "drag",
-            dt: (!ctx.scheme.integrates_linear_drag()).then_some(2.0 * tau),
+            dt: (!ctx.scheme.spec().integrates_linear_drag()).then_some(2.0 * tau),
             limited_by: "drag relaxation",
             collision: None,
             summary: format!("; drag relaxation {tau:.3e} s"),
@@ -527,7 +527,7 @@ impl TermSpec for DragSpec {
             ShieldingSpec::Paper => Shielding::Paper { touch_tolerance: self.touch_tolerance, near: ctx.pairs.near },
         };
         let mut drag = Drag::new(law, shielding, self.rotational, fluid).renewed_every(self.refactor_every);
-        drag.exclude_linear = ctx.scheme.integrates_linear_drag();
+        drag.exclude_linear = ctx.scheme.spec().integrates_linear_drag();
         drag.wall = wall.map(WallCorrection::new);
         Box::new(drag)
     }

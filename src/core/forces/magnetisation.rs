@@ -113,7 +113,8 @@ pub fn impact_speed(s: &Species, moment: f64, drag_viscosity: Option<f64>, least
 /// ω_m = √(k_m/m*) (the Verlet bound on that spring, for r-RESPA; sub-cycled Euler holds the
 /// force as forward Euler does and is bounded more tightly; the stability map measures r-RESPA).
 pub fn held_bound(ctx: &StepContext) -> Option<StepBound> {
-    if ctx.slow_every <= 1 {
+    let k = ctx.scheme.spec().slow_every();
+    if k <= 1 {
         return None;
     }
     let bound = ctx
@@ -125,7 +126,7 @@ pub fn held_bound(ctx: &StepContext) -> Option<StepBound> {
             let d = 2.0 * s.radius;
             let stiffness = 4.0 * 3.0 * MU0 * m * m / (2.0 * PI * d.powi(5));
             let omega = (stiffness / (0.5 * s.mass())).sqrt();
-            2.0 / (omega * ctx.slow_every as f64)
+            2.0 / (omega * k as f64)
         })
         .fold(f64::INFINITY, f64::min);
     bound.is_finite().then(|| StepBound {

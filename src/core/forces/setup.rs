@@ -4,44 +4,12 @@
 //! order; the scene layer, which parses the file, runs them (the core reads no files).
 
 use super::ForceTerm;
+pub use crate::core::checks::{invalid, non_negative, positive, Invalid};
 use crate::core::domain::Domain;
 use crate::core::integrators::Scheme;
 use crate::core::neighbours::{PairRange, Skins};
 use crate::core::state::{largest_diameter, Species, Vec3};
 use nalgebra::Matrix3;
-
-/// A key's value that cannot be used: the key, the value and why (the scene layer shows it as
-/// `key = value: reason`).
-#[derive(Debug, Clone, thiserror::Error)]
-#[error("{key} = {value}: {reason}")]
-pub struct Invalid {
-    pub key: String,
-    pub value: String,
-    pub reason: String,
-}
-
-/// An [`Invalid`] value.
-pub fn invalid(key: impl Into<String>, value: impl std::fmt::Display, reason: impl Into<String>) -> Invalid {
-    Invalid { key: key.into(), value: value.to_string(), reason: reason.into() }
-}
-
-/// Refuses `v` unless it is positive and finite.
-pub fn positive(key: &str, v: f64) -> Result<(), Invalid> {
-    if v > 0.0 && v.is_finite() {
-        Ok(())
-    } else {
-        Err(invalid(key, v, "must be a positive finite number"))
-    }
-}
-
-/// Refuses `v` unless it is zero or positive and finite.
-pub fn non_negative(key: &str, v: f64) -> Result<(), Invalid> {
-    if v >= 0.0 && v.is_finite() {
-        Ok(())
-    } else {
-        Err(invalid(key, v, "must be zero or positive"))
-    }
-}
 
 /// The fluid the particles move in.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -83,9 +51,8 @@ pub struct SceneContext<'a> {
     pub fluid: Option<Fluid>,
     /// The `[field]` table, B_ext(x) = b0 + G x, if given.
     pub field: Option<(Vec3, Matrix3<f64>)>,
+    /// The integration scheme, with its parameters.
     pub scheme: Scheme,
-    /// Steps over which the slow (magnetic) forces are held.
-    pub slow_every: u64,
     pub steps_per_frame: u64,
     /// The pair ranges to build with (defaults while checking).
     pub pairs: Pairs,
@@ -131,6 +98,7 @@ pub trait TermSpec {
 pub struct StepContext<'a> {
     /// The species, each at its smallest radius (the strictest case for every bound).
     pub species: &'a [Species],
+    /// The integration scheme, with its parameters.
     pub scheme: Scheme,
     /// Largest isolated moment magnitude per species (A·m²), zero without magnetic terms.
     pub moments: Vec<f64>,
@@ -139,8 +107,6 @@ pub struct StepContext<'a> {
     /// Viscosity if drag is included.
     pub drag_viscosity: Option<f64>,
     pub max_initial_speed: f64,
-    /// Steps over which the magnetic forces are held (K of r-RESPA; 1 otherwise).
-    pub slow_every: u64,
 }
 
 /// The fastest collision a term expects: its speed and the shortest contact duration.

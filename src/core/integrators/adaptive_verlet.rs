@@ -16,7 +16,8 @@
 //! layer refuses the paper's lagged induction, which advances one sweep per evaluation.
 
 use super::ForceGroup;
-use super::{kick, kick_drift, Evaluate, Integrator, Renumbering};
+use super::{kick, kick_drift, Evaluate, Integrator, IntegratorContext, IntegratorSpec, Renumbering};
+use crate::core::checks::{invalid, Invalid};
 use crate::core::state::State;
 
 pub struct AdaptiveVerlet {
@@ -55,9 +56,6 @@ fn scaled_error(a: &State, b: &State, h: f64, tolerance: f64) -> f64 {
 }
 
 impl Integrator for AdaptiveVerlet {
-    fn name(&self) -> &'static str {
-        "adaptive-verlet"
-    }
     fn step(&mut self, state: &mut State, dt: f64, evaluate: &mut Evaluate) {
         let (start_step, start_time) = (state.step, state.time);
         let end = start_time + dt;
@@ -99,4 +97,45 @@ impl Integrator for AdaptiveVerlet {
     }
     /// Holds nothing per particle.
     fn renumber(&mut self, _r: &Renumbering) {}
+}
+
+/// `scheme = "adaptive-verlet"`: `tolerance`, the local error allowed per substep as a fraction
+/// of each particle's radius (default 1e-6); dt is the largest step.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct AdaptiveVerletSpec {
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+}
+
+impl Default for AdaptiveVerletSpec {
+    fn default() -> Self {
+        Self { tolerance: default_tolerance() }
+    }
+}
+
+fn default_tolerance() -> f64 {
+    1e-6
+}
+
+impl IntegratorSpec for AdaptiveVerletSpec {
+    fn check(&self) -> Result<(), Invalid> {
+        if !(self.tolerance > 0.0 && self.tolerance < 1.0) {
+            return Err(invalid(
+                "integration.tolerance",
+                self.tolerance,
+                "must lie in (0, 1): a fraction of a particle radius",
+            ));
+        }
+        Ok(())
+    }
+    fn dt_is_a_cap(&self) -> bool {
+        true
+    }
+    fn compares_evaluations(&self) -> bool {
+        true
+    }
+    fn build(&self, _ctx: &IntegratorContext) -> Box<dyn Integrator> {
+        Box::new(AdaptiveVerlet::new(self.tolerance))
+    }
 }

@@ -9,7 +9,7 @@
 //! (contact still does) — what sub-micron particles need. At γ = 0 it is velocity Verlet.
 
 use super::ForceGroup;
-use super::{advance, drift, tick, Evaluate, Integrator, Kick, Renumbering};
+use super::{advance, drift, tick, Evaluate, Integrator, IntegratorContext, IntegratorSpec, Kick, Renumbering};
 use crate::core::state::{State, Vec3};
 
 pub struct ExponentialVerlet {
@@ -33,9 +33,6 @@ impl ExponentialVerlet {
 }
 
 impl Integrator for ExponentialVerlet {
-    fn name(&self) -> &'static str {
-        "exponential-verlet"
-    }
     fn step(&mut self, state: &mut State, dt: f64, evaluate: &mut Evaluate) {
         self.half_kick(state, 0.5 * dt);
         drift(state, dt);
@@ -46,5 +43,24 @@ impl Integrator for ExponentialVerlet {
     fn renumber(&mut self, r: &Renumbering) {
         r.permute(&mut self.gamma);
         r.permute(&mut self.gamma_rotational);
+    }
+}
+
+/// `scheme = "exponential-verlet"`: no keys of its own; it takes each particle's drag
+/// coefficients from the scene.
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExponentialVerletSpec {}
+
+impl IntegratorSpec for ExponentialVerletSpec {
+    fn integrates_linear_drag(&self) -> bool {
+        true
+    }
+    fn build(&self, ctx: &IntegratorContext) -> Box<dyn Integrator> {
+        Box::new(ExponentialVerlet {
+            gamma: ctx.linear_drag.to_vec(),
+            gamma_rotational: ctx.rotational_drag.to_vec(),
+            fluid_velocity: ctx.fluid_velocity,
+        })
     }
 }

@@ -1,6 +1,11 @@
 //! Time integrators. An integrator does not own the state: it advances a [`State`] by one step,
 //! calling back into the force pipeline. On entry and on exit `force`/`torque` belong to the
 //! current state, so each step costs one force evaluation.
+//!
+//! Each scheme is one file: the integrator behind [`Integrator`] and its `[integration]` keys
+//! behind [`IntegratorSpec`]. The registry below (one line per scheme) makes [`Scheme`], the
+//! tagged choice a scene holds: `integration.scheme` names the variant, and the variant's own
+//! keys sit beside it in the same table.
 
 mod adaptive_verlet;
 mod explicit_euler;
@@ -10,14 +15,15 @@ mod semi_implicit_euler;
 mod subcycled_euler;
 mod velocity_verlet;
 
-pub use adaptive_verlet::AdaptiveVerlet;
-pub use explicit_euler::ExplicitEuler;
-pub use exponential_verlet::ExponentialVerlet;
-pub use respa::Respa;
-pub use semi_implicit_euler::SemiImplicitEuler;
-pub use subcycled_euler::SubcycledEuler;
-pub use velocity_verlet::VelocityVerlet;
+pub use adaptive_verlet::{AdaptiveVerlet, AdaptiveVerletSpec};
+pub use explicit_euler::{ExplicitEuler, ExplicitEulerSpec};
+pub use exponential_verlet::{ExponentialVerlet, ExponentialVerletSpec};
+pub use respa::{Respa, RespaSpec};
+pub use semi_implicit_euler::{SemiImplicitEuler, SemiImplicitEulerSpec};
+pub use subcycled_euler::{SubcycledEuler, SubcycledEulerSpec};
+pub use velocity_verlet::{VelocityVerlet, VelocityVerletSpec};
 
+use super::checks::Invalid;
 pub use super::forces::ForceGroup;
 use super::parallel;
 use super::renumber::Renumbering;
@@ -29,7 +35,6 @@ use std::sync::atomic::{AtomicU64, Ordering};
 pub type Evaluate<'a> = dyn FnMut(&mut State, ForceGroup, f64) + 'a;
 
 pub trait Integrator: Send {
-    fn name(&self) -> &'static str;
     /// Steps of `dt` one call of `step` advances (more than one for multiple time stepping).
     fn steps_per_call(&self) -> u64 {
         1
@@ -44,82 +49,113 @@ pub trait Integrator: Send {
     fn renumber(&mut self, r: &Renumbering);
 }
 
-/// The time-integration schemes, parsed once from the scene; what depends on the scheme is a
-/// method here, not a comparison of names.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Scheme {
-    ExplicitEuler,
-    SemiImplicitEuler,
-    VelocityVerlet,
-    Respa,
-    ExponentialVerlet,
-    AdaptiveVerlet,
-    SubcycledEuler,
+/// What an integrator may need of the scene to build itself.
+pub struct IntegratorContext<'a> {
+    /// Linear (Stokes) drag coefficient 6π μ a per particle (kg/s); zeros without drag.
+    pub linear_drag: &'a [f64],
+    /// Rotational drag coefficient 8π μ a³ per particle (kg m²/s); zeros without it.
+    pub rotational_drag: &'a [f64],
+    /// u_f (m/s), uniform; zero without a fluid.
+    pub fluid_velocity: Vec3,
 }
 
-impl Scheme {
-    pub const ALL: [Scheme; 7] = [
-        Scheme::ExplicitEuler,
-        Scheme::SemiImplicitEuler,
-        Scheme::VelocityVerlet,
-        Scheme::Respa,
-        Scheme::ExponentialVerlet,
-        Scheme::AdaptiveVerlet,
-        Scheme::SubcycledEuler,
-    ];
-
-    /// The name a scene gives (`integration.scheme`).
-    pub fn name(self) -> &'static str {
-        match self {
-            Scheme::ExplicitEuler => "explicit-euler",
-            Scheme::SemiImplicitEuler => "semi-implicit-euler",
-            Scheme::VelocityVerlet => "velocity-verlet",
-            Scheme::Respa => "respa",
-            Scheme::ExponentialVerlet => "exponential-verlet",
-            Scheme::AdaptiveVerlet => "adaptive-verlet",
-            Scheme::SubcycledEuler => "subcycled-euler",
-        }
+/// A scheme's `[integration]` keys (plain serde data, in the scheme's own file): its checks, what
+/// the scene and the force terms must know of it before it runs, and its construction.
+pub trait IntegratorSpec {
+    /// Refuses a value of the scheme's own keys, naming the key (`integration.<key>`).
+    fn check(&self) -> Result<(), Invalid> {
+        Ok(())
     }
-
-    pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|s| s.name() == name)
+    /// K: steps over which the slow (magnetic) forces are held (multiple time stepping); 1 when
+    /// every step evaluates them.
+    fn slow_every(&self) -> u64 {
+        1
     }
-
-    /// Holds the slow (magnetic) forces over `slow_every` steps.
-    pub fn multiple_time_stepping(self) -> bool {
-        matches!(self, Scheme::Respa | Scheme::SubcycledEuler)
+    /// dt is only the largest step (error control splits it), so no stable-step bound applies.
+    fn dt_is_a_cap(&self) -> bool {
+        false
     }
-
-    /// dt is only the largest step (error control splits it).
-    pub fn dt_is_a_cap(self) -> bool {
-        self == Scheme::AdaptiveVerlet
+    /// Evaluates the forces more than once per step and compares the results (step doubling):
+    /// forces must be functions of the state alone.
+    fn compares_evaluations(&self) -> bool {
+        false
     }
-
     /// Integrates the linear (Stokes) drag itself, so the drag term leaves it out and the drag
     /// relaxation time does not bound dt.
-    pub fn integrates_linear_drag(self) -> bool {
-        self == Scheme::ExponentialVerlet
+    fn integrates_linear_drag(&self) -> bool {
+        false
     }
-
     /// Forward Euler in the contact force: stable only for dt < 2ζ/ω (central-difference
     /// schemes for dt < (2/ω)(√(1+ζ²) − ζ)).
-    pub fn forward_euler_in_contact(self) -> bool {
-        self == Scheme::ExplicitEuler
+    fn forward_euler_in_contact(&self) -> bool {
+        false
     }
+    fn build(&self, ctx: &IntegratorContext) -> Box<dyn Integrator>;
+}
 
-    /// The integrator, for all but exponential Verlet (which needs each particle's drag
-    /// coefficients: the scene layer builds it); `slow_every` is K of the multiple-time-stepping
-    /// schemes, `tolerance` the adaptive integrator's local error per substep.
-    pub fn integrator(self, slow_every: u64, tolerance: f64) -> Option<Box<dyn Integrator>> {
-        match self {
-            Scheme::AdaptiveVerlet => Some(Box::new(AdaptiveVerlet::new(tolerance))),
-            Scheme::ExplicitEuler => Some(Box::new(ExplicitEuler)),
-            Scheme::SemiImplicitEuler => Some(Box::new(SemiImplicitEuler)),
-            Scheme::VelocityVerlet => Some(Box::new(VelocityVerlet)),
-            Scheme::Respa => Some(Box::new(Respa { slow_every })),
-            Scheme::SubcycledEuler => Some(Box::new(SubcycledEuler { slow_every })),
-            Scheme::ExponentialVerlet => None,
+macro_rules! schemes {
+    ($($variant:ident($spec:ident) = $name:literal,)*) => {
+        /// The time-integration scheme of a scene, with its own parameters: `integration.scheme`
+        /// names the variant.
+        #[derive(Debug, Clone, Copy, PartialEq)]
+        pub enum Scheme {
+            $($variant($spec),)*
         }
+
+        impl Scheme {
+            /// Every scheme's name, in registry order.
+            pub const NAMES: &[&str] = &[$($name),*];
+
+            /// The name a scene gives (`integration.scheme`).
+            pub fn name(&self) -> &'static str {
+                match self {
+                    $(Scheme::$variant(_) => $name,)*
+                }
+            }
+
+            /// The scheme's spec, behind its trait.
+            pub fn spec(&self) -> &dyn IntegratorSpec {
+                match self {
+                    $(Scheme::$variant(spec) => spec,)*
+                }
+            }
+
+            /// The scheme's own keys as serde data (what a scene writes beside `scheme`).
+            pub fn keys<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+                match self {
+                    $(Scheme::$variant(spec) => serde::Serialize::serialize(spec, serializer),)*
+                }
+            }
+
+            /// The scheme `name` with its keys read from `keys` (the `[integration]` keys other
+            /// than the common ones), or `None` for a name the registry does not hold.
+            pub fn deserialize_named<'de, D: serde::Deserializer<'de>>(
+                name: &str,
+                keys: D,
+            ) -> Result<Option<Self>, D::Error> {
+                match name {
+                    $($name => <$spec as serde::Deserialize>::deserialize(keys).map(|s| Some(Scheme::$variant(s))),)*
+                    _ => Ok(None),
+                }
+            }
+        }
+    };
+}
+
+// The registry of time-integration schemes.
+schemes! {
+    ExplicitEuler(ExplicitEulerSpec) = "explicit-euler",
+    SemiImplicitEuler(SemiImplicitEulerSpec) = "semi-implicit-euler",
+    VelocityVerlet(VelocityVerletSpec) = "velocity-verlet",
+    Respa(RespaSpec) = "respa",
+    ExponentialVerlet(ExponentialVerletSpec) = "exponential-verlet",
+    AdaptiveVerlet(AdaptiveVerletSpec) = "adaptive-verlet",
+    SubcycledEuler(SubcycledEulerSpec) = "subcycled-euler",
+}
+
+impl Default for Scheme {
+    fn default() -> Self {
+        Scheme::VelocityVerlet(VelocityVerletSpec {})
     }
 }
 

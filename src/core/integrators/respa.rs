@@ -6,7 +6,11 @@
 //! approaches half the period of a fast oscillation, which the stability studies measure.
 
 use super::ForceGroup;
-use super::{kick, kick_twice_drift, slow_kick, slow_kick_then_kick_drift, tick, Evaluate, Integrator, Renumbering};
+use super::{
+    kick, kick_twice_drift, slow_kick, slow_kick_then_kick_drift, tick, Evaluate, Integrator, IntegratorContext,
+    IntegratorSpec, Renumbering,
+};
+use crate::core::checks::{invalid, Invalid};
 use crate::core::state::State;
 
 pub struct Respa {
@@ -15,9 +19,6 @@ pub struct Respa {
 }
 
 impl Integrator for Respa {
-    fn name(&self) -> &'static str {
-        "respa"
-    }
     fn steps_per_call(&self) -> u64 {
         self.slow_every
     }
@@ -44,4 +45,38 @@ impl Integrator for Respa {
     }
     /// Holds nothing per particle.
     fn renumber(&mut self, _r: &Renumbering) {}
+}
+
+/// `scheme = "respa"`: `slow_every`, K fast steps per evaluation of the moments and magnetic
+/// forces (default 1). It must divide the steps per output frame and the run.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RespaSpec {
+    #[serde(default = "one")]
+    pub slow_every: u64,
+}
+
+impl Default for RespaSpec {
+    fn default() -> Self {
+        Self { slow_every: 1 }
+    }
+}
+
+fn one() -> u64 {
+    1
+}
+
+impl IntegratorSpec for RespaSpec {
+    fn check(&self) -> Result<(), Invalid> {
+        if self.slow_every == 0 {
+            return Err(invalid("integration.slow_every", 0, "must be at least 1"));
+        }
+        Ok(())
+    }
+    fn slow_every(&self) -> u64 {
+        self.slow_every
+    }
+    fn build(&self, _ctx: &IntegratorContext) -> Box<dyn Integrator> {
+        Box::new(Respa { slow_every: self.slow_every })
+    }
 }

@@ -2,15 +2,12 @@
 //! stable for an oscillator while ω dt < 2.
 
 use super::ForceGroup;
-use super::{kick_drift, tick, Evaluate, Integrator, Renumbering};
+use super::{kick_drift, tick, Evaluate, Integrator, IntegratorContext, IntegratorSpec, Renumbering};
 use crate::core::state::State;
 
 pub struct SemiImplicitEuler;
 
 impl Integrator for SemiImplicitEuler {
-    fn name(&self) -> &'static str {
-        "semi-implicit-euler"
-    }
     fn step(&mut self, state: &mut State, dt: f64, evaluate: &mut Evaluate) {
         kick_drift(state, dt, dt);
         tick(state, dt);
@@ -18,4 +15,15 @@ impl Integrator for SemiImplicitEuler {
     }
     /// Holds nothing per particle.
     fn renumber(&mut self, _r: &Renumbering) {}
+}
+
+/// `scheme = "semi-implicit-euler"`: no keys of its own.
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SemiImplicitEulerSpec {}
+
+impl IntegratorSpec for SemiImplicitEulerSpec {
+    fn build(&self, _ctx: &IntegratorContext) -> Box<dyn Integrator> {
+        Box::new(SemiImplicitEuler)
+    }
 }

@@ -7,7 +7,8 @@
 //! OpenFOAM's colliding clouds do.
 
 use super::ForceGroup;
-use super::{kick, kick_drift, slow_kick, tick, Evaluate, Integrator, Renumbering};
+use super::{kick, kick_drift, slow_kick, tick, Evaluate, Integrator, IntegratorContext, IntegratorSpec, Renumbering};
+use crate::core::checks::{invalid, Invalid};
 use crate::core::state::State;
 
 pub struct SubcycledEuler {
@@ -16,9 +17,6 @@ pub struct SubcycledEuler {
 }
 
 impl Integrator for SubcycledEuler {
-    fn name(&self) -> &'static str {
-        "subcycled-euler"
-    }
     fn steps_per_call(&self) -> u64 {
         self.slow_every
     }
@@ -38,4 +36,38 @@ impl Integrator for SubcycledEuler {
     }
     /// Holds nothing per particle.
     fn renumber(&mut self, _r: &Renumbering) {}
+}
+
+/// `scheme = "subcycled-euler"`: `slow_every`, K fast steps per evaluation of the moments and magnetic
+/// forces (default 1). It must divide the steps per output frame and the run.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SubcycledEulerSpec {
+    #[serde(default = "one")]
+    pub slow_every: u64,
+}
+
+impl Default for SubcycledEulerSpec {
+    fn default() -> Self {
+        Self { slow_every: 1 }
+    }
+}
+
+fn one() -> u64 {
+    1
+}
+
+impl IntegratorSpec for SubcycledEulerSpec {
+    fn check(&self) -> Result<(), Invalid> {
+        if self.slow_every == 0 {
+            return Err(invalid("integration.slow_every", 0, "must be at least 1"));
+        }
+        Ok(())
+    }
+    fn slow_every(&self) -> u64 {
+        self.slow_every
+    }
+    fn build(&self, _ctx: &IntegratorContext) -> Box<dyn Integrator> {
+        Box::new(SubcycledEuler { slow_every: self.slow_every })
+    }
 }

@@ -213,7 +213,7 @@ pub fn case2(inp: &Inputs) -> Result<Value, Error> {
         paper_size => ps.get(1).copied(),
         end_time => base.times.last().copied(),
         dt => integration.dt,
-        slow_every => integration.slow_every,
+        slow_every => integration.slow_every(),
         b0 => scene.spec.field.as_ref().map(|f| nalgebra::Vector3::from(f.b0).norm()),
         gradient => scene.spec.field.as_ref().map(|f| f.gradient[0][0]),
         diameter_um => 2e6 * scene.species[0].radius,

@@ -200,7 +200,7 @@ fn sensitivity_panel(bars: &[(String, convergence::Estimate)], concentration: f6
 fn reference_slow_every(runs: &[Run]) -> Option<u64> {
     let r = runs.iter().find(|r| SENSITIVITY.contains(&r.experiment.as_str()) && r.variant == "respa")?;
     let scene = Scene::parse(&r.scene_text, &r.id).ok()?;
-    Some(scene.spec.integration.slow_every)
+    Some(scene.spec.integration.slow_every())
 }
 
 /// The experiment that switches the shielding off under Table 3's integrator and seeds.

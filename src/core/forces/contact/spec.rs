@@ -109,7 +109,7 @@ impl TermSpec for ContactSpec {
                     (PI / (omega * (1.0 - beta * beta).sqrt()), omega, -beta)
                 }
             };
-            let b = if ctx.scheme.forward_euler_in_contact() {
+            let b = if ctx.scheme.spec().forward_euler_in_contact() {
                 2.0 * zeta / omega
             } else {
                 2.0 / omega * ((1.0 + zeta * zeta).sqrt() - zeta)
