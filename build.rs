@@ -1,5 +1,6 @@
-//! Records the git commit the binary was built from (written into every trajectory) and, with the
-//! `liggghts-shim` feature, builds the LIGGGHTS callback shim as a shared object.
+//! Records the git commit the binary was built from (written into every trajectory), lists the
+//! reference engines (one file each in `src/reference/engines/`) and, with the `liggghts-shim`
+//! feature, builds the LIGGGHTS callback shim as a shared object.
 use std::path::PathBuf;
 use std::process::Command;
 
@@ -31,6 +32,8 @@ fn main() {
         }
     }
 
+    engines();
+
     let shim = "src/reference/shim/liggghts_shim.cpp";
     println!("cargo:rerun-if-changed={shim}");
     if std::env::var_os("CARGO_FEATURE_LIGGGHTS_SHIM").is_some() {
@@ -51,5 +54,29 @@ fn main() {
             .status()
             .expect("run the C++ compiler");
         assert!(status.success(), "building the LIGGGHTS shim failed (is libliggghts-dev installed?)");
+    }
+}
+
+/// `$OUT_DIR/engines.rs`, included by `src/reference/mod.rs`: a module per file of
+/// `src/reference/engines/` (each defines `ENGINE`, its `Dialect`) and `ALL`, every engine in
+/// file-name order. A new engine is its file, nothing else.
+fn engines() {
+    let dir = std::path::Path::new("src/reference/engines");
+    println!("cargo:rerun-if-changed={}", dir.display());
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .expect("src/reference/engines")
+        .filter_map(|e| e.ok()?.file_name().into_string().ok()?.strip_suffix(".rs").map(String::from))
+        .collect();
+    names.sort();
+    let root = std::env::var("CARGO_MANIFEST_DIR").unwrap();
+    let mut code = String::new();
+    for name in &names {
+        code += &format!("#[path = \"{root}/src/reference/engines/{name}.rs\"]\npub mod {name};\n");
+    }
+    let all: Vec<String> = names.iter().map(|n| format!("Engine(&{n}::ENGINE)")).collect();
+    code += &format!("/// Every engine, in file-name order.\npub static ALL: &[Engine] = &[{}];\n", all.join(", "));
+    let out = PathBuf::from(std::env::var("OUT_DIR").unwrap()).join("engines.rs");
+    if std::fs::read_to_string(&out).ok().as_deref() != Some(code.as_str()) {
+        std::fs::write(out, code).expect("write engines.rs");
     }
 }

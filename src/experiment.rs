@@ -133,7 +133,9 @@ fn run_point(point: &Point, file: &Path, digested: Option<&Recorded>, options: &
             }
         }
         name => {
-            let engine = if name == "liggghts" { Engine::Liggghts } else { Engine::Lammps };
+            let Some(engine) = Engine::named(name) else {
+                return Outcome::Failed(format!("no engine named {name}"));
+            };
             if !engine.available() {
                 return Outcome::EngineMissing(engine.name());
             }

@@ -9,7 +9,7 @@ use magdem::verify::contacts::run_case;
 use tempfile::TempDir;
 
 fn engines() -> Option<Vec<Engine>> {
-    let wanted = [Engine::Liggghts, Engine::Lammps];
+    let wanted = [Engine::LIGGGHTS, Engine::LAMMPS];
     if wanted.iter().all(|e| e.available()) {
         return Some(wanted.to_vec());
     }
@@ -155,7 +155,7 @@ fn multi_particle_decks_run_and_match_magdem() {
             engine.name(),
             end / 11e-6
         );
-        if engine == Engine::Liggghts {
+        if engine == Engine::LIGGGHTS {
             assert!(half / 11e-6 < 1e-12 && end / 11e-6 < 1e-4, "{}: {half:e} m, {end:e} m", engine.name());
         } else {
             assert!(end / 11e-6 < 0.1, "{}: {end:e} m", engine.name());
@@ -170,7 +170,7 @@ fn decks_carry_the_magnetic_fix_and_refuse_what_the_codes_cannot_express() {
         "[field]\nb0 = [0.4, 0.0, 0.0]\n[forces.contact]\n[forces.dipole]\ninduction = \"none\"",
     );
     let scene = Scene::parse(&magnetic, "magnetic").unwrap();
-    for engine in [Engine::Liggghts, Engine::Lammps] {
+    for engine in [Engine::LIGGGHTS, Engine::LAMMPS] {
         // Magnetic terms are not refused: the deck carries the fix external magdem drives.
         let work = workdir(&format!("magnetic-{}", engine.name()));
         let dir = work.path();
@@ -181,13 +181,13 @@ fn decks_carry_the_magnetic_fix_and_refuse_what_the_codes_cannot_express() {
         assert!(fix.contains("fix magnetic all external pf/callback 1 1"), "{fix}");
     }
     let sn = Scene::parse(&SETTLING.replace("law = \"stokes\"", "law = \"schiller-naumann\""), "sn").unwrap();
-    let err = reference::deck::write(Engine::Lammps, &sn, workdir("refuse1").path()).unwrap_err().to_string();
+    let err = reference::deck::write(Engine::LAMMPS, &sn, workdir("refuse1").path()).unwrap_err().to_string();
     assert!(err.contains("lammps cannot express forces.drag.law"), "{err}");
     let shielded = Scene::parse(&SETTLING.replace("shielding = \"none\"", "shielding = \"paper\""), "s").unwrap();
-    let err = reference::deck::write(Engine::Liggghts, &shielded, workdir("refuse2").path()).unwrap_err().to_string();
+    let err = reference::deck::write(Engine::LIGGGHTS, &shielded, workdir("refuse2").path()).unwrap_err().to_string();
     assert!(err.contains("forces.drag.shielding"), "{err}");
     let rotational = Scene::parse(&SETTLING.replace("rotational = false", "rotational = true"), "r").unwrap();
-    let err = reference::deck::write(Engine::Lammps, &rotational, workdir("refuse3").path()).unwrap_err().to_string();
+    let err = reference::deck::write(Engine::LAMMPS, &rotational, workdir("refuse3").path()).unwrap_err().to_string();
     assert!(err.contains("rotational"), "{err}");
 }
 
@@ -229,7 +229,7 @@ fn magnetic_forces_in_lock_step_reproduce_magdem() {
             / m.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
         println!("{}: position difference {before:.3e} m before contact, {all:.3e} m overall; moments {moments:.3e} relative", engine.name());
         assert!(before < 1e-15, "{}: {before:e}", engine.name());
-        if engine == Engine::Liggghts {
+        if engine == Engine::LIGGGHTS {
             assert!(all < 1e-15 && moments < 1e-12, "{}: {all:e} {moments:e}", engine.name());
         }
     }
@@ -283,7 +283,7 @@ fn files_route_agrees_with_the_callback_route_to_first_order_in_the_lag() {
     let magdem_bin = std::path::Path::new(env!("CARGO_BIN_EXE_magdem"));
     let text = magdem::verify::magnetic::files_route_scene();
     let rows = magdem::verify::magnetic::files_route_lag(
-        Engine::Liggghts,
+        Engine::LIGGGHTS,
         &text,
         workdir("files").path(),
         magdem_bin,
@@ -294,9 +294,9 @@ fn files_route_agrees_with_the_callback_route_to_first_order_in_the_lag() {
     let ratio = rows[1].1 / rows[0].1;
     assert!(rows[0].1 < 2e-7 && (2.5..4.5).contains(&ratio), "{rows:?}");
     // LAMMPS' binary accepts the same files-route deck.
-    if engines.contains(&Engine::Lammps) {
+    if engines.contains(&Engine::LAMMPS) {
         let rows = magdem::verify::magnetic::files_route_lag(
-            Engine::Lammps,
+            Engine::LAMMPS,
             &text,
             workdir("files-lammps").path(),
             magdem_bin,
@@ -334,7 +334,7 @@ fn native_lammps_deck_runs_the_fixed_moment_model_on_one_and_two_processes() {
     let coupling = reference::deck::Coupling::Native;
     for procs in [1, 2] {
         let out = dir.join(format!("lammps-np{procs}.h5"));
-        reference::run_binary(Engine::Lammps, &scene, &dir.join(format!("np{procs}")), &out, &coupling, procs).unwrap();
+        reference::run_binary(Engine::LAMMPS, &scene, &dir.join(format!("np{procs}")), &out, &coupling, procs).unwrap();
         let t = magdem::io::trajectory::Trajectory::open(&out).unwrap();
         assert!(t.attr_string("integrator").unwrap().contains("lj/cut/dipole/cut"));
         let y = t.all_vectors("position").unwrap();
@@ -369,9 +369,9 @@ fn native_decks_refuse_induction_gradients_and_uncut_sums() {
         reference::deck::write_with(engine, &scene, workdir("refused").path(), &coupling).unwrap_err().to_string()
     };
     for (text, named) in cases {
-        let err = refusal(Engine::Lammps, &text);
+        let err = refusal(Engine::LAMMPS, &text);
         assert!(err.contains(named), "{named}: {err}");
     }
-    let err = refusal(Engine::Liggghts, &base);
+    let err = refusal(Engine::LIGGGHTS, &base);
     assert!(err.contains("native"), "{err}");
 }

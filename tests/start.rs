@@ -133,7 +133,7 @@ fn the_deck_writes_the_started_positions_and_says_the_springs_start_at_zero() {
     first_run(dir.path(), 1.0e-7);
     let started = Scene::parse_in(&bed("[start]\ntrajectory = \"first.h5\"\n", 1.0e-7), "started", dir.path()).unwrap();
     let out = dir.path().join("deck");
-    let files = magdem::reference::deck::write(Engine::Liggghts, &started, &out).unwrap();
+    let files = magdem::reference::deck::write(Engine::LIGGGHTS, &started, &out).unwrap();
     let deck = std::fs::read_to_string(out.join(&files.input)).unwrap();
     assert!(deck.contains("tangential\n# springs it held start at zero"), "{deck}");
     let data = std::fs::read_to_string(out.join(&files.data)).unwrap();

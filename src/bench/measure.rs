@@ -315,7 +315,7 @@ impl<'a> Bench<'a> {
                 ];
                 // At 30 000 the engines also run on both cores (mpirun -np 2), beside magdem's threads.
                 let procs = if n == 30000 && mpirun_available() { vec![1, 2] } else { vec![1] };
-                for engine in [Engine::Liggghts, Engine::Lammps] {
+                for engine in [Engine::LIGGGHTS, Engine::LAMMPS] {
                     for &np in &procs {
                         let (scene, engine_dir) = (
                             &scene,
@@ -345,7 +345,7 @@ impl<'a> Bench<'a> {
                 }
                 let (one, two) = (one.last.expect("one-thread runs"), two.last.expect("two-thread runs"));
                 self.ends(&case, &one, &two);
-                for engine in [Engine::Liggghts, Engine::Lammps] {
+                for engine in [Engine::LIGGGHTS, Engine::LAMMPS] {
                     self.record_version(&dir.join(engine.name()));
                 }
                 self.profile(&case, &scene, Work::Steps)?;
@@ -420,10 +420,10 @@ impl<'a> Bench<'a> {
             let mut runs = MagdemRuns::default();
             let lammps_dir = dir.join("lammps");
             let mut contenders = vec![Contender::magdem(&scene, 1, Work::Forces, false, &mut runs)];
-            contenders.extend(Contender::engine(Engine::Lammps, 1, || time_lammps_dipoles(&scene, &lammps_dir)));
+            contenders.extend(Contender::engine(Engine::LAMMPS, 1, || time_lammps_dipoles(&scene, &lammps_dir)));
             self.compare(&case, scene.initial.len(), steps, contenders)?;
             self.profile(&case, &scene, Work::Forces)?;
-            if Engine::Lammps.available() {
+            if Engine::LAMMPS.available() {
                 match dipole_check::check(&scene, &dir.join("force-check")) {
                     Ok(check) => self
                         .record
@@ -517,7 +517,7 @@ impl<'a> Bench<'a> {
         let experiment =
             crate::scene::experiment::Experiment::from_file(Path::new("experiments/paper/reference.toml"))?;
         let magdem = std::env::current_exe()?;
-        for engine in [Engine::Liggghts, Engine::Lammps] {
+        for engine in [Engine::LIGGGHTS, Engine::LAMMPS] {
             let Some(point) = experiment.points.iter().find(|p| p.engine == engine.name()) else { continue };
             self.record.setup.mpi_duration_ms = Some(point.scene.spec.integration.end_time * 1e3);
             if !engine.available() || !mpirun_available() {
@@ -566,7 +566,7 @@ impl<'a> Bench<'a> {
     /// case-1 scene at 2.25 mg/ml (`verify::magnetic::case1_fixed_moments`) in magdem and in
     /// LAMMPS' own `lj/cut/dipole/cut` on one and two processes, no magdem in LAMMPS' loop.
     fn native_demo(&mut self, progress: &indicatif::ProgressBar) -> Result<(), Error> {
-        if !Engine::Lammps.available() || !mpirun_available() {
+        if !Engine::LAMMPS.available() || !mpirun_available() {
             self.record.notes.push("native LAMMPS deck: lmp or mpirun is not installed".into());
             return Ok(());
         }
@@ -590,7 +590,7 @@ impl<'a> Bench<'a> {
             progress.set_message(format!("native LAMMPS deck: mpirun -np {procs} lmp"));
             let output = dir.join(format!("lammps-np{procs}.h5"));
             let run = crate::reference::run_binary(
-                Engine::Lammps,
+                Engine::LAMMPS,
                 &scene,
                 &dir.join(format!("np{procs}")),
                 &output,
@@ -630,8 +630,8 @@ impl<'a> Bench<'a> {
         }
         for procs in [1, 2] {
             let deck_dir = bulk_dir.join(format!("np{procs}"));
-            let written = deck::write_with(Engine::Lammps, &bulk, &deck_dir, &deck::Coupling::Native)?;
-            let seconds = time_engine(Engine::Lammps, &deck_dir, &written.input.to_string_lossy(), procs)?;
+            let written = deck::write_with(Engine::LAMMPS, &bulk, &deck_dir, &deck::Coupling::Native)?;
+            let seconds = time_engine(Engine::LAMMPS, &deck_dir, &written.input.to_string_lossy(), procs)?;
             let ns_per_particle_step = seconds / particle_steps * 1e9;
             self.record.native_bulk.push(NativeBulk {
                 engine: "lammps".into(),

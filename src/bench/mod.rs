@@ -389,7 +389,7 @@ pub fn time_lammps_dipoles(scene: &Scene, dir: &Path) -> Result<f64, Error> {
     let state = scene.initial_magnetic_state().ok_or("the scene has no magnetic term")?;
     let rc = dipole_check::lammps_cutoff(scene, cutoff)?;
     dipole_check::write_deck(&state, &scene.domain, rc, dir, &scene.hash, Some((scene.total_steps(), scene.dt())))?;
-    time_engine(Engine::Lammps, dir, "in.dipole", 1)
+    time_engine(Engine::LAMMPS, dir, "in.dipole", 1)
 }
 
 /// Writes `text` as `dir/name.toml` (for rerunning by hand) and parses it.

@@ -8,12 +8,28 @@ use magdem::scene::Scene;
 use std::path::Path;
 use std::process::ExitCode;
 
-/// `magdem run --engine`.
-#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+/// `magdem run --engine`: magdem's own solver or a reference engine.
+#[derive(Clone, Copy, PartialEq, Eq)]
 pub enum EngineChoice {
     Magdem,
-    Liggghts,
-    Lammps,
+    Reference(Engine),
+}
+
+impl clap::ValueEnum for EngineChoice {
+    fn value_variants<'a>() -> &'a [Self] {
+        static ALL: std::sync::OnceLock<Vec<EngineChoice>> = std::sync::OnceLock::new();
+        ALL.get_or_init(|| {
+            std::iter::once(EngineChoice::Magdem)
+                .chain(Engine::all().iter().map(|&e| EngineChoice::Reference(e)))
+                .collect()
+        })
+    }
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(match self {
+            EngineChoice::Magdem => "magdem",
+            EngineChoice::Reference(engine) => engine.name(),
+        }))
+    }
 }
 
 /// How a reference code gets its magnetic forces and how many processes it runs on.
@@ -40,8 +56,7 @@ pub fn run(
     };
     match engine {
         EngineChoice::Magdem => run_native(&scene, output, options),
-        EngineChoice::Liggghts => run_reference(Engine::Liggghts, &scene, output, coupling),
-        EngineChoice::Lammps => run_reference(Engine::Lammps, &scene, output, coupling),
+        EngineChoice::Reference(engine) => run_reference(engine, &scene, output, coupling),
     }
 }
 

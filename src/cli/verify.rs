@@ -6,7 +6,7 @@ use magdem::reference::{self, Engine};
 use std::path::Path;
 use std::process::ExitCode;
 
-const ENGINES: [Engine; 2] = [Engine::Liggghts, Engine::Lammps];
+const ENGINES: [Engine; 2] = [Engine::LIGGGHTS, Engine::LAMMPS];
 
 /// `magdem verify contacts`: the single-contact benchmarks in magdem and every installed engine.
 pub fn contacts(report: &Path, work: &Path) -> ExitCode {

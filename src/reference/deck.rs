@@ -773,7 +773,7 @@ mod tests {
                 let magnetic = scene.spec.forces.dipole.is_some() || scene.spec.forces.gradient.is_some();
                 let every = scene.steps_per_frame();
                 let files_route = Coupling::Files { magdem: PathBuf::from("magdem"), every };
-                for (engine, refused) in [Engine::Liggghts, Engine::Lammps].into_iter().zip(refused) {
+                for (engine, refused) in [Engine::LIGGGHTS, Engine::LAMMPS].into_iter().zip(refused) {
                     for coupling in
                         if magnetic { vec![Coupling::Callback, files_route.clone()] } else { vec![Coupling::Callback] }
                     {
@@ -804,7 +804,7 @@ mod tests {
             if scene.magnetic_force_field().is_some() && scene.total_steps() > 2 {
                 let coupling = Coupling::Files { magdem: PathBuf::from("magdem"), every: scene.total_steps() - 1 };
                 let err =
-                    write_with(Engine::Lammps, &scene, tempfile::tempdir().unwrap().path(), &coupling).unwrap_err();
+                    write_with(Engine::LAMMPS, &scene, tempfile::tempdir().unwrap().path(), &coupling).unwrap_err();
                 assert!(matches!(&err, ReferenceError::Unsupported { term, .. } if term == "the files route"), "{err}");
             }
         }

@@ -13,6 +13,16 @@ pub trait Dialect: Sync {
     fn binary(&self) -> &'static str;
     /// The shared library of the in-process route.
     fn library(&self) -> &'static str;
+    /// The in-process route's callback shim, a shared object built with magdem, if the engine
+    /// needs one to set a `fix external` callback; `Err` says why this build has none.
+    fn callback_shim(&self) -> Result<Option<&'static str>, &'static str> {
+        Ok(None)
+    }
+    /// The library's `lammps_open_no_mpi` returns the instance (LAMMPS since 2020) rather than
+    /// writing it through its third argument (LIGGGHTS 3.8).
+    fn open_returns_instance(&self) -> bool {
+        true
+    }
     /// A species this engine cannot hold, beyond what no deck holds: (term, why).
     fn refuse_species(&self, _species: &[SpeciesSpec]) -> Option<(&'static str, &'static str)> {
         None

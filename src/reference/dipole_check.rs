@@ -86,7 +86,7 @@ pub fn write_deck(
 
 /// Runs `in.dipole` in `dir` with LAMMPS (log in `log.dipole`).
 pub fn run_deck(dir: &Path) -> Result<(), ReferenceError> {
-    let engine = Engine::Lammps;
+    let engine = Engine::LAMMPS;
     let out =
         Command::new(engine.binary()).args(["-in", "in.dipole", "-log", "log.dipole"]).current_dir(dir).output()?;
     if !out.status.success() {
@@ -113,7 +113,7 @@ pub struct DipoleCheck {
 /// Evaluates the dipole forces of `scene`'s initial configuration (moments from magdem's
 /// induction model) in magdem and in LAMMPS, and compares them.
 pub fn check(scene: &Scene, dir: &Path) -> Result<DipoleCheck, ReferenceError> {
-    let engine = Engine::Lammps;
+    let engine = Engine::LAMMPS;
     if !engine.available() {
         return Err(ReferenceError::NotInstalled { engine: engine.name(), binary: engine.binary() });
     }

@@ -88,27 +88,27 @@ extern "C" fn magnetic_forces(
     }
 }
 
-/// The engine's library (and LIGGGHTS' shim), loaded once per process and kept: unloading and
+/// The engine's library (and its callback shim), loaded once per process and kept: unloading and
 /// reloading LIGGGHTS runs its static style registration again, which it reports as collisions.
 fn load(engine: Engine) -> Result<&'static (Library, Option<Library>), String> {
-    static LIGGGHTS: std::sync::OnceLock<Result<(Library, Option<Library>), String>> = std::sync::OnceLock::new();
-    static LAMMPS: std::sync::OnceLock<Result<(Library, Option<Library>), String>> = std::sync::OnceLock::new();
-    let cell = if engine == Engine::Liggghts { &LIGGGHTS } else { &LAMMPS };
-    cell.get_or_init(|| {
-        if engine == Engine::Liggghts && option_env!("MAGDEM_LIGGGHTS_SHIM").is_none() {
-            return Err("this magdem was built without the liggghts-shim feature (make build enables it when libliggghts-dev is installed)".into());
-        }
+    type Loaded = Result<&'static (Library, Option<Library>), String>;
+    static LOADED: std::sync::Mutex<Vec<(&'static str, Loaded)>> = std::sync::Mutex::new(Vec::new());
+    let mut loaded = LOADED.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some((_, result)) = loaded.iter().find(|(name, _)| *name == engine.name()) {
+        return result.clone();
+    }
+    let open = || -> Result<(Library, Option<Library>), String> {
+        let shim = engine.dialect().callback_shim().map_err(String::from)?;
         // SAFETY: loading a system library runs its initialisers, which touch nothing of ours; the
         // symbols are used with their C signatures from library.h.
-        let library = unsafe { Library::new(library_name(engine)) }.map_err(|e| format!("cannot load {}: {e}", library_name(engine)))?;
-        let shim = match engine {
-            Engine::Liggghts => Some(unsafe { Library::new(option_env!("MAGDEM_LIGGGHTS_SHIM").unwrap_or_default()) }.map_err(|e| e.to_string())?),
-            Engine::Lammps => None,
-        };
+        let name = library_name(engine);
+        let library = unsafe { Library::new(name) }.map_err(|e| format!("cannot load {name}: {e}"))?;
+        let shim = shim.map(|path| unsafe { Library::new(path) }.map_err(|e| e.to_string())).transpose()?;
         Ok((library, shim))
-    })
-    .as_ref()
-    .map_err(Clone::clone)
+    };
+    let result: Loaded = open().map(|pair| &*Box::leak(Box::new(pair)));
+    loaded.push((engine.name(), result.clone()));
+    result
 }
 
 /// A loaded engine instance.
@@ -135,20 +135,17 @@ impl Instance {
         let mut argv: Vec<*mut c_char> = args.iter().map(|a| a.as_ptr() as *mut c_char).collect();
         let mut handle: *mut c_void = std::ptr::null_mut();
         unsafe {
-            match engine {
+            if !engine.dialect().open_returns_instance() {
                 // LIGGGHTS 3.8: void lammps_open_no_mpi(int, char **, void **)
-                Engine::Liggghts => {
-                    let open: libloading::Symbol<unsafe extern "C" fn(c_int, *mut *mut c_char, *mut *mut c_void)> =
-                        library.get(b"lammps_open_no_mpi").map_err(|e| fail(e.to_string()))?;
-                    open(argv.len() as c_int, argv.as_mut_ptr(), &mut handle);
-                }
+                let open: libloading::Symbol<unsafe extern "C" fn(c_int, *mut *mut c_char, *mut *mut c_void)> =
+                    library.get(b"lammps_open_no_mpi").map_err(|e| fail(e.to_string()))?;
+                open(argv.len() as c_int, argv.as_mut_ptr(), &mut handle);
+            } else {
                 // LAMMPS 2021: void *lammps_open_no_mpi(int, char **, void **), handle returned
-                Engine::Lammps => {
-                    let open: libloading::Symbol<
-                        unsafe extern "C" fn(c_int, *mut *mut c_char, *mut *mut c_void) -> *mut c_void,
-                    > = library.get(b"lammps_open_no_mpi").map_err(|e| fail(e.to_string()))?;
-                    handle = open(argv.len() as c_int, argv.as_mut_ptr(), std::ptr::null_mut());
-                }
+                let open: libloading::Symbol<
+                    unsafe extern "C" fn(c_int, *mut *mut c_char, *mut *mut c_void) -> *mut c_void,
+                > = library.get(b"lammps_open_no_mpi").map_err(|e| fail(e.to_string()))?;
+                handle = open(argv.len() as c_int, argv.as_mut_ptr(), std::ptr::null_mut());
             }
         }
         if handle.is_null() {

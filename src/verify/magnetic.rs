@@ -425,7 +425,7 @@ pub fn verify(
         Some(&engine) => Some(files_route_section(dir, work, engine, magdem)?),
         None => None,
     };
-    let dipole = if engines.contains(&Engine::Lammps) { Some(dipole_check_section(work)?) } else { None };
+    let dipole = if engines.contains(&Engine::LAMMPS) { Some(dipole_check_section(work)?) } else { None };
     let md = render(
         "verification/magnetic.md",
         &context! {

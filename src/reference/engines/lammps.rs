@@ -3,12 +3,15 @@
 //! calibrated to LIGGGHTS' restitution damping, `wall/gran granular`, and `lj/cut/dipole/cut`
 //! for the native deck's fixed dipoles.
 
-use super::dialect::Dialect;
+use crate::reference::dialect::Dialect;
 use crate::core::forces::contact::law::restitution_beta;
 use crate::core::forces::contact::PairMaterial;
 use crate::core::state::Species;
 use crate::scene::{Scene, SpeciesSpec};
 use std::fmt::Write as _;
+
+/// The registered engine (`src/reference/engines/`: build.rs lists every file there).
+pub const ENGINE: Lammps = Lammps;
 
 pub struct Lammps;
 

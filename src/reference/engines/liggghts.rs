@@ -1,10 +1,13 @@
 //! LIGGGHTS-PUBLIC 3.8's dialect: `atom_style granular`, materials as `property/global` fixes,
 //! `pair_style gran model hertz tangential history`, `wall/gran` primitives.
 
-use super::dialect::Dialect;
+use crate::reference::dialect::Dialect;
 use crate::core::state::Species;
 use crate::scene::{Scene, SpeciesSpec};
 use std::fmt::Write as _;
+
+/// The registered engine (`src/reference/engines/`: build.rs lists every file there).
+pub const ENGINE: Liggghts = Liggghts;
 
 pub struct Liggghts;
 
@@ -17,6 +20,15 @@ impl Dialect for Liggghts {
     }
     fn library(&self) -> &'static str {
         "libliggghts.so.3"
+    }
+    /// `fix external` in LIGGGHTS 3.8 has no library call to set its callback: the shim does it.
+    fn callback_shim(&self) -> Result<Option<&'static str>, &'static str> {
+        option_env!("MAGDEM_LIGGGHTS_SHIM").map(Some).ok_or(
+            "this magdem was built without the liggghts-shim feature (make build enables it when libliggghts-dev is installed)",
+        )
+    }
+    fn open_returns_instance(&self) -> bool {
+        false
     }
     fn refuse_species(&self, species: &[SpeciesSpec]) -> Option<(&'static str, &'static str)> {
         species
