@@ -1,8 +1,11 @@
 //! Trajectories in the tools of the field: ParaView (pvpython, pvbatch) reads the XDMF sidecar
 //! that `run` writes, and OVITO's Python module reads `magdem export --format lammps-dump`; both
-//! give the HDF5 file's points, frames and positions. Each test is skipped, with the reason
-//! printed, where its program is not installed (`make setup` installs them).
+//! give the HDF5 file's points, frames and positions. `make setup` installs both programs and
+//! Xvfb: a test whose program is absent fails, unless MAGDEM_NO_REFERENCE=1 makes them optional
+//! (tests/common/absent.rs).
 
+#[path = "common/absent.rs"]
+mod absent;
 mod common;
 
 use magdem::io::trajectory::Trajectory;
@@ -77,8 +80,8 @@ fn numbers(stdout: &[u8], key: &str) -> Vec<f64> {
 
 #[test]
 fn paraview_reads_the_xdmf_sidecar_and_renders_a_frame() {
-    if !has("pvpython", &["--version"]) {
-        println!("skipped: pvpython (Debian's paraview) is not installed");
+    if !absent::present(has("pvpython", &["--version"]), "pvpython", "run scripts/setup.sh as root (Debian's paraview)")
+    {
         return;
     }
     let (_work, h5) = run();
@@ -123,8 +126,7 @@ print("arrays", len(names), " ".join(names))
             assert!(text.contains(array), "{reader}: {array} in {text}");
         }
     }
-    if !has("Xvfb", &["-help"]) {
-        println!("skipped the render: Xvfb (Debian's xvfb) is not installed");
+    if !absent::present(has("Xvfb", &["-help"]), "Xvfb", "run scripts/setup.sh as root (Debian's xvfb)") {
         return;
     }
     let png = work.join("frame.png");
@@ -140,8 +142,11 @@ print("arrays", len(names), " ".join(names))
 
 #[test]
 fn ovito_reads_the_lammps_dump_export() {
-    if !has("python3", &["-c", "import ovito"]) {
-        println!("skipped: the ovito Python module is not installed");
+    if !absent::present(
+        has("python3", &["-c", "import ovito"]),
+        "the ovito Python module",
+        "run `python3 -m pip install ovito` (scripts/setup.sh does)",
+    ) {
         return;
     }
     let (_work, h5) = run();

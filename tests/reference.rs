@@ -1,28 +1,42 @@
 //! The reference codes, for real: decks accepted by Debian's `liggghts` and `lmp`, contact
-//! behaviour equal to LIGGGHTS' (0.5% normal, 1% tangential), and refusals that name the term.
-//! The setup script installs both; set MAGDEM_NO_REFERENCE=1 to skip these tests without them.
+//! behaviour equal to LIGGGHTS' and LAMMPS' normal law to round-off, and refusals that name the
+//! term. The setup script installs both: a test that needs them fails without them, unless
+//! MAGDEM_NO_REFERENCE=1 makes them optional (tests/common/absent.rs).
+
+#[path = "common/absent.rs"]
+mod absent;
 
 use magdem::reference::{self, Engine};
 use magdem::scene::Scene;
-use magdem::verify::contact_cases::{cases, relative};
+use magdem::verify::contact_cases::{cases, relative, Case, Geometry};
 use magdem::verify::contacts::run_case;
 use tempfile::TempDir;
 
 fn engines() -> Option<Vec<Engine>> {
     let wanted = [Engine::LIGGGHTS, Engine::LAMMPS];
-    if wanted.iter().all(|e| e.available()) {
-        return Some(wanted.to_vec());
-    }
-    if std::env::var("MAGDEM_NO_REFERENCE").as_deref() == Ok("1") {
-        eprintln!("MAGDEM_NO_REFERENCE=1 and the reference codes are missing: skipped");
-        return None;
-    }
-    panic!("liggghts/lmp not on the PATH: run scripts/setup.sh as root (or set MAGDEM_NO_REFERENCE=1)");
+    let available = wanted.iter().all(|e| e.available());
+    absent::present(available, "liggghts or lmp", "run scripts/setup.sh as root").then(|| wanted.to_vec())
 }
 
 /// A fresh directory, removed when the returned guard drops (also when a test fails).
 fn workdir(name: &str) -> TempDir {
     tempfile::Builder::new().prefix(&format!("magdem-ref-{name}-")).tempdir().unwrap()
+}
+
+/// Hertz's closed forms for an elastic normal impact of `case`, written here: δ_max =
+/// (15 m* v²/(16 E* √R*))^(2/5), t_c = 2 (2/5) Γ(2/5) Γ(1/2)/Γ(9/10) (15/16)^(2/5) (m*²/(R* E*² v))^(1/5).
+fn hertz(case: &Case) -> (f64, f64) {
+    use magdem::verify::contact_cases::{DENSITY, POISSON, YOUNGS};
+    let (a1, a2) = case.radii();
+    let m = |a: f64| DENSITY * 4.0 / 3.0 * std::f64::consts::PI * a.powi(3);
+    let (r_eff, m_eff, v) = match case.geometry {
+        Geometry::Pair { .. } => (a1 * a2 / (a1 + a2), m(a1) * m(a2) / (m(a1) + m(a2)), 2.0 * case.normal_speed),
+        Geometry::Wall => (a1, m(a1), case.normal_speed),
+    };
+    let e_star = YOUNGS / (2.0 * (1.0 - POISSON * POISSON));
+    let delta = (15.0 * m_eff * v * v / (16.0 * e_star * r_eff.sqrt())).powf(0.4);
+    let t_c = 2.868_265_699_195_33 * (m_eff * m_eff / (r_eff * e_star * e_star * v)).powf(0.2);
+    (delta, t_c)
 }
 
 #[test]
@@ -39,45 +53,55 @@ fn single_contacts_agree_with_liggghts_and_lammps() {
         "spin, normal",
         "unequal 1:2, elastic",
     ];
+    // Largest |relative deviation| per comparison.
+    let mut worst: std::collections::BTreeMap<&str, f64> = Default::default();
+    let mut note = |key: &'static str, case: &str, e: f64| {
+        println!("  {case}: {key} {e:.3e}");
+        let w = worst.entry(key).or_insert(0.0);
+        *w = w.max(e.abs());
+    };
     for case in cases().into_iter().filter(|c| wanted.contains(&c.name.as_str())) {
         let outcomes = run_case(&case, dir, &engines).unwrap();
         let get = |engine: &str| outcomes.iter().find(|o| o.engine == engine).unwrap().metrics;
         let (m, l, p) = (get("magdem"), get("liggghts"), get("lammps"));
         println!("{}: magdem {m:?}\n  liggghts {l:?}\n  lammps {p:?}", case.name);
-        let (delta, t_c) = case.hertz();
+        let (delta, t_c) = hertz(&case);
         let speed = case.normal_speed.hypot(case.tangential_speed);
-        // Normal quantities: 0.5% against LIGGGHTS and against LAMMPS (calibrated damping).
-        for (reference, name) in [(l, "liggghts"), (p, "lammps")] {
-            assert!(
-                relative(m.restitution, reference.restitution, 1.0).abs() < 0.005,
-                "{}: restitution vs {name}",
-                case.name
-            );
-            if case.tangential_speed == 0.0 && case.spin == 0.0 {
-                assert!(
-                    relative(m.duration, reference.duration, t_c).abs() < 0.005,
-                    "{}: duration vs {name}",
-                    case.name
-                );
-                assert!(
-                    relative(m.max_overlap, reference.max_overlap, delta).abs() < 0.005,
-                    "{}: overlap vs {name}",
-                    case.name
-                );
-            }
+        let normal = case.tangential_speed == 0.0 && case.spin == 0.0;
+        note("restitution vs liggghts", &case.name, relative(m.restitution, l.restitution, 1.0));
+        note("restitution vs lammps", &case.name, relative(m.restitution, p.restitution, 1.0));
+        if normal {
+            note("duration vs liggghts", &case.name, relative(m.duration, l.duration, t_c));
+            note("overlap vs liggghts", &case.name, relative(m.max_overlap, l.max_overlap, delta));
+            note("duration vs lammps", &case.name, relative(m.duration, p.duration, t_c));
+            note("overlap vs lammps", &case.name, relative(m.max_overlap, p.max_overlap, delta));
         }
-        // Tangential quantities: 1% against LIGGGHTS (the same Mindlin model).
-        assert!(relative(m.rebound_tangential, l.rebound_tangential, speed).abs() < 0.01, "{}: v_t", case.name);
-        assert!(relative(m.rebound_spin, l.rebound_spin, speed / 5.5e-6).abs() < 0.01, "{}: ω", case.name);
-        // The elastic cases also meet Hertz's closed forms (1%).
+        note("v_t vs liggghts", &case.name, relative(m.rebound_tangential, l.rebound_tangential, speed));
+        note("ω vs liggghts", &case.name, relative(m.rebound_spin, l.rebound_spin, speed / 5.5e-6));
+        note("v_t vs lammps", &case.name, relative(m.rebound_tangential, p.rebound_tangential, speed));
+        note("ω vs lammps", &case.name, relative(m.rebound_spin, p.rebound_spin, speed / 5.5e-6));
         if case.restitution == 1.0 {
-            assert!(
-                (m.max_overlap / delta - 1.0).abs() < 0.01 && (m.duration / t_c - 1.0).abs() < 0.01,
-                "{}: Hertz",
-                case.name
-            );
+            note("overlap vs Hertz", &case.name, m.max_overlap / delta - 1.0);
+            note("duration vs Hertz", &case.name, m.duration / t_c - 1.0);
         }
     }
+    println!("largest deviations: {worst:#?}");
+    // The dumps carry 17 significant digits (deck.rs), so the engines' numbers limit nothing here.
+    // LIGGGHTS runs the same law: every quantity agrees to round-off (measured ≤ 1.6e-15).
+    for key in ["restitution", "duration", "overlap", "v_t", "ω"] {
+        assert!(worst[format!("{key} vs liggghts").as_str()] < 1e-14, "{key}: {worst:?}");
+    }
+    // LAMMPS' normal law, with its damping calibrated to magdem's (docs/model.md §10.2), agrees
+    // to round-off too (measured 4.4e-16, 0, 0). Its tangential model differs (the spring's
+    // length kept on projection, its own damping ratio): measured 14 % on v_t and 71 % on ω,
+    // which no assertion holds (reports/contact-verification.md discusses it).
+    for key in ["restitution", "duration", "overlap"] {
+        assert!(worst[format!("{key} vs lammps").as_str()] < 5e-15, "{key}: {worst:?}");
+    }
+    // Hertz: the largest overlap is sampled every 5 steps (5e-10 s), so it falls short of δ_max
+    // by up to about (π Δt/t_c)²/2 ≈ 1e-5 (measured 3.3e-6); the duration's crossings are
+    // interpolated where δ is nearly linear (measured 1.5e-7).
+    assert!(worst["overlap vs Hertz"] < 3e-5 && worst["duration vs Hertz"] < 1.5e-6, "{worst:?}");
 }
 
 /// 40 spheres driven onto a wall (g raised to 2e6 m/s² so contacts form within the run),
@@ -228,16 +252,20 @@ fn magnetic_forces_in_lock_step_reproduce_magdem() {
         let moments = m.iter().zip(my.iter()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max)
             / m.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
         println!("{}: position difference {before:.3e} m before contact, {all:.3e} m overall; moments {moments:.3e} relative", engine.name());
-        assert!(before < 1e-15, "{}: {before:e}", engine.name());
+        // Measured: 1.1e-22 m before contact with both engines, 2.1e-22 m overall and 5.3e-18
+        // relative with LIGGGHTS: round-off. The bounds allow about 1.5 ulps of the 3.3e-5 m
+        // coordinates (6.8e-21 m each) and a few ulps of the moments.
+        assert!(before < 1e-20, "{}: {before:e}", engine.name());
         if engine == Engine::LIGGGHTS {
-            assert!(all < 1e-15 && moments < 1e-12, "{}: {all:e} {moments:e}", engine.name());
+            assert!(all < 1e-20 && moments < 5e-16, "{}: {all:e} {moments:e}", engine.name());
         }
     }
 }
 
 /// The shipped case-1 scene (4.5 mg/ml, 307 particles; Stokes drag, which the decks express) for
-/// 2e-5 s: in lock step LIGGGHTS stays within 1e-12 m of magdem (measured 4e-18 m), LAMMPS
-/// within a tenth of a diameter (its Mindlin model differs; measured 1.8e-7 m).
+/// 2e-5 s: in lock step LIGGGHTS stays within 4e-17 m of magdem (measured 4.0e-18 m: round-off
+/// that contacts amplify), LAMMPS within a tenth of a diameter (its Mindlin model differs;
+/// measured 1.8e-7 m).
 #[test]
 fn case1_in_lock_step_tracks_magdem() {
     let Some(engines) = engines() else { return };
@@ -246,7 +274,7 @@ fn case1_in_lock_step_tracks_magdem() {
     for d in diffs {
         let worst = d.max.iter().fold(0.0_f64, |a, &b| a.max(b));
         println!("{}: largest position difference {worst:.3e} m", d.engine);
-        let limit = if d.engine == "liggghts" { 1e-12 } else { 1.1e-6 };
+        let limit = if d.engine == "liggghts" { 4e-17 } else { 1.1e-6 };
         assert!(worst < limit, "{}: {worst:e}", d.engine);
     }
 }
@@ -270,7 +298,8 @@ fn dipole_forces_match_lammps_lj_cut_dipole_cut() {
             check.largest_force,
             check.max_relative_error
         );
-        assert!(check.max_relative_error < 1e-9, "{name}: {check:?}");
+        // Measured: 1.7e-15 and 8.1e-16 (round-off of the two codes' different arithmetic).
+        assert!(check.max_relative_error < 2e-14, "{name}: {check:?}");
     }
 }
 
@@ -312,7 +341,7 @@ fn files_route_agrees_with_the_callback_route_to_first_order_in_the_lag() {
 /// `lj/cut/dipole/cut`, no magdem in the loop), with induction "none", Stokes drag and friction 0
 /// (LAMMPS turns its fixed dipoles' torque into spin, which friction would couple into contacts;
 /// magdem's induced moments feel none). For 2 000 steps, on one and on two MPI processes, the
-/// positions stay within 1e-15 m of magdem's (measured 8e-19 and 1.3e-18 m: round-off, and the
+/// positions stay within 1e-17 m of magdem's (measured 7.6e-19 to 1.3e-18 m: round-off, and the
 /// two process counts differ from each other by as much).
 #[test]
 fn native_lammps_deck_runs_the_fixed_moment_model_on_one_and_two_processes() {
@@ -340,7 +369,7 @@ fn native_lammps_deck_runs_the_fixed_moment_model_on_one_and_two_processes() {
         let y = t.all_vectors("position").unwrap();
         let worst = x.iter().zip(y.iter()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
         println!("lammps native, {procs} process(es): largest position difference to magdem {worst:.3e} m (largest move {moved:.3e} m)");
-        assert!(worst < 1e-15, "np {procs}: {worst:e} m");
+        assert!(worst < 1e-17, "np {procs}: {worst:e} m");
     }
 }
 
