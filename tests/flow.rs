@@ -94,3 +94,121 @@ fn womersley_tends_to_poiseuille_and_to_a_plug() {
     let mean = 1e-6 / (PI * R * R);
     assert!(centre < 1.2 * mean && centre > 0.9 * mean, "centre {centre} against mean {mean} at α = {alpha}");
 }
+
+/// A 5.5 µm bead in water inside a vessel of radius 50 µm along x, with Stokes drag and nothing
+/// else; the scene's integration lines follow.
+fn bead_in_vessel(y0: f64, vessel_extra: &str, integration: &str) -> magdem::core::simulation::Simulation {
+    let text = format!(
+        "version = 1\n[domain]\nlo = [-1e-3, -6e-5, -6e-5]\nhi = [1e-3, 6e-5, 6e-5]\n\
+         [fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n\
+         [fluid.vessel]\ncentre = [0.0, 0.0, 0.0]\naxis = [1.0, 0.0, 0.0]\nradius = 5.0e-5\nmean_speed = 1.0e-3\n{vessel_extra}\
+         [[species]]\nname = \"p\"\ndiameter = 11.0e-6\ndensity = 1087.0\nyoungs_modulus = 1.0e9\npoisson_ratio = 0.5\n\
+         friction = 0.5\nrestitution = 1.0\n[[particles]]\nspecies = \"p\"\npositions = [[0.0, {y0:e}, 0.0]]\n\
+         [forces.drag]\nlaw = \"stokes\"\nshielding = \"none\"\nrotational = false\n[integration]\n{integration}"
+    );
+    let scene = magdem::scene::Scene::parse(&text, "vessel").unwrap_or_else(|e| panic!("{e}\n{text}"));
+    let mut sim = scene.simulation(None);
+    sim.initialise().unwrap();
+    sim
+}
+
+/// Drag relaxation time τ = m/(6π μ a) of the bead.
+fn bead_tau() -> f64 {
+    1087.0 * 4.0 / 3.0 * PI * 5.5e-6_f64.powi(3) / (6.0 * PI * 1.0e-3 * 5.5e-6)
+}
+
+/// Velocity Verlet on τ v' = u(t) − v, as the solver steps it, written out: a half kick with the
+/// force of the last evaluation, a drift, the drag at the half-step velocity and the new time,
+/// and the closing half kick. Returns (x, v) after each step, from rest at x = 0.
+fn verlet_on_drag(u: impl Fn(f64) -> f64, tau: f64, h: f64, steps: usize) -> Vec<(f64, f64)> {
+    let (mut x, mut v, mut f) = (0.0, 0.0, u(0.0) / tau);
+    (1..=steps)
+        .map(|n| {
+            let w = v + 0.5 * h * f;
+            x += h * w;
+            f = (u(n as f64 * h) - w) / tau;
+            v = w + 0.5 * h * f;
+            (x, v)
+        })
+        .collect()
+}
+
+/// A bead released at rest at r0 = 20 µm from the axis of steady Poiseuille flow moves along the
+/// axis (the flow has no radial part), so its drag sees the fixed local speed u(r0) = 2ū(1 − r0²/R²).
+/// Its steps follow velocity Verlet's recurrence to round-off, and the closed form
+/// v = u(r0)(1 − e^(−t/τ)), x = u(r0)(t − τ(1 − e^(−t/τ))) to the scheme's first-order error.
+#[test]
+fn a_bead_in_poiseuille_flow_relaxes_to_the_local_speed() {
+    let (r0, tau) = (2e-5, bead_tau());
+    let u = 2.0 * 1e-3 * (1.0 - (r0 / 5e-5_f64).powi(2));
+    let dt = tau / 200.0;
+    let mut sim = bead_in_vessel(r0, "", &format!("scheme = \"velocity-verlet\"\ndt = {dt:e}\nend_time = 1.0\n"));
+    let steps = verlet_on_drag(|_| u, tau, dt, 1000);
+    let (mut recurrence, mut worst_v, mut worst_x) = (0.0_f64, 0.0_f64, 0.0_f64);
+    for &(x, v) in &steps {
+        sim.step().unwrap();
+        let (t, p) = (sim.state.time, &sim.state.particles);
+        recurrence = recurrence.max((p.velocity[0].x - v).abs() / u).max((p.position[0].x - x).abs() / (u * tau));
+        let e = (-t / tau).exp();
+        worst_v = worst_v.max((p.velocity[0].x - u * (1.0 - e)).abs() / u);
+        worst_x = worst_x.max((p.position[0].x - u * (t - tau * (1.0 - e))).abs() / (u * tau));
+        assert_eq!((p.position[0].y, p.position[0].z), (r0, 0.0), "the bead stays at r0");
+    }
+    println!(
+        "u(r0) = {u:e} m/s; over 5 τ at dt = τ/200: recurrence {recurrence:.1e}; closed form: velocity {worst_v:.2e}, \
+         position {worst_x:.2e} (of u τ)"
+    );
+    // Round-off (measured 1.6e-15).
+    assert!(recurrence < 2e-14, "{recurrence:e}");
+    // First order in dt/τ = 5e-3 (the drag sees the half-step velocity): measured 9.2e-4 and
+    // 2.4e-3 (the position lags by about half a step).
+    assert!(worst_v < 2e-3 && worst_x < 5e-3, "{worst_v:e}, {worst_x:e}");
+}
+
+/// On the axis of a pulsatile flow of one harmonic, u(0, t) = U0 + Re[Û e^(iωt)], the bead's
+/// velocity obeys τ v' = u(0, t) − v: once the start has decayed (10 τ), v = U0 + Re[Û e^(iωt)/(1 + iωτ)],
+/// amplitude cut by √(1 + ω²τ²) and lagging by atan(ωτ). Here ωτ = 1. The steps follow velocity
+/// Verlet's recurrence with the flow taken at each evaluation's time to round-off, and the
+/// filtered pulse to the scheme's first-order error.
+#[test]
+fn a_bead_on_the_axis_of_pulsatile_flow_follows_it_as_a_first_order_filter() {
+    let tau = bead_tau();
+    let period = 2.0 * PI * tau;
+    let (steps, dt) = (8000, tau / 400.0);
+    let pulse = format!("period = {period:e}\nharmonics = [[1, 0.5, 0.3]]\n");
+    let mut sim = bead_in_vessel(0.0, &pulse, &format!("scheme = \"velocity-verlet\"\ndt = {dt:e}\nend_time = 1.0\n"));
+    // The flow on the axis (its profile is held to Womersley's in the tests above).
+    let steady_flow = VesselFlow::poiseuille(
+        Vessel { centre: Vec3::zeros(), axis: Vec3::x_axis(), radius: 5e-5 },
+        1e-3,
+        1000.0,
+        1e-3,
+    );
+    let harmonic = Harmonic { n: 1, q: Complex::from_polar(0.5 * steady_flow.mean_flow, 0.3) };
+    let flow = VesselFlow { period, harmonics: vec![harmonic], ..steady_flow };
+    let on_axis = |t: f64| flow.axial_speed(0.0, t);
+    let steady = 2.0 * 1e-3;
+    // u(0, t) − U0 = Re[Û e^(iωt)]: Re Û at t = 0, −Im Û at a quarter period.
+    let hat = Complex::new(on_axis(0.0) - steady, -(on_axis(period / 4.0) - steady));
+    let omega = 2.0 * PI / period;
+    let expected = verlet_on_drag(on_axis, tau, dt, steps);
+    let (mut recurrence, mut worst) = (0.0_f64, 0.0_f64);
+    for (k, &(_, v)) in expected.iter().enumerate() {
+        sim.step().unwrap();
+        let vx = sim.state.particles.velocity[0].x;
+        recurrence = recurrence.max((vx - v).abs() / steady);
+        if k >= steps / 2 {
+            let t = sim.state.time;
+            let filtered = steady + (hat * Complex::from_polar(1.0, omega * t) / Complex::new(1.0, omega * tau)).re;
+            worst = worst.max((vx - filtered).abs() / hat.norm());
+        }
+    }
+    println!(
+        "|Û| = {:.3e} m/s; over 20 τ at dt = τ/400: recurrence {recurrence:.1e}; filtered pulse (last 10 τ): {worst:.2e} of |Û|",
+        hat.norm()
+    );
+    // Round-off (measured 4.3e-16).
+    assert!(recurrence < 5e-15, "{recurrence:e}");
+    // First order in dt/τ = 2.5e-3 (measured 6.3e-4); the start has decayed to e^(−10) = 4.5e-5.
+    assert!(worst < 1.5e-3, "{worst:e}");
+}

@@ -1,5 +1,6 @@
 //! Physics verification against closed forms and independent solutions (docs/model.md §11).
 
+use magdem::core::flow::Flow;
 use magdem::core::forces::drag::{Drag, DragLaw, Fluid, Shielding};
 use magdem::core::forces::magnetisation::{Induction, Magnetisation, MU0};
 use magdem::core::forces::shielding::lens_area;
@@ -382,7 +383,7 @@ fn chain_moving_along_its_axis_has_drag_only_on_its_leading_sphere() {
     let paper = Shielding::Paper { touch_tolerance: 1e-3, near };
     for (shielding, expect_shielded) in [(paper, true), (Shielding::None, false)] {
         let mut state = State::new(p.clone());
-        let water = Fluid { density: 1000.0, viscosity: 1.0e-3, velocity: Vec3::zeros() };
+        let water = Fluid { density: 1000.0, viscosity: 1.0e-3, flow: Flow::Uniform(Vec3::zeros()) };
         let drag = Drag::new(DragLaw::Stokes, shielding, false, water);
         ForceField::new(domain.clone(), vec![Box::new(drag)]).evaluate(&mut state, 1e-8);
         let stokes = -6.0 * PI * 1.0e-3 * 5.5e-6 * u.x;
@@ -611,7 +612,7 @@ fn rpy_mobility_is_positive_definite_with_overlaps_and_unequal_radii() {
         assert!(asym == 0.0, "trial {trial}: not symmetric ({asym:e})");
         let resistance = Resistance::new(&x, &radii, 1e-3, None).unwrap_or_else(|e| panic!("trial {trial}: {e}"));
         let u: Vec<Vec3> = (0..n).map(|i| Vec3::from_fn(|c, _| value(31 * trial + 3 * i + c) - 0.5)).collect();
-        let power: f64 = resistance.drag(&u, Vec3::zeros()).iter().zip(&u).map(|(f, v)| f.dot(v)).sum();
+        let power: f64 = resistance.drag(&u, |_| Vec3::zeros()).iter().zip(&u).map(|(f, v)| f.dot(v)).sum();
         assert!(power < 0.0, "trial {trial}: the drag does work {power:e}");
     }
 }
@@ -746,7 +747,7 @@ fn rpy_pair_drag_matches_its_closed_form_at_several_separations() {
         ] {
             let mut u = Vec3::zeros();
             u[axis] = speed;
-            let f = resistance.drag(&[u, u], Vec3::zeros());
+            let f = resistance.drag(&[u, u], |_| Vec3::zeros());
             for fi in &f {
                 let ratio = -fi[axis] / (6.0 * PI * mu * a * speed);
                 assert!((ratio - closed).abs() < 1e-12, "r = {r_over_a} a, axis {axis}: {ratio} vs {closed}");

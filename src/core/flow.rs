@@ -95,6 +95,35 @@ impl VesselFlow {
     }
 }
 
+/// The fluid's velocity field u(x, t), which the drag laws take each particle's velocity relative
+/// to.
+#[derive(Debug, Clone)]
+pub enum Flow {
+    /// The same velocity everywhere and always (zero: the fluid at rest).
+    Uniform(Vec3),
+    /// Poiseuille or Womersley flow along a straight vessel, zero outside it.
+    Vessel(VesselFlow),
+}
+
+impl Flow {
+    /// u(x, t).
+    #[inline]
+    pub fn velocity(&self, at: Vec3, t: f64) -> Vec3 {
+        match self {
+            Flow::Uniform(u) => *u,
+            Flow::Vessel(flow) => flow.velocity(at, t),
+        }
+    }
+
+    /// The velocity of a uniform flow, `None` for one that varies in space or time.
+    pub fn uniform(&self) -> Option<Vec3> {
+        match self {
+            Flow::Uniform(u) => Some(*u),
+            Flow::Vessel(_) => None,
+        }
+    }
+}
+
 /// The largest Womersley number the series below hold to about 1e-8 (their terms grow to
 /// e^α / α before they cancel); arteries reach about 20 in the aorta.
 pub const MAX_WOMERSLEY: f64 = 25.0;

@@ -78,7 +78,7 @@ impl ForceField {
         let terms = &self.terms;
         let wanted = |range| terms.iter().any(|t| group.has(t.as_ref()) && t.pairs() == Some(range));
         self.neighbours.update(&state.particles.position, &self.domain, wanted, &mut self.timers);
-        let ctx = Context { domain: &self.domain, neighbours: &self.neighbours, dt };
+        let ctx = Context { domain: &self.domain, neighbours: &self.neighbours, dt, time: state.time };
         for term in self.terms.iter_mut().filter(|t| group.has(t.as_ref())) {
             let t0 = self.timers.start();
             if let Err(e) = term.prepare(&ctx, state) {

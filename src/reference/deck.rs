@@ -80,7 +80,16 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
     }
     // Density: the buoyancy in fix gravity; viscosity: fix viscous; velocity: refused with drag
     // (without drag it acts on nothing).
-    let fluid_velocity = fluid.as_ref().map(|FluidSpec { density: _, viscosity: _, velocity }| velocity);
+    let fluid_velocity = fluid.as_ref().map(|FluidSpec { density: _, viscosity: _, velocity, vessel: _ }| velocity);
+    // A vessel's flow would be fix addforce with atom-style variables of position and velocity:
+    // not written yet, refused whether or not a drag term reads it.
+    if fluid.as_ref().is_some_and(|f| f.vessel.is_some()) {
+        return Err(unsupported(
+            engine,
+            "fluid.vessel",
+            "the decks write no flow field (fix viscous drags towards rest)",
+        ));
+    }
     // Magnetic terms: magdem computes the moments (from the applied field, with the induction,
     // cut-off and iteration settings) and the dipole and gradient forces, and hands them to
     // fix.magnetic (`fix external` in process, `fix addforce` by the files route).
@@ -685,6 +694,23 @@ mod tests {
                 ("drag touch tolerance", vec![("forces.drag.touch_tolerance", f(1e-2))], [None, None]),
                 ("no drag", vec![("forces.drag", None)], [None, None]),
                 ("moving fluid", vec![("fluid.velocity", v3([1e-4, 0.0, 0.0]))], [Some("fluid.velocity"); 2]),
+                (
+                    "vessel flow (a vessel wider than any box)",
+                    vec![(
+                        "fluid.vessel",
+                        Some(Value::Table(
+                            [
+                                ("centre".to_string(), v3([0.0; 3]).unwrap()),
+                                ("axis".to_string(), v3([1.0, 0.0, 0.0]).unwrap()),
+                                ("radius".to_string(), Value::Float(1.0)),
+                                ("mean_speed".to_string(), Value::Float(1e-4)),
+                            ]
+                            .into_iter()
+                            .collect(),
+                        )),
+                    )],
+                    [Some("fluid.vessel"); 2],
+                ),
                 (
                     "moving fluid, no drag",
                     vec![("forces.drag", None), ("fluid.velocity", v3([1e-4, 0.0, 0.0]))],

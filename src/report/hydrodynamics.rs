@@ -244,7 +244,7 @@ fn wall_chain_axial(n: usize) -> Result<f64, Error> {
     let wall = PlaneWall { axis: 2, position: 0.0, side: 1.0, min_gap: WALL_GAP };
     let x: Vec<Vec3> = (0..n).map(|i| Vec3::new(2.0 * a * i as f64, 0.0, a)).collect();
     let r = Resistance::new(&x, &vec![a; n], mu, Some(&wall))?;
-    Ok(-r.drag(&vec![Vec3::new(speed, 0.0, 0.0); n], Vec3::zeros()).iter().map(|f| f.x).sum::<f64>() / n as f64)
+    Ok(-r.drag(&vec![Vec3::new(speed, 0.0, 0.0); n], |_| Vec3::zeros()).iter().map(|f| f.x).sum::<f64>() / n as f64)
 }
 
 /// The axial drag per sphere of a chain of `n` touching spheres resting on a wall under RPY above
@@ -371,7 +371,7 @@ fn cost_section(tables: &Path) -> Result<Cost, Error> {
         .median;
         let r = Resistance::new(&x, &radii, mu, None)?;
         let solve = timed(COST_REPEATS.2, || {
-            std::hint::black_box(r.drag(&velocity, Vec3::zeros()));
+            std::hint::black_box(r.drag(&velocity, |_| Vec3::zeros()));
         })
         .1
         .median;

@@ -2,6 +2,7 @@
 //! name the key, the value and why), places particles and builds a [`Simulation`].
 
 pub mod experiment;
+pub mod fluid;
 pub mod placement;
 pub mod spec;
 mod start;
@@ -9,7 +10,7 @@ mod start;
 use crate::core::domain::Domain;
 use crate::core::forces::drag::Drag;
 use crate::core::forces::magnetisation::{held_bound, impact_speed, isolated_moment, Induction, Magnetisation};
-use crate::core::forces::setup::{self, Fluid, Invalid, Pairs, SceneContext, StepBound, StepContext, TermSpec};
+use crate::core::forces::setup::{self, Invalid, Pairs, SceneContext, StepBound, StepContext, TermSpec};
 use crate::core::forces::ForceTerm;
 use crate::core::integrators;
 use crate::core::neighbours::{PairRange, Skins};
@@ -114,8 +115,7 @@ impl Scene {
         }
         let domain = check_domain(&spec.domain)?;
         if let Some(f) = &spec.fluid {
-            positive("fluid.viscosity", f.viscosity)?;
-            non_negative("fluid.density", f.density)?;
+            fluid::check(f)?;
         }
         let species =
             spec.species.iter().enumerate().map(|(k, s)| check_species(k, s)).collect::<Result<Vec<_>, _>>()?;
@@ -138,6 +138,9 @@ impl Scene {
         };
         if initial.is_empty() {
             return Err(invalid("particles", 0, NO_PARTICLES));
+        }
+        if let Some(f) = &spec.fluid {
+            fluid::check_particles(f, &initial)?;
         }
         let hash = hasher.finalize().iter().map(|b| format!("{b:02x}")).collect();
         check_integration(&spec)?;
@@ -234,7 +237,8 @@ impl Scene {
         self.spec.integration.scheme.spec().build(&integrators::IntegratorContext {
             linear_drag: &linear_drag,
             rotational_drag: &rotational_drag,
-            fluid_velocity: fluid.map_or(Vec3::zeros(), |f| Vec3::from(f.velocity)),
+            // A flow that is not uniform is refused with this scheme (the drag's check).
+            fluid_velocity: fluid.map_or(Vec3::zeros(), |f| fluid::flow(f).uniform().unwrap_or_default()),
         })
     }
 
@@ -295,11 +299,7 @@ fn term_context<'a>(spec: &SceneSpec, domain: &'a Domain, species: &'a [Species]
     SceneContext {
         domain,
         species,
-        fluid: spec.fluid.as_ref().map(|f| Fluid {
-            density: f.density,
-            viscosity: f.viscosity,
-            velocity: Vec3::from(f.velocity),
-        }),
+        fluid: spec.fluid.as_ref().map(fluid::fluid),
         field: spec.field.as_ref().map(|f| (Vec3::from(f.b0), Matrix3::from_fn(|r, c| f.gradient[r][c]))),
         scheme: spec.integration.scheme,
         steps_per_frame: steps_per_frame(spec),

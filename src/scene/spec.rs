@@ -108,7 +108,7 @@ impl BoundarySpec {
     }
 }
 
-/// `[fluid]`: the still (or uniformly moving) carrier fluid.
+/// `[fluid]`: the carrier fluid, still, moving uniformly, or flowing along a vessel.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FluidSpec {
@@ -116,9 +116,11 @@ pub struct FluidSpec {
     pub density: f64,
     /// Dynamic viscosity, Pa·s
     pub viscosity: f64,
-    /// m/s (default at rest)
+    /// m/s, uniform (default at rest)
     #[serde(default)]
     pub velocity: [f64; 3],
+    /// Flow along a straight cylindrical vessel instead ([`super::fluid::VesselSpec`]).
+    pub vessel: Option<super::fluid::VesselSpec>,
 }
 
 /// `[field]`: B_ext(x) = b0 + gradient · x, x in scene coordinates.

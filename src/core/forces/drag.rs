@@ -15,6 +15,7 @@ use super::setup::{invalid, non_negative, positive, Invalid, SceneContext, StepB
 use super::shielding::shadow_area;
 use super::wall_drag::{WallCorrection, WallDragSpec};
 use super::{ConstantForce, Context, ForceTerm, Forces, Renewal, Renumbering};
+use crate::core::flow::Flow;
 use crate::core::neighbours::PairRange;
 use crate::core::parallel;
 use crate::core::state::{Particles, State, Vec3};
@@ -55,6 +56,8 @@ pub struct Drag {
     coefficient: Vec<f64>,
     shadow: Vec<f64>,
     flow_direction: Vec<Vec3>,
+    /// u_f(x_i, t) of a flow that is not uniform, at the evaluation's positions and time.
+    local_flow: Vec<Vec3>,
 }
 
 impl Drag {
@@ -70,6 +73,26 @@ impl Drag {
             coefficient: vec![],
             shadow: vec![],
             flow_direction: vec![],
+            local_flow: vec![],
+        }
+    }
+
+    /// The fluid's velocity at particle `i` in this evaluation.
+    #[inline(always)]
+    fn fluid_at(&self, i: usize) -> Vec3 {
+        match &self.fluid.flow {
+            Flow::Uniform(u) => *u,
+            Flow::Vessel(_) => self.local_flow[i],
+        }
+    }
+
+    /// Samples a flow that varies in space or time at every particle, at the evaluation's time.
+    fn sample_flow(&mut self, ctx: &Context, p: &Particles) {
+        if let Flow::Vessel(flow) = &self.fluid.flow {
+            self.local_flow.resize(p.len(), Vec3::zeros());
+            parallel::for_each_share((&mut self.local_flow[..], &p.position[..]), |_, (u, x)| {
+                u.iter_mut().zip(x).for_each(|(u, x)| *u = flow.velocity(*x, ctx.time));
+            });
         }
     }
 
@@ -89,15 +112,17 @@ impl Drag {
     /// particles: a share reads the near pairs with i below its end and keeps the shadows cast
     /// on its own particles (a maximum: the same bits in any order and on any split).
     fn compute_shadows(&mut self, ctx: &Context, p: &Particles, touch_tolerance: f64, near: PairRange) {
-        let fluid = self.fluid.velocity;
-        self.flow_direction.resize(p.len(), Vec3::zeros());
-        parallel::for_each_share((&mut self.flow_direction[..], &p.velocity[..]), |_, (dirs, vs)| {
-            for (dir, v) in dirs.iter_mut().zip(vs) {
-                let u = v - fluid;
+        let mut directions = std::mem::take(&mut self.flow_direction);
+        directions.resize(p.len(), Vec3::zeros());
+        let this = &*self;
+        parallel::for_each_share((&mut directions[..], &p.velocity[..]), |first, (dirs, vs)| {
+            for (k, (dir, v)) in dirs.iter_mut().zip(vs).enumerate() {
+                let u = v - this.fluid_at(first + k);
                 let speed = u.norm();
                 *dir = if speed > 0.0 { u / speed } else { Vec3::zeros() };
             }
         });
+        self.flow_direction = directions;
         self.shadow.clear();
         self.shadow.resize(p.len(), 0.0);
         let pairs = ctx.neighbours.pairs(near);
@@ -135,9 +160,11 @@ impl Drag {
         if let Shielding::Paper { touch_tolerance, near } = self.shielding {
             self.compute_shadows(ctx, p, touch_tolerance, near);
         }
-        self.coefficient.resize(p.len(), 0.0);
-        let (law, shielding, fluid, shadow) = (self.law, self.shielding, self.fluid, &self.shadow);
-        parallel::for_each_share(&mut self.coefficient[..], |first, c| {
+        let mut coefficient = std::mem::take(&mut self.coefficient);
+        coefficient.resize(p.len(), 0.0);
+        let (law, shielding, fluid, shadow) = (self.law, self.shielding, &self.fluid, &self.shadow);
+        let this = &*self;
+        parallel::for_each_share(&mut coefficient[..], |first, c| {
             for (k, c) in c.iter_mut().enumerate() {
                 let i = first + k;
                 let a = p.radius[i];
@@ -149,13 +176,14 @@ impl Drag {
                 let correction = match law {
                     DragLaw::Stokes => 1.0,
                     DragLaw::SchillerNaumann => {
-                        let u = p.velocity[i] - fluid.velocity;
+                        let u = p.velocity[i] - this.fluid_at(i);
                         schiller_naumann(fluid.density * u.norm() * 2.0 * a / fluid.viscosity)
                     }
                 };
                 *c = 12.0 * fluid.viscosity * area / (2.0 * a) * correction;
             }
         });
+        self.coefficient = coefficient;
     }
 }
 
@@ -169,6 +197,7 @@ enum Onto<'a> {
 
 impl Drag {
     fn renew_if_due(&mut self, ctx: &Context, p: &Particles) {
+        self.sample_flow(ctx, p);
         if self.renewal.now(self.coefficient.len() == p.len()) {
             self.renew_coefficients(ctx, p);
         }
@@ -179,7 +208,7 @@ impl Drag {
     /// is excluded.
     #[inline(always)]
     fn force_on(&self, p: &Particles, i: usize, a: f64, v: &Vec3) -> Vec3 {
-        let u = v - self.fluid.velocity;
+        let u = v - self.fluid_at(i);
         let linear = if self.exclude_linear { Self::stokes_coefficient(self.fluid.viscosity, a) } else { 0.0 };
         let coefficient = self.coefficient[i];
         match &self.wall {
@@ -260,6 +289,7 @@ impl ForceTerm for Drag {
         r.permute(&mut self.coefficient);
         self.shadow.clear();
         self.flow_direction.clear();
+        self.local_flow.clear();
     }
 }
 
@@ -298,15 +328,15 @@ mod tests {
         ];
         let domain = Domain { lo: Vec3::zeros(), hi: Vec3::repeat(1e-4), periodic: [false; 3] };
         let neighbours = Neighbours::new([]);
-        let ctx = Context { domain: &domain, neighbours: &neighbours, dt: 1e-8 };
+        let ctx = Context { domain: &domain, neighbours: &neighbours, dt: 1e-8, time: 0.0 };
         let wall = WallCorrection::new(PlaneWall { axis: 2, position: 0.0, side: 1.0, min_gap: 1e-3 });
-        let fluid = Fluid { density: 1000.0, viscosity: 1e-3, velocity: Vec3::new(1e-4, 0.0, 0.0) };
+        let fluid = Fluid { density: 1000.0, viscosity: 1e-3, flow: Flow::Uniform(Vec3::new(1e-4, 0.0, 0.0)) };
         let (mut cases, n) = (0, p.len());
         for rotational in [false, true] {
             for exclude_linear in [false, true] {
                 for wall in [None, Some(wall)] {
                     for start in &starts {
-                        let mut drag = Drag::new(DragLaw::SchillerNaumann, Shielding::None, rotational, fluid);
+                        let mut drag = Drag::new(DragLaw::SchillerNaumann, Shielding::None, rotational, fluid.clone());
                         (drag.exclude_linear, drag.wall) = (exclude_linear, wall);
                         let mut run = |fused: bool| {
                             let (mut force, mut torque) =
@@ -422,8 +452,24 @@ fn default_refactor_every() -> u64 {
 
 impl TermSpec for DragSpec {
     fn check(&self, ctx: &SceneContext) -> Result<(), Invalid> {
-        if ctx.fluid.is_none() {
+        let Some(fluid) = &ctx.fluid else {
             return Err(invalid("forces.drag", "{}", "drag needs a [fluid] table"));
+        };
+        if fluid.flow.uniform().is_none() {
+            if ctx.scheme.spec().integrates_linear_drag() {
+                return Err(invalid(
+                    "integration.scheme",
+                    ctx.scheme,
+                    "integrates the drag towards one uniform fluid velocity; the [fluid.vessel] flow varies in space",
+                ));
+            }
+            if self.wall.is_some() {
+                return Err(invalid(
+                    "forces.drag.wall",
+                    "{…}",
+                    "the wall correction is for a fluid at rest beside a plane; the [fluid.vessel] flow is not",
+                ));
+            }
         }
         non_negative("forces.drag.touch_tolerance", self.touch_tolerance)?;
         let rpy = self.law == DragLawSpec::Rpy;
@@ -511,7 +557,7 @@ impl TermSpec for DragSpec {
     }
 
     fn build(&self, ctx: &SceneContext) -> Box<dyn ForceTerm> {
-        let fluid = ctx.fluid.expect("checked: drag has a [fluid] table");
+        let fluid = ctx.fluid.clone().expect("checked: drag has a [fluid] table");
         let wall = self.wall.as_ref().map(|w| w.wall(ctx.domain));
         let law = match self.law {
             DragLawSpec::Stokes => DragLaw::Stokes,

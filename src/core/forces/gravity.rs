@@ -78,6 +78,6 @@ impl TermSpec for GravitySpec {
     }
     /// Buoyancy in the `[fluid]` table's density, none without one.
     fn build(&self, ctx: &SceneContext) -> Box<dyn ForceTerm> {
-        Box::new(GravityBuoyancy::new(Vec3::from(self.g), ctx.fluid.map_or(0.0, |f| f.density)))
+        Box::new(GravityBuoyancy::new(Vec3::from(self.g), ctx.fluid.as_ref().map_or(0.0, |f| f.density)))
     }
 }

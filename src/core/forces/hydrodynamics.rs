@@ -96,13 +96,15 @@ impl Resistance {
         Ok(Self { inverse: factor.inverse() })
     }
 
-    /// The hydrodynamic forces F_h = −M⁻¹ (U − u_f) on spheres moving at `velocity`.
-    pub fn drag(&self, velocity: &[Vec3], fluid_velocity: Vec3) -> Vec<Vec3> {
+    /// The hydrodynamic forces F_h = −M⁻¹ (U − u_f) on spheres moving at `velocity`, the
+    /// background flow u_f(x_k) at sphere k given by `fluid_velocity(k)` (Faxén's a²∇²u/6 left
+    /// out: docs/assumptions.md).
+    pub fn drag(&self, velocity: &[Vec3], fluid_velocity: impl Fn(usize) -> Vec3) -> Vec<Vec3> {
         let mut f = vec![Vec3::zeros(); velocity.len()];
         let out: &mut [f64] = bytemuck::cast_slice_mut(&mut f);
         // F = −Σ_k R[:, k] u_k over R's contiguous columns (R is symmetric).
         for (k, v) in velocity.iter().enumerate() {
-            let u = v - fluid_velocity;
+            let u = v - fluid_velocity(k);
             for c in 0..3 {
                 let column = self.inverse.col_as_slice(3 * k + c);
                 out.iter_mut().zip(column).for_each(|(o, r)| *o -= r * u[c]);
@@ -149,10 +151,12 @@ impl ForceTerm for RpyDrag {
         }
         Ok(())
     }
-    fn apply(&mut self, _ctx: &Context, p: &Particles, out: &mut Forces) {
+    fn apply(&mut self, ctx: &Context, p: &Particles, out: &mut Forces) {
+        let flow = &self.fluid.flow;
+        let fluid_velocity = |k: usize| flow.velocity(p.position[k], ctx.time);
         match self.resistance.as_ref().expect("prepared before applied") {
             Ok(r) => {
-                for (f, d) in out.force.iter_mut().zip(r.drag(&p.velocity, self.fluid.velocity)) {
+                for (f, d) in out.force.iter_mut().zip(r.drag(&p.velocity, fluid_velocity)) {
                     *f += d;
                 }
             }

@@ -62,6 +62,8 @@ pub struct Context<'a> {
     /// Time step by which history-dependent terms advance (tangential springs); 0 in the setup
     /// evaluation ([`crate::core::simulation::Simulation::initialise`]).
     pub dt: f64,
+    /// Time of the state evaluated (s): a flow that varies in time is taken at it.
+    pub time: f64,
 }
 
 /// What a force evaluation writes: the force and torque of the evaluated group, the moments

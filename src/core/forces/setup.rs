@@ -6,20 +6,21 @@
 use super::ForceTerm;
 pub use crate::core::checks::{invalid, non_negative, positive, Invalid};
 use crate::core::domain::Domain;
+use crate::core::flow::Flow;
 use crate::core::integrators::Scheme;
 use crate::core::neighbours::{PairRange, Skins};
 use crate::core::state::{largest_diameter, Species, Vec3};
 use nalgebra::Matrix3;
 
 /// The fluid the particles move in.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct Fluid {
     /// ρ_f (kg/m³).
     pub density: f64,
     /// μ (Pa s).
     pub viscosity: f64,
-    /// u_f (m/s), uniform.
-    pub velocity: Vec3,
+    /// u_f(x, t) (m/s).
+    pub flow: Flow,
 }
 
 /// The moments' mutual induction (the moments term, [`super::magnetisation`]).

@@ -590,7 +590,7 @@ mod tests {
             let mut neighbours = Neighbours::new(contact.pairs());
             let p = &state.particles;
             neighbours.update(&p.position, &domain, |_| true, &mut crate::core::timers::PhaseTimers::default());
-            let ctx = Context { domain: &domain, neighbours: &neighbours, dt: 1e-8 };
+            let ctx = Context { domain: &domain, neighbours: &neighbours, dt: 1e-8, time: 0.0 };
             let (p, mut out) = Forces::of(&mut state, ForceGroup::All);
             contact.apply(&ctx, p, &mut out);
             assert_eq!(alike(&state.particles).is_some(), b == a, "one size: R* and m* set once");
@@ -652,7 +652,7 @@ mod tests {
             }
             neighbours.update(&p.position, &domain, |_| true, &mut crate::core::timers::PhaseTimers::default());
             rebuilds += neighbours.rebuilt(near).is_some() as usize;
-            let ctx = Context { domain: &domain, neighbours: &neighbours, dt };
+            let ctx = Context { domain: &domain, neighbours: &neighbours, dt, time: 0.0 };
             let mut every_particle = state.clone();
             let (p, mut out) = Forces::of(&mut every_particle, ForceGroup::All);
             Contact::new(std::slice::from_ref(&species), ContactLaw::default(), true, near).apply(&ctx, p, &mut out);

@@ -1,0 +1,129 @@
+//! `[fluid]` and `[fluid.vessel]`: the carrier fluid, at rest, moving uniformly, or flowing along
+//! a straight cylindrical vessel (Poiseuille's steady flow, Womersley's pulsatile one). Its checks
+//! and the flow the drag laws read.
+
+use super::spec::FluidSpec;
+use super::{invalid, positive, SceneError};
+use crate::core::flow::{Flow, Harmonic, Vessel, VesselFlow, MAX_WOMERSLEY};
+use crate::core::forces::setup::Fluid;
+use crate::core::state::{Particles, Vec3};
+use nalgebra::{Complex, Unit};
+use serde::Deserialize;
+
+/// `[fluid.vessel]`: flow along a straight cylindrical vessel, zero outside it. Steady Poiseuille
+/// flow u = 2ū (1 − r²/R²) at the mean speed alone; with `period` and `harmonics`, Womersley's
+/// pulsatile flow whose flow rate is Q(t) = Q̄ (1 + Σ A_n cos(2π n t/period + φ_n)).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VesselSpec {
+    /// A point on the axis (m).
+    pub centre: [f64; 3],
+    /// The axis: the flow runs along it (any length, normalised).
+    pub axis: [f64; 3],
+    /// R (m).
+    pub radius: f64,
+    /// ū = Q̄/(πR²) (m/s): the centreline speed of steady flow is 2ū.
+    pub mean_speed: f64,
+    /// The pulse's period (s), with `harmonics`.
+    pub period: Option<f64>,
+    /// [n, A_n, φ_n] per harmonic of the flow rate: n ≥ 1 whole, A_n relative to Q̄, φ_n in rad.
+    #[serde(default)]
+    pub harmonics: Vec<[f64; 3]>,
+}
+
+/// Refuses a `[fluid]` table the solver cannot use, naming the key.
+pub fn check(f: &FluidSpec) -> Result<(), SceneError> {
+    positive("fluid.viscosity", f.viscosity)?;
+    super::non_negative("fluid.density", f.density)?;
+    let Some(v) = &f.vessel else { return Ok(()) };
+    if f.velocity != [0.0; 3] {
+        return Err(invalid(
+            "fluid.velocity",
+            format!("{:?}", f.velocity),
+            "a [fluid.vessel] sets the flow: leave fluid.velocity out",
+        ));
+    }
+    positive("fluid.vessel.radius", v.radius)?;
+    if Vec3::from(v.axis).norm() == 0.0 {
+        return Err(invalid("fluid.vessel.axis", format!("{:?}", v.axis), "must be a non-zero direction"));
+    }
+    match (v.period, v.harmonics.is_empty()) {
+        (None, false) => return Err(invalid("fluid.vessel.harmonics", v.harmonics.len(), "need fluid.vessel.period")),
+        (Some(period), true) => {
+            return Err(invalid("fluid.vessel.period", period, "needs fluid.vessel.harmonics (steady flow has none)"))
+        }
+        (Some(period), false) => positive("fluid.vessel.period", period)?,
+        (None, true) => {}
+    }
+    for (k, &[n, amplitude, _]) in v.harmonics.iter().enumerate() {
+        if !(n >= 1.0 && n.fract() == 0.0 && n <= u32::MAX as f64) {
+            return Err(invalid(
+                format!("fluid.vessel.harmonics[{k}][0]"),
+                n,
+                "the harmonic's order must be a whole number ≥ 1",
+            ));
+        }
+        if amplitude < 0.0 {
+            return Err(invalid(
+                format!("fluid.vessel.harmonics[{k}][1]"),
+                amplitude,
+                "the amplitude must be ≥ 0 (a phase of π reverses it)",
+            ));
+        }
+    }
+    if let Flow::Vessel(flow) = flow(f) {
+        for h in &flow.harmonics {
+            let alpha = flow.womersley_number(h.n);
+            if alpha > MAX_WOMERSLEY {
+                return Err(invalid(
+                    "fluid.vessel.period",
+                    flow.period,
+                    format!("gives harmonic {} a Womersley number {alpha:.1}, above the {MAX_WOMERSLEY} the Bessel series hold", h.n),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Refuses particles that start outside the vessel or through its wall (r + a > R): the vessel
+/// has no contact wall, and the flow is zero outside it.
+pub fn check_particles(f: &FluidSpec, particles: &Particles) -> Result<(), SceneError> {
+    let Flow::Vessel(flow) = self::flow(f) else { return Ok(()) };
+    for (i, (x, a)) in particles.position.iter().zip(&particles.radius).enumerate() {
+        let r = flow.vessel.radial(*x);
+        if r + a > flow.vessel.radius {
+            return Err(invalid(
+                "fluid.vessel.radius",
+                flow.vessel.radius,
+                format!("particle {i} at {r:.4e} m from the axis (radius {a:.4e} m) is not inside the vessel"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The fluid's velocity field.
+pub fn flow(f: &FluidSpec) -> Flow {
+    let Some(v) = &f.vessel else { return Flow::Uniform(Vec3::from(f.velocity)) };
+    let vessel =
+        Vessel { centre: Vec3::from(v.centre), axis: Unit::new_normalize(Vec3::from(v.axis)), radius: v.radius };
+    let mut flow = VesselFlow::poiseuille(vessel, v.mean_speed, f.density, f.viscosity);
+    if let Some(period) = v.period {
+        flow.period = period;
+        flow.harmonics = v
+            .harmonics
+            .iter()
+            .map(|&[n, amplitude, phase]| Harmonic {
+                n: n as u32,
+                q: Complex::from_polar(amplitude * flow.mean_flow, phase),
+            })
+            .collect();
+    }
+    Flow::Vessel(flow)
+}
+
+/// The fluid the force terms see.
+pub fn fluid(f: &FluidSpec) -> Fluid {
+    Fluid { density: f.density, viscosity: f.viscosity, flow: flow(f) }
+}
