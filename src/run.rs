@@ -271,7 +271,7 @@ fn run_in_pool(scene: &Scene, output: &Path, options: &RunOptions) -> Result<Run
         }
         let step = sim.state.step;
         if step % per_frame == 0 || step == total {
-            if let Err(e) = check_space(scene, output, writer.frames(), sim.state.contacts.pairs.len()) {
+            if let Err(e) = check_space(scene, output, writer.frames(), sim.state.history.pairs.len()) {
                 bar.abandon();
                 writer.finish(status::INTERRUPTED, &e.to_string(), cost(&start))?;
                 return Err(e);

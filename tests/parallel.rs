@@ -56,7 +56,7 @@ fn one_and_two_threads_give_identical_bits() {
     for (dipole, steps) in cases {
         let scene = crowd(MIN_PARALLEL_LEN + 500, dipole, steps);
         let (one, two) = (run_on(&scene, 1), run_on(&scene, 2));
-        assert!(steps < 60 || !one.contacts.pairs.is_empty(), "the test should exercise contacts");
+        assert!(steps < 60 || !one.history.pairs.is_empty(), "the test should exercise contacts");
         assert_eq!(one, two, "{dipole}: states differ between 1 and 2 threads");
     }
 }
@@ -69,7 +69,7 @@ fn one_and_two_threads_give_identical_bits() {
 fn uneven_shares_give_the_bits_of_one_thread() {
     let scene = crowd(MIN_PARALLEL_LEN + 500, "induction = \"paper\"\ncutoff_diameters = 15.0", 60);
     let one = run_on(&scene, 1);
-    assert!(!one.contacts.pairs.is_empty(), "the test should exercise contacts");
+    assert!(!one.history.pairs.is_empty(), "the test should exercise contacts");
     for first in [0.3, 0.7] {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
         let two = pool.install(|| {
@@ -106,12 +106,12 @@ fn a_sheared_packed_bed_gives_identical_bits_on_one_two_and_three_threads() {
     assert_eq!(scene.initial.len(), 4631);
     assert!(scene.initial.len() > MIN_PARALLEL_LEN);
     let one = run_on(&scene, 1);
-    let coordination = 2.0 * one.contacts.pairs.len() as f64 / scene.initial.len() as f64;
+    let coordination = 2.0 * one.history.pairs.len() as f64 / scene.initial.len() as f64;
     assert!(coordination > 9.0, "coordination {coordination}: the bed should stay packed");
     // With ν = 0.5, kt = kn: a spring at the Coulomb limit is about μ δ long (δ the lattice's
     // overlap, μ = 0.5); the longest springs reach it, so contacts slide.
     let overlap = d - spacing;
-    let mut springs: Vec<f64> = one.contacts.pairs.iter().map(|(_, s)| s.norm()).collect();
+    let mut springs: Vec<f64> = one.history.pairs.iter().map(|(_, s)| s.norm()).collect();
     springs.sort_by(f64::total_cmp);
     let (median, longest) = (springs[springs.len() / 2], springs[springs.len() - 1]);
     assert!(median > 0.05 * overlap, "median spring {median:e} m: the bed should shear");
@@ -210,7 +210,7 @@ fn numbering_particles_in_space_changes_only_the_numbering() {
         "consecutive particles {morton_neighbours:e} m apart in all against {placed_neighbours:e}"
     );
     let (a, b) = (run_on(&placed, 1), run_on(&spatial, 1));
-    assert!(!a.contacts.pairs.is_empty(), "the test should exercise contacts");
+    assert!(!a.history.pairs.is_empty(), "the test should exercise contacts");
     let worst = matching
         .iter()
         .enumerate()

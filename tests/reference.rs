@@ -158,7 +158,7 @@ fn multi_particle_decks_run_and_match_magdem() {
     let reference_positions =
         magdem::io::trajectory::Trajectory::open(&native).unwrap().all_vectors("position").unwrap();
     let contacts =
-        magdem::io::trajectory::Trajectory::open(&native).unwrap().checkpoint().unwrap().0.contacts.walls.len();
+        magdem::io::trajectory::Trajectory::open(&native).unwrap().checkpoint().unwrap().0.history.walls.len();
     assert!(contacts > 0, "the scene should end with wall contacts");
     for engine in engines {
         let out = dir.join(format!("{}.h5", engine.name()));

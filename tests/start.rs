@@ -61,8 +61,8 @@ fn a_started_run_takes_the_stored_state_and_its_springs() {
     let (p, q) = (&started.initial, &stored.particles);
     assert_eq!((&p.position, &p.velocity, &p.angular_velocity), (&q.position, &q.velocity, &q.angular_velocity));
     assert_eq!((&p.radius, &p.mass, &p.inertia), (&q.radius, &q.mass, &q.inertia));
-    assert_eq!(started.initial_contacts, stored.contacts, "the springs, bitwise");
-    let springs = &started.initial_contacts;
+    assert_eq!(started.initial_history, stored.history, "the springs, bitwise");
+    let springs = &started.initial_history;
     let coordination = 2.0 * springs.pairs.len() as f64 / p.len() as f64;
     assert!(coordination > 6.0, "coordination {coordination}: the bed should stay packed");
     assert!(!springs.walls.is_empty(), "the bed presses on its walls");
@@ -95,7 +95,7 @@ fn a_started_run_takes_the_stored_state_and_its_springs() {
     // kick's damping, the contacts at the limit), far less than by dropping the springs.
     let error = max_difference(&run_in_memory(&started), &whole);
     let mut forgetful = started.clone();
-    forgetful.initial_contacts = Default::default();
+    forgetful.initial_history = Default::default();
     let without = max_difference(&run_in_memory(&forgetful), &whole);
     assert!(
         without > 50.0 * error,
@@ -172,7 +172,7 @@ fn a_start_numbered_in_space_is_the_same_state_renamed() {
             (q.velocity[k], q.angular_velocity[k], q.radius[k])
         );
     }
-    let (a, b) = (&kept.initial_contacts, &spatial.initial_contacts);
+    let (a, b) = (&kept.initial_history, &spatial.initial_history);
     assert_eq!((a.pairs.len(), a.walls.len()), (b.pairs.len(), b.walls.len()));
     let mut flipped = 0;
     for ((i, j), spring) in &a.pairs {
@@ -197,7 +197,7 @@ fn a_start_numbered_in_space_is_the_same_state_renamed() {
     let apart =
         (0..p.len()).map(|i| (x.particles.position[i] - y.particles.position[new[i]]).norm()).fold(0.0, f64::max);
     let mut forgetful = spatial.clone();
-    forgetful.initial_contacts = Default::default();
+    forgetful.initial_history = Default::default();
     let z = run_in_memory(&forgetful);
     let without =
         (0..p.len()).map(|i| (x.particles.position[i] - z.particles.position[new[i]]).norm()).fold(0.0, f64::max);

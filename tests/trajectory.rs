@@ -68,8 +68,8 @@ fn assert_identical(a: &Path, b: &Path) {
     let (sb, fb) = tb.checkpoint().unwrap();
     assert_eq!((sa.step, fa), (sb.step, fb));
     assert_eq!(sa.particles, sb.particles, "final particle state differs");
-    assert_eq!(sa.contacts, sb.contacts, "final contact history differs");
-    assert!(!sa.contacts.pairs.is_empty(), "the test scene should end with contacts");
+    assert_eq!(sa.history, sb.history, "final contact history differs");
+    assert!(!sa.history.pairs.is_empty(), "the test scene should end with contacts");
     for name in ["position", "velocity", "angular_velocity", "moment", "force", "torque"] {
         let (x, y) = (ta.all_vectors(name).unwrap(), tb.all_vectors(name).unwrap());
         assert_eq!(x.shape(), y.shape(), "{name}");
@@ -575,9 +575,8 @@ fn every_state_field_round_trips_through_the_checkpoint() {
         }
     }
     state.particles.has_permanent_moments = true;
-    state.contacts.pairs =
-        vec![((0, 3), Vec3::new(1e-9, -2e-9, 3e-9)), ((4, 59), Vec3::new(-1e-10, 0.0, 5e-10))].into();
-    state.contacts.walls = vec![((2, 1), Vec3::new(0.0, 7e-10, -1e-10)), ((2, 4), Vec3::new(3e-11, 0.0, 0.0))];
+    state.history.pairs = vec![((0, 3), Vec3::new(1e-9, -2e-9, 3e-9)), ((4, 59), Vec3::new(-1e-10, 0.0, 5e-10))].into();
+    state.history.walls = vec![((2, 1), Vec3::new(0.0, 7e-10, -1e-10)), ((2, 4), Vec3::new(3e-11, 0.0, 0.0))];
     (state.step, state.time, state.next_substep) = (123_456, 1.23456e-3, Some(3.3e-10));
     // Renumbered (slots in reverse): the checkpoint keeps the slots and their ids.
     state.renumber(&magdem::core::renumber::Renumbering::new((0..60).rev().collect()));

@@ -292,8 +292,8 @@ impl<'a> Bench<'a> {
         let particles = state.particles.len() as f64;
         record.contacts.push(Contacts {
             case: case.into(),
-            pairs_per_particle: state.contacts.pairs.len() as f64 / particles,
-            walls_per_particle: state.contacts.walls.len() as f64 / particles,
+            pairs_per_particle: state.history.pairs.len() as f64 / particles,
+            walls_per_particle: state.history.walls.len() as f64 / particles,
         });
     }
 

@@ -159,7 +159,7 @@ fn describe(path: &Path) -> Result<(), Error> {
         state.step,
         state.time,
         frames,
-        state.contacts.pairs.len()
+        state.history.pairs.len()
     );
     Ok(())
 }

@@ -33,7 +33,10 @@ pub struct ForceField {
 impl ForceField {
     /// The force field of `terms`, in the order given but with a constant term first; the
     /// moments term, if any, must come before the terms that read moments.
+    /// The force field of `terms` (at most one of which keeps a per-contact history).
     pub fn new(domain: Domain, mut terms: Vec<Box<dyn ForceTerm>>) -> Self {
+        let keepers: Vec<&str> = terms.iter().filter(|t| t.keeps_history()).map(|t| t.name()).collect();
+        assert!(keepers.len() <= 1, "one term may keep the per-contact history, not {keepers:?}");
         terms.sort_by_key(|t| !t.is_constant());
         let neighbours = Neighbours::new(terms.iter().filter_map(|t| t.pairs()));
         Self {

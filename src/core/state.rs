@@ -438,11 +438,16 @@ impl Particles {
 /// Wall faces of the box: 0..6 = x-lo, x-hi, y-lo, y-hi, z-lo, z-hi.
 pub type WallFace = u8;
 
-/// Tangential spring (shear history) of every active contact, sorted by key: the order in which
-/// the contact term visits contacts, so it finds each spring by a merge rather than a hash, and a
-/// checkpoint stores them in a deterministic order.
+/// Per-contact history, as LAMMPS' `fix neigh/history` keeps `size_history` values per pair: a
+/// 3-vector per touching pair and per wall contact, kept across steps for the one force term that
+/// declares it ([`crate::core::forces::ForceTerm::keeps_history`]; the contact's tangential
+/// springs). The framework holds it here, renumbers it, checkpoints it and negates a pair's value
+/// when its ends swap; the term reads and rewrites it through
+/// [`crate::core::forces::Forces::history`]. Sorted by key: the order in which the term visits
+/// contacts, so it finds each value by a merge rather than a hash, and a checkpoint stores them
+/// in a deterministic order.
 #[derive(Debug, Clone, Default, PartialEq)]
-pub struct ContactHistory {
+pub struct PairHistory {
     pub pairs: PairSprings,
     pub walls: Vec<WallSpring>,
 }
@@ -555,7 +560,7 @@ impl Fields {
 pub struct State {
     pub particles: Particles,
     pub fields: Fields,
-    pub contacts: ContactHistory,
+    pub history: PairHistory,
     pub diagnostics: ContactDiagnostics,
     /// Number of steps taken since t = 0.
     pub step: u64,
@@ -574,8 +579,7 @@ pub struct State {
 macro_rules! state_vectors {
     ($state:expr, $position:ident => $access:expr) => {{
         // `ids` are stored as the checkpoint's `id` (and index the fixed properties).
-        let State { particles, fields, contacts: _, diagnostics: _, step: _, time: _, next_substep: _, ids: _ } =
-            $state;
+        let State { particles, fields, history: _, diagnostics: _, step: _, time: _, next_substep: _, ids: _ } = $state;
         let Particles {
             position: $position,
             velocity,
@@ -653,7 +657,7 @@ impl State {
     /// skipped with `..`), so a field added to [`State`], [`Particles`] or [`Fields`] does not
     /// compile until it says what a renumbering does to it.
     pub fn renumber(&mut self, r: &Renumbering) {
-        let State { particles, fields, contacts, diagnostics, step: _, time: _, next_substep: _, ids } = self;
+        let State { particles, fields, history, diagnostics, step: _, time: _, next_substep: _, ids } = self;
         let Particles {
             species,
             radius,
@@ -690,7 +694,7 @@ impl State {
         ] {
             r.permute(v);
         }
-        contacts.renumber(r);
+        history.renumber(r);
         // The diagnostics name the pair of the last evaluation.
         if !r.is_empty() {
             let (i, j) = diagnostics.max_overlap_pair;
@@ -699,7 +703,7 @@ impl State {
     }
 }
 
-impl ContactHistory {
+impl PairHistory {
     /// The history with old slot i renamed `r.to(i)`, sorted again. A pair whose ends swap
     /// stores the spring of j against i: the relative tangential displacement, negated.
     pub fn renumber(&mut self, r: &Renumbering) {
@@ -784,8 +788,8 @@ mod tests {
         let mut state = State::new(p);
         state.fields.moment.iter_mut().enumerate().for_each(|(k, m)| m.z = k as f64);
         let spring = Vec3::new(1.0, 2.0, 3.0);
-        state.contacts.pairs = vec![((0, 3), spring), ((1, 2), -spring)].into();
-        state.contacts.walls = vec![((4, 0), spring)];
+        state.history.pairs = vec![((0, 3), spring), ((1, 2), -spring)].into();
+        state.history.walls = vec![((4, 0), spring)];
         let original = state.clone();
         let r = Renumbering::new(vec![3, 4, 0, 2, 1]);
         state.renumber(&r);
@@ -798,8 +802,8 @@ mod tests {
         }
         // (0, 3) → (2, 0) and (1, 2) → (4, 3): both swapped, so stored as (0, 2) and (3, 4) with
         // their springs negated.
-        assert_eq!(state.contacts.pairs.iter().copied().collect::<Vec<_>>(), [((0, 2), -spring), ((3, 4), spring)]);
-        assert_eq!(state.contacts.walls, [((1, 0), spring)]);
+        assert_eq!(state.history.pairs.iter().copied().collect::<Vec<_>>(), [((0, 2), -spring), ((3, 4), spring)]);
+        assert_eq!(state.history.walls, [((1, 0), spring)]);
         assert_eq!(state.in_id_order(&state.particles.position), *original.particles.position);
         let inverse = Renumbering::new((0..5).map(|i| r.to(i)).collect());
         state.renumber(&inverse);

@@ -6,7 +6,7 @@
 //! The `checkpoint` group holds the full state (forces and contact history included) and is
 //! rewritten in place with every frame and on interruption; `--resume` continues from it.
 
-use crate::core::state::{ContactHistory, Particles, State, Vec3};
+use crate::core::state::{PairHistory, Particles, State, Vec3};
 use hdf5::types::VarLenUnicode;
 use hdf5::{Dataset, Extent, File, Group, SimpleExtents};
 use ndarray::{s, Array1, Array2, Array3};
@@ -312,7 +312,7 @@ impl TrajectoryWriter {
             let p = &state.particles;
             // By particle id, in id order.
             let mut active: Vec<(u32, u32, f64)> = state
-                .contacts
+                .history
                 .pairs
                 .iter()
                 .map(|&((i, j), _)| {
@@ -350,7 +350,7 @@ impl TrajectoryWriter {
                 Err(_) => ck.new_dataset::<u32>().shape(self.n).create("id")?,
             };
             ids.write(&Array1::from(state.ids.clone()))?;
-            let (pairs, walls) = (&state.contacts.pairs, &state.contacts.walls);
+            let (pairs, walls) = (&state.history.pairs, &state.history.walls);
             let keys =
                 Array2::from_shape_vec((pairs.len(), 2), pairs.iter().flat_map(|((i, j), _)| [*i, *j]).collect())
                     .expect("two keys per spring");
@@ -476,7 +476,7 @@ impl Trajectory {
         let wkeys: Array2<u32> = ck.dataset("wall_keys")?.read_2d()?;
         let wshear: Array2<f64> = ck.dataset("wall_shear")?.read_2d()?;
         let pairs: Vec<_> = keys.rows().into_iter().zip(rows_vec3(&shear)).map(|(k, s)| ((k[0], k[1]), s)).collect();
-        let mut contacts = ContactHistory { pairs: pairs.into(), ..Default::default() };
+        let mut contacts = PairHistory { pairs: pairs.into(), ..Default::default() };
         for (k, s) in wkeys.rows().into_iter().zip(rows_vec3(&wshear)) {
             contacts.walls.push(((k[0], k[1] as u8), s));
         }
@@ -485,7 +485,7 @@ impl Trajectory {
         let time: f64 = ck.attr("time")?.read_scalar()?;
         let frames: u64 = ck.attr("frames")?.read_scalar()?;
         let next_substep = ck.attr("next_substep").and_then(|a| a.read_scalar::<f64>()).ok().filter(|h| h.is_finite());
-        (state.contacts, state.step, state.time, state.next_substep) = (contacts, step, time, next_substep);
+        (state.history, state.step, state.time, state.next_substep) = (contacts, step, time, next_substep);
         Ok((state, frames as usize))
     }
 }

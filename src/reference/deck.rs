@@ -431,13 +431,13 @@ fn input_deck(engine: Engine, scene: &Scene, data: &Path, dump: &str, coupling: 
     );
     s += dialect.settings(species);
     let _ = writeln!(s, "read_data {}", data.display());
-    if !scene.initial_contacts.pairs.is_empty() || !scene.initial_contacts.walls.is_empty() {
+    if !scene.initial_history.pairs.is_empty() || !scene.initial_history.walls.is_empty() {
         let _ = writeln!(
             s,
             "# Started from a trajectory: positions and velocities as stored; the {} pair and {} wall tangential\n\
              # springs it held start at zero here (magdem keeps them).",
-            scene.initial_contacts.pairs.len(),
-            scene.initial_contacts.walls.len()
+            scene.initial_history.pairs.len(),
+            scene.initial_history.walls.len()
         );
     }
     let _ = writeln!(

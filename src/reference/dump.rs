@@ -62,7 +62,7 @@ pub fn read(engine: Engine, path: &Path, scene: &Scene) -> Result<Vec<State>, Re
         let p = &state.particles;
         cells.pairs_within(&p.position, &scene.domain, Some(largest_d), &mut pairs);
         let touching = pairs.iter().filter(|q| q.dist < p.radius[q.i as usize] + p.radius[q.j as usize]);
-        state.contacts.pairs = touching.map(|q| ((q.i, q.j), Vec3::zeros())).collect::<Vec<_>>().into();
+        state.history.pairs = touching.map(|q| ((q.i, q.j), Vec3::zeros())).collect::<Vec<_>>().into();
         frames.push(state);
     }
     if frames.is_empty() {

@@ -17,7 +17,7 @@ use crate::core::neighbours::{PairRange, Skins};
 use crate::core::simulation::{ForceField, RenumberSchedule, Simulation};
 use crate::core::stability::{Monitor, StepEstimate};
 use crate::core::state::{
-    largest_diameter, ContactHistory, Particles, Saturation, SaturationLaw, SizeDistribution, SizeLaw, Species, State,
+    largest_diameter, PairHistory, Particles, Saturation, SaturationLaw, SizeDistribution, SizeLaw, Species, State,
     Vec3,
 };
 use nalgebra::Matrix3;
@@ -63,7 +63,7 @@ pub struct Scene {
     pub species: Vec<Species>,
     pub initial: Particles,
     /// The contact history the run starts with (from `[start]`; else empty).
-    pub initial_contacts: ContactHistory,
+    pub initial_history: PairHistory,
     pub estimate: StepEstimate,
     /// Non-fatal findings (e.g. a gradient that is not divergence-free, dt above the estimate).
     pub warnings: Vec<String>,
@@ -128,13 +128,13 @@ impl Scene {
             }
         }
         check_forces(&spec, &domain, &species, &mut warnings)?;
-        let (initial, initial_contacts) = match &spec.start {
+        let (initial, initial_history) = match &spec.start {
             Some(start) => {
                 let started = start::load(&spec, start, dir, &domain, &species, &mut warnings)?;
                 hasher.update(&started.digest);
-                (started.particles, started.contacts)
+                (started.particles, started.history)
             }
-            None => (place_particles(&spec, &domain, &species)?, ContactHistory::default()),
+            None => (place_particles(&spec, &domain, &species)?, PairHistory::default()),
         };
         if initial.is_empty() {
             return Err(invalid("particles", 0, NO_PARTICLES));
@@ -161,7 +161,7 @@ impl Scene {
                 OnUnstable::Warn => warnings.push(format!("integration.dt = {dt:e} {why}")),
             }
         }
-        let scene = Self { spec, text, hash, domain, species, initial, initial_contacts, estimate, warnings };
+        let scene = Self { spec, text, hash, domain, species, initial, initial_history, estimate, warnings };
         let k = scene.spec.integration.slow_every();
         if !scene.steps_per_frame().is_multiple_of(k) || !scene.total_steps().is_multiple_of(k) {
             return Err(invalid(
@@ -210,7 +210,7 @@ impl Scene {
 
     /// The initial state (forces not yet evaluated).
     pub fn initial_state(&self) -> State {
-        State { contacts: self.initial_contacts.clone(), ..State::new(self.initial.clone()) }
+        State { history: self.initial_history.clone(), ..State::new(self.initial.clone()) }
     }
 
     /// The initial state with the magnetic forces evaluated once (the moments at t = 0 in

@@ -4,7 +4,7 @@ use super::spec::ParticleOrder;
 use super::{fmt3, invalid, SceneError, SceneSpec, StartSpec};
 use crate::core::domain::Domain;
 use crate::core::renumber::{morton_order, Renumbering};
-use crate::core::state::{ContactHistory, Particles, Species, Vec3};
+use crate::core::state::{PairHistory, Particles, Species, Vec3};
 use crate::io::trajectory::Trajectory;
 use sha2::{Digest, Sha256};
 use std::path::Path;
@@ -13,7 +13,7 @@ use std::path::Path;
 /// it, so a run started from another state is another scene).
 pub(super) struct Started {
     pub particles: Particles,
-    pub contacts: ContactHistory,
+    pub history: PairHistory,
     pub digest: Vec<u8>,
 }
 
@@ -88,7 +88,7 @@ pub(super) fn load(
         }
     }
 
-    let mut contacts = state.contacts;
+    let mut contacts = state.history;
     if start.order != ParticleOrder::Placement {
         contacts.renumber(&Renumbering::new(visit.iter().map(|&i| i as u32).collect()));
     }
@@ -125,7 +125,7 @@ pub(super) fn load(
         h.update([*face]);
         s.iter().for_each(|c| h.update(c.to_le_bytes()));
     }
-    Ok(Started { particles, contacts, digest: h.finalize().to_vec() })
+    Ok(Started { particles, history: contacts, digest: h.finalize().to_vec() })
 }
 
 fn wrapped(x: &Vec3, domain: &Domain) -> Vec3 {

@@ -299,7 +299,7 @@ mod tests {
     use crate::core::domain::Domain;
     use crate::core::forces::wall_drag::PlaneWall;
     use crate::core::neighbours::Neighbours;
-    use crate::core::state::{ContactDiagnostics, ContactHistory};
+    use crate::core::state::{ContactDiagnostics, PairHistory};
 
     /// Writing the drag onto the starting force and zero torques in one pass gives the bits of
     /// starting them and then adding the drag: for every start (none, uniform, per particle),
@@ -342,12 +342,12 @@ mod tests {
                             let (mut force, mut torque) =
                                 (vec![Vec3::repeat(f64::NAN); n], vec![Vec3::repeat(f64::NAN); n]);
                             let (mut moment, mut contacts, mut diagnostics) =
-                                (vec![Vec3::zeros(); n], ContactHistory::default(), ContactDiagnostics::default());
+                                (vec![Vec3::zeros(); n], PairHistory::default(), ContactDiagnostics::default());
                             let mut out = Forces {
                                 force: &mut force,
                                 torque: &mut torque,
                                 moment: &mut moment,
-                                contacts: &mut contacts,
+                                history: &mut contacts,
                                 diagnostics: &mut diagnostics,
                             };
                             if !fused || !drag.apply_from(&ctx, &p, &mut out, start.as_ref()) {

@@ -19,7 +19,7 @@ pub mod wall_drag;
 use super::domain::Domain;
 use super::neighbours::{Neighbours, PairRange};
 pub use super::renumber::Renumbering;
-use super::state::{ContactDiagnostics, ContactHistory, Particles, State, Vec3};
+use super::state::{ContactDiagnostics, PairHistory, Particles, State, Vec3};
 
 /// [`ForcesSpec`] with the table `[forces.$name]` of each term, read as its module's `$spec`.
 macro_rules! registry {
@@ -67,13 +67,14 @@ pub struct Context<'a> {
 }
 
 /// What a force evaluation writes: the force and torque of the evaluated group, the moments
-/// (written by the moments term, read by the magnetic force terms after it), and the contact
-/// history and diagnostics (written by the contact term).
+/// (written by the moments term, read by the magnetic force terms after it), the per-contact
+/// history of the term that keeps one ([`ForceTerm::keeps_history`]), and what the stability
+/// monitor reads of the contacts.
 pub struct Forces<'a> {
     pub force: &'a mut [Vec3],
     pub torque: &'a mut [Vec3],
     pub moment: &'a mut [Vec3],
-    pub contacts: &'a mut ContactHistory,
+    pub history: &'a mut PairHistory,
     pub diagnostics: &'a mut ContactDiagnostics,
 }
 
@@ -157,6 +158,11 @@ pub trait ForceTerm: Send {
     ) -> bool {
         false
     }
+    /// Whether the term keeps a value per contact across steps in [`Forces::history`] (LAMMPS'
+    /// `size_history`). The framework holds, renumbers and checkpoints it; one term may keep it.
+    fn keeps_history(&self) -> bool {
+        false
+    }
     /// The particles were renumbered between two step calls: per-particle values the term holds
     /// follow `r` ([`Renumbering::permute`]), particle indices it holds are renamed or dropped.
     /// Required, so that a term cannot hold particle data and miss a renumbering.
@@ -220,11 +226,11 @@ impl ForceGroup {
 impl<'a> Forces<'a> {
     /// The arrays `group` writes, from `state`; the particles stay readable beside them.
     pub fn of(state: &'a mut State, group: ForceGroup) -> (&'a Particles, Self) {
-        let State { particles, fields, contacts, diagnostics, .. } = state;
+        let State { particles, fields, history, diagnostics, .. } = state;
         let (force, torque) = match group {
             ForceGroup::Slow => (&mut fields.slow_force, &mut fields.slow_torque),
             ForceGroup::All | ForceGroup::Fast => (&mut fields.force, &mut fields.torque),
         };
-        (particles, Forces { force, torque, moment: &mut fields.moment, contacts, diagnostics })
+        (particles, Forces { force, torque, moment: &mut fields.moment, history, diagnostics })
     }
 }

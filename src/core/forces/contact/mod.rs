@@ -355,7 +355,7 @@ impl Contact {
     }
 
     fn apply_pairs(&mut self, ctx: &Context, p: &Particles, out: &mut Forces, diag: &mut ContactDiagnostics) {
-        let history = std::mem::take(&mut out.contacts.pairs);
+        let history = std::mem::take(&mut out.history.pairs);
         let (shares, size) = parallel::split_of(out.force.len());
         let mut slots = std::mem::take(&mut self.shares);
         slots.resize_with(shares.max(slots.len()), Default::default);
@@ -384,7 +384,7 @@ impl Contact {
             }
             std::mem::swap(fresh, piece);
         }
-        out.contacts.pairs = PairSprings::from_pieces(pieces);
+        out.history.pairs = PairSprings::from_pieces(pieces);
         self.spare_pairs = history.into_pieces();
         self.shares = slots;
     }
@@ -393,7 +393,7 @@ impl Contact {
     /// after all their pair contacts (as in the serial order), its springs and largest overlap
     /// then gathered in share order.
     fn apply_walls(&mut self, ctx: &Context, p: &Particles, out: &mut Forces, diag: &mut ContactDiagnostics) {
-        let history = std::mem::take(&mut out.contacts.walls);
+        let history = std::mem::take(&mut out.history.walls);
         let mut found = std::mem::take(&mut self.wall_found);
         self.wall_scan.find(p, ctx.domain, ctx.neighbours.rebuilt(self.near), &mut found);
         let (shares, size) = parallel::split_of(out.force.len());
@@ -435,7 +435,7 @@ impl Contact {
                 *diag = *share_diag;
             }
         }
-        out.contacts.walls = next;
+        out.history.walls = next;
         self.wall_found = found;
         self.wall_shares = slots;
     }
@@ -504,6 +504,10 @@ impl ForceTerm for Contact {
     }
     fn pairs(&self) -> Option<PairRange> {
         Some(self.near)
+    }
+    /// The tangential springs.
+    fn keeps_history(&self) -> bool {
+        true
     }
     fn apply(&mut self, ctx: &Context, p: &Particles, out: &mut Forces) {
         let mut diag = ContactDiagnostics::default();
@@ -594,7 +598,7 @@ mod tests {
             let (p, mut out) = Forces::of(&mut state, ForceGroup::All);
             contact.apply(&ctx, p, &mut out);
             assert_eq!(alike(&state.particles).is_some(), b == a, "one size: R* and m* set once");
-            assert_eq!((state.contacts.pairs.len(), state.contacts.walls.len()), (4, 2));
+            assert_eq!((state.history.pairs.len(), state.history.walls.len()), (4, 2));
             let hertz = |si: u16, sj: u16, r_eff: f64| {
                 let e_star = PairMaterial::new(&species[si as usize], &species[sj as usize]).e_star;
                 4.0 / 3.0 * e_star * (r_eff * delta).sqrt() * delta
@@ -658,7 +662,7 @@ mod tests {
             Contact::new(std::slice::from_ref(&species), ContactLaw::default(), true, near).apply(&ctx, p, &mut out);
             let (p, mut out) = Forces::of(&mut state, ForceGroup::All);
             contact.apply(&ctx, p, &mut out);
-            let (kept, all) = (&state.contacts.walls, &every_particle.contacts.walls);
+            let (kept, all) = (&state.history.walls, &every_particle.history.walls);
             assert!(
                 kept == all,
                 "step {step}: {} wall contacts among the candidates, {} testing every particle",
@@ -666,7 +670,7 @@ mod tests {
                 all.len()
             );
             assert!(state.fields.force == every_particle.fields.force, "step {step}: forces differ");
-            found += state.contacts.walls.len();
+            found += state.history.walls.len();
         }
         assert!(rebuilds > 20, "{rebuilds} rebuilds");
         assert!(found > 1000, "{found} wall contacts over the run");
