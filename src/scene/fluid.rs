@@ -2,13 +2,27 @@
 //! a straight cylindrical vessel (Poiseuille's steady flow, Womersley's pulsatile one). Its checks
 //! and the flow the drag laws read.
 
-use super::spec::FluidSpec;
 use super::{invalid, positive, SceneError};
 use crate::core::flow::{Flow, Harmonic, Vessel, VesselFlow, MAX_WOMERSLEY};
 use crate::core::forces::setup::Fluid;
 use crate::core::state::{Particles, Vec3};
 use nalgebra::{Complex, Unit};
 use serde::Deserialize;
+
+/// `[fluid]`: the carrier fluid, still, moving uniformly, or flowing along a vessel.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FluidSpec {
+    /// kg/m³
+    pub density: f64,
+    /// Dynamic viscosity, Pa·s
+    pub viscosity: f64,
+    /// m/s, uniform (default at rest)
+    #[serde(default)]
+    pub velocity: [f64; 3],
+    /// Flow along a straight cylindrical vessel instead ([`VesselSpec`]).
+    pub vessel: Option<VesselSpec>,
+}
 
 /// `[fluid.vessel]`: flow along a straight cylindrical vessel, zero outside it. Steady Poiseuille
 /// flow u = 2ū (1 − r²/R²) at the mean speed alone; with `period` and `harmonics`, Womersley's

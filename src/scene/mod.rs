@@ -294,7 +294,7 @@ fn near_range(spec: &SceneSpec, species: &[Species]) -> f64 {
 }
 
 /// What the terms' specs see of the scene, their pair ranges padded by `skins`.
-fn term_context<'a>(spec: &SceneSpec, domain: &'a Domain, species: &'a [Species], skins: Skins) -> SceneContext<'a> {
+fn term_context<'a>(spec: &'a SceneSpec, domain: &'a Domain, species: &'a [Species], skins: Skins) -> SceneContext<'a> {
     let range = near_range(spec, species);
     SceneContext {
         domain,
@@ -304,6 +304,8 @@ fn term_context<'a>(spec: &SceneSpec, domain: &'a Domain, species: &'a [Species]
         scheme: spec.integration.scheme,
         steps_per_frame: steps_per_frame(spec),
         pairs: Pairs { near: PairRange::Within { range, skin: skins.near * range }, skins },
+        forces: &spec.forces,
+        seed: spec.seed,
     }
 }
 

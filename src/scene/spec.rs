@@ -4,6 +4,7 @@
 use crate::core::integrators::Scheme;
 use serde::Deserialize;
 
+pub use super::fluid::{FluidSpec, VesselSpec};
 pub use crate::core::forces::contact::{ContactSpec, NormalSpec, TangentialSpec};
 pub use crate::core::forces::dipole::{DipoleSpec, InductionSpec};
 pub use crate::core::forces::drag::{DragLawSpec, DragSpec, ShieldingSpec};
@@ -106,21 +107,6 @@ impl BoundarySpec {
     pub fn axis(&self, k: usize) -> Boundary {
         [self.x, self.y, self.z][k]
     }
-}
-
-/// `[fluid]`: the carrier fluid, still, moving uniformly, or flowing along a vessel.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct FluidSpec {
-    /// kg/m³
-    pub density: f64,
-    /// Dynamic viscosity, Pa·s
-    pub viscosity: f64,
-    /// m/s, uniform (default at rest)
-    #[serde(default)]
-    pub velocity: [f64; 3],
-    /// Flow along a straight cylindrical vessel instead ([`super::fluid::VesselSpec`]).
-    pub vessel: Option<super::fluid::VesselSpec>,
 }
 
 /// `[field]`: B_ext(x) = b0 + gradient · x, x in scene coordinates.

@@ -450,6 +450,27 @@ fn default_refactor_every() -> u64 {
     1
 }
 
+impl DragSpec {
+    /// What makes this drag other than a lone sphere's Stokes drag 6π μ a (Schiller–Naumann's at
+    /// vanishing Re): the key, its value and why; `None` when it is that drag.
+    pub fn unlike_stokes(&self) -> Option<(&'static str, String, &'static str)> {
+        if self.law == DragLawSpec::Rpy {
+            return Some(("forces.drag.law", "rpy".into(), "the RPY drag's correlated noise is not built yet"));
+        }
+        if self.shielding != ShieldingSpec::None {
+            return Some((
+                "forces.drag.shielding",
+                "paper".into(),
+                "the shielded coefficient changes with the neighbours",
+            ));
+        }
+        if self.wall.is_some() {
+            return Some(("forces.drag.wall", "{…}".into(), "a wall changes the drag near it"));
+        }
+        None
+    }
+}
+
 impl TermSpec for DragSpec {
     fn check(&self, ctx: &SceneContext) -> Result<(), Invalid> {
         let Some(fluid) = &ctx.fluid else {

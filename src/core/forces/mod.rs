@@ -14,6 +14,7 @@ pub mod hydrodynamics;
 pub mod magnetisation;
 pub mod setup;
 pub mod shielding;
+pub mod thermal;
 pub mod wall_drag;
 
 use super::domain::Domain;
@@ -52,6 +53,7 @@ registry! {
     drag: DragSpec,
     gravity: GravitySpec,
     contact: ContactSpec,
+    thermal: ThermalSpec,
 }
 
 /// What a term may read besides the particles during one force evaluation.

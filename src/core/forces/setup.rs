@@ -57,6 +57,11 @@ pub struct SceneContext<'a> {
     pub steps_per_frame: u64,
     /// The pair ranges to build with (defaults while checking).
     pub pairs: Pairs,
+    /// Every term's spec, for a term that must agree with another (the thermal forces with the
+    /// drag they balance).
+    pub forces: &'a super::ForcesSpec,
+    /// The scene's seed (the thermal noise's key).
+    pub seed: u64,
 }
 
 impl SceneContext<'_> {
