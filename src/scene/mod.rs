@@ -326,7 +326,11 @@ fn estimate(spec: &SceneSpec, domain: &Domain, species: &[Species], initial: &Pa
         impact_speeds: smallest
             .iter()
             .zip(&moments)
-            .map(|(s, &m)| impact_speed(s, m, drag_viscosity, max_initial_speed))
+            .map(|(s, &m)| {
+                // A term's agitation (thermal motion) adds its closing speed to the field's.
+                let agitation = terms.iter().map(|t| t.agitation_speed(s)).fold(0.0, f64::max);
+                impact_speed(s, m, drag_viscosity, max_initial_speed) + agitation
+            })
             .collect(),
         moments,
         drag_viscosity,

@@ -95,6 +95,11 @@ pub trait TermSpec {
     fn stable_dt(&self, _ctx: &StepContext) -> Option<StepBound> {
         None
     }
+    /// A closing speed the term's agitation gives two particles of `species` (m/s), which the
+    /// contact's bound must resolve; zero for a term that agitates nothing.
+    fn agitation_speed(&self, _species: &Species) -> f64 {
+        0.0
+    }
     /// The term.
     fn build(&self, ctx: &SceneContext) -> Box<dyn ForceTerm>;
 }

@@ -10,7 +10,7 @@ use super::setup::{invalid, positive, Invalid, SceneContext, StepBound, StepCont
 use super::{Context, ForceTerm, Forces, Renumbering, TermError};
 use crate::core::noise::{Noise, Stream};
 use crate::core::parallel;
-use crate::core::state::{Particles, State, Vec3};
+use crate::core::state::{Particles, Species, State, Vec3};
 use std::f64::consts::PI;
 
 /// Boltzmann's constant (J/K), exact in the SI since 2019.
@@ -122,6 +122,11 @@ impl TermSpec for ThermalSpec {
             collision: None,
             summary: format!("; thermal motion of a tenth of a radius {bound:.3e} s"),
         })
+    }
+    /// Five standard deviations of the relative speed of two particles along their line of
+    /// centres, 5 √(2kT/m): the Maxwell tail a collision reaches about once in 10⁶ encounters.
+    fn agitation_speed(&self, species: &Species) -> f64 {
+        5.0 * (2.0 * BOLTZMANN * self.temperature / species.mass()).sqrt()
     }
     fn build(&self, ctx: &SceneContext) -> Box<dyn ForceTerm> {
         let viscosity = ctx.fluid.as_ref().expect("checked: the drag has a [fluid] table").viscosity;
