@@ -975,23 +975,27 @@ fn a_polydisperse_placement_reproduces_its_distribution_and_masses() {
 /// message name the key a user wrote), and the moments term joins the terms that read moments.
 #[test]
 fn every_term_is_named_by_its_scene_key() {
-    let text = "version = 1\n[domain]\nlo = [0.0, 0.0, 0.0]\nhi = [1.0e-4, 1.0e-4, 1.0e-4]\n\
-                [fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n[field]\nb0 = [0.4, 0.0, 0.0]\n\
-                gradient = [[1.4, 0.0, 0.0], [0.0, -0.7, 0.0], [0.0, 0.0, -0.7]]\n\
-                [[species]]\nname = \"p\"\ndiameter = 11.0e-6\ndensity = 1087.0\nyoungs_modulus = 1.0e9\n\
-                poisson_ratio = 0.5\nfriction = 0.5\nrestitution = 0.5\nrelative_permeability = 12.3\n\
-                [[particles]]\nspecies = \"p\"\npositions = [[2.0e-5, 5.0e-5, 5.0e-5], [8.0e-5, 5.0e-5, 5.0e-5]]\n\
-                [forces.dipole]\ninduction = \"exact\"\n[forces.gradient]\n[forces.drag]\nlaw = \"stokes\"\nshielding = \"none\"\n\
-                [forces.gravity]\n[forces.contact]\n[forces.thermal]\ntemperature = 300.0\n\
-                [integration]\ndt = 1.0e-9\nend_time = 1.0e-6\n";
-    let scene = Scene::parse(text, "every term").unwrap();
-    let mut keys: Vec<&str> = scene.spec.forces.names();
-    keys.push("moments");
-    keys.sort_unstable();
-    let sim = scene.simulation(None);
-    let mut names: Vec<&str> = sim.field.terms.iter().map(|t| t.name()).collect();
-    names.sort_unstable();
-    assert_eq!(names, keys);
+    // The Stokes drag with the thermal forces, and the RPY drag (which has no thermal forces yet).
+    for (law, thermal) in [("stokes", "[forces.thermal]\ntemperature = 300.0\n"), ("rpy", "")] {
+        let text = format!(
+            "version = 1\n[domain]\nlo = [0.0, 0.0, 0.0]\nhi = [1.0e-4, 1.0e-4, 1.0e-4]\n\
+             [fluid]\ndensity = 1000.0\nviscosity = 1.0e-3\n[field]\nb0 = [0.4, 0.0, 0.0]\n\
+             gradient = [[1.4, 0.0, 0.0], [0.0, -0.7, 0.0], [0.0, 0.0, -0.7]]\n\
+             [[species]]\nname = \"p\"\ndiameter = 11.0e-6\ndensity = 1087.0\nyoungs_modulus = 1.0e9\n\
+             poisson_ratio = 0.5\nfriction = 0.5\nrestitution = 0.5\nrelative_permeability = 12.3\n\
+             [[particles]]\nspecies = \"p\"\npositions = [[2.0e-5, 5.0e-5, 5.0e-5], [8.0e-5, 5.0e-5, 5.0e-5]]\n\
+             [forces.dipole]\ninduction = \"exact\"\n[forces.gradient]\n[forces.drag]\nlaw = \"{law}\"\nshielding = \"none\"\n\
+             [forces.gravity]\n[forces.contact]\n{thermal}[integration]\ndt = 1.0e-9\nend_time = 1.0e-6\n"
+        );
+        let scene = Scene::parse(&text, "every term").unwrap_or_else(|e| panic!("{e}\n{text}"));
+        let mut keys: Vec<&str> = scene.spec.forces.names();
+        keys.push("moments");
+        keys.sort_unstable();
+        let sim = scene.simulation(None);
+        let mut names: Vec<&str> = sim.field.terms.iter().map(|t| t.name()).collect();
+        names.sort_unstable();
+        assert_eq!(names, keys, "drag law {law}");
+    }
 }
 
 /// A box away from the origin on every axis: six spheres, each thrown at a different face, bounce
