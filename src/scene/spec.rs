@@ -308,14 +308,15 @@ fn scheme_error(name: &str, own: &toml::Table, message: &str) -> String {
         let keys = toml::Value::Table([(key.clone(), value.clone())].into_iter().collect());
         Scheme::deserialize_named(scheme, keys).err().map(|e| e.message().to_string())
     };
-    let unknown = |message: &Option<String>| message.as_ref().is_some_and(|m| m.starts_with("unknown field"));
+    let unknown = |why: &str| why.starts_with("unknown field");
     let Some((key, value, why)) = own.iter().find_map(|(k, v)| read(name, k, v).map(|why| (k, v, why))) else {
         return format!("scheme \"{name}\": {message}");
     };
-    if !unknown(&Some(why.clone())) {
+    if !unknown(&why) {
         return format!("{key} = {value}: {why}");
     }
-    let takers: Vec<&str> = Scheme::NAMES.iter().copied().filter(|&other| !unknown(&read(other, key, value))).collect();
+    let takes = |other: &str| !read(other, key, value).is_some_and(|why| unknown(&why));
+    let takers: Vec<&str> = Scheme::NAMES.iter().copied().filter(|&other| takes(other)).collect();
     let takers = if takers.is_empty() { "none".to_string() } else { takers.join(", ") };
     format!("{key} = {value} is not a key of scheme \"{name}\" (schemes that take {key}: {takers})")
 }

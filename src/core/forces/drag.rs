@@ -39,6 +39,30 @@ pub enum Shielding {
     },
 }
 
+/// u_f at each particle in one evaluation: the uniform velocity, or a varying flow's samples.
+#[derive(Clone, Copy)]
+enum FluidAt<'a> {
+    Uniform(Vec3),
+    Sampled(&'a [Vec3]),
+}
+
+impl<'a> FluidAt<'a> {
+    fn of(flow: &Flow, samples: &'a [Vec3]) -> Self {
+        match flow {
+            Flow::Uniform(u) => FluidAt::Uniform(*u),
+            Flow::Vessel(_) => FluidAt::Sampled(samples),
+        }
+    }
+
+    #[inline(always)]
+    fn at(self, i: usize) -> Vec3 {
+        match self {
+            FluidAt::Uniform(u) => u,
+            FluidAt::Sampled(samples) => samples[i],
+        }
+    }
+}
+
 #[derive(Debug, Clone)]
 pub struct Drag {
     pub law: DragLaw,
@@ -77,15 +101,6 @@ impl Drag {
         }
     }
 
-    /// The fluid's velocity at particle `i` in this evaluation.
-    #[inline(always)]
-    fn fluid_at(&self, i: usize) -> Vec3 {
-        match &self.fluid.flow {
-            Flow::Uniform(u) => *u,
-            Flow::Vessel(_) => self.local_flow[i],
-        }
-    }
-
     /// Samples a flow that varies in space or time at every particle, at the evaluation's time.
     fn sample_flow(&mut self, ctx: &Context, p: &Particles) {
         if let Flow::Vessel(flow) = &self.fluid.flow {
@@ -112,17 +127,15 @@ impl Drag {
     /// particles: a share reads the near pairs with i below its end and keeps the shadows cast
     /// on its own particles (a maximum: the same bits in any order and on any split).
     fn compute_shadows(&mut self, ctx: &Context, p: &Particles, touch_tolerance: f64, near: PairRange) {
-        let mut directions = std::mem::take(&mut self.flow_direction);
-        directions.resize(p.len(), Vec3::zeros());
-        let this = &*self;
-        parallel::for_each_share((&mut directions[..], &p.velocity[..]), |first, (dirs, vs)| {
+        let fluid = FluidAt::of(&self.fluid.flow, &self.local_flow);
+        self.flow_direction.resize(p.len(), Vec3::zeros());
+        parallel::for_each_share((&mut self.flow_direction[..], &p.velocity[..]), |first, (dirs, vs)| {
             for (k, (dir, v)) in dirs.iter_mut().zip(vs).enumerate() {
-                let u = v - this.fluid_at(first + k);
+                let u = v - fluid.at(first + k);
                 let speed = u.norm();
                 *dir = if speed > 0.0 { u / speed } else { Vec3::zeros() };
             }
         });
-        self.flow_direction = directions;
         self.shadow.clear();
         self.shadow.resize(p.len(), 0.0);
         let pairs = ctx.neighbours.pairs(near);
@@ -160,11 +173,10 @@ impl Drag {
         if let Shielding::Paper { touch_tolerance, near } = self.shielding {
             self.compute_shadows(ctx, p, touch_tolerance, near);
         }
-        let mut coefficient = std::mem::take(&mut self.coefficient);
-        coefficient.resize(p.len(), 0.0);
+        self.coefficient.resize(p.len(), 0.0);
         let (law, shielding, fluid, shadow) = (self.law, self.shielding, &self.fluid, &self.shadow);
-        let this = &*self;
-        parallel::for_each_share(&mut coefficient[..], |first, c| {
+        let fluid_at = FluidAt::of(&fluid.flow, &self.local_flow);
+        parallel::for_each_share(&mut self.coefficient[..], |first, c| {
             for (k, c) in c.iter_mut().enumerate() {
                 let i = first + k;
                 let a = p.radius[i];
@@ -176,14 +188,13 @@ impl Drag {
                 let correction = match law {
                     DragLaw::Stokes => 1.0,
                     DragLaw::SchillerNaumann => {
-                        let u = p.velocity[i] - this.fluid_at(i);
+                        let u = p.velocity[i] - fluid_at.at(i);
                         schiller_naumann(fluid.density * u.norm() * 2.0 * a / fluid.viscosity)
                     }
                 };
                 *c = 12.0 * fluid.viscosity * area / (2.0 * a) * correction;
             }
         });
-        self.coefficient = coefficient;
     }
 }
 
@@ -203,12 +214,12 @@ impl Drag {
         }
     }
 
-    /// The drag on particle `i` with radius `a` and velocity `v`, to subtract from its force:
-    /// c_i u (with a wall, c_i times u's scaled parallel parts), less 6π μ a u if the linear part
-    /// is excluded.
+    /// The drag on particle `i` with radius `a` and velocity `v` in fluid moving at `u_f`, to
+    /// subtract from its force: c_i u (with a wall, c_i times u's scaled parallel parts), less
+    /// 6π μ a u if the linear part is excluded.
     #[inline(always)]
-    fn force_on(&self, p: &Particles, i: usize, a: f64, v: &Vec3) -> Vec3 {
-        let u = v - self.fluid_at(i);
+    fn force_on(&self, p: &Particles, i: usize, a: f64, v: &Vec3, u_f: Vec3) -> Vec3 {
+        let u = v - u_f;
         let linear = if self.exclude_linear { Self::stokes_coefficient(self.fluid.viscosity, a) } else { 0.0 };
         let coefficient = self.coefficient[i];
         match &self.wall {
@@ -223,12 +234,13 @@ impl Drag {
     fn pass(&self, p: &Particles, out: &mut Forces, onto: Onto) {
         let rotational = self.rotational && !self.exclude_linear;
         let spin_drag = |a: f64, w: &Vec3| 8.0 * PI * self.fluid.viscosity * a.powi(3) * w;
+        let fluid = FluidAt::of(&self.fluid.flow, &self.local_flow);
         parallel::for_each_share((&mut *out.force, &mut *out.torque), |first, (force, torque)| {
             let span = first..first + force.len();
             let each = force.iter_mut().zip(torque).zip(&p.radius[span.clone()]).zip(&p.velocity[span.clone()]);
             for (k, (((f, t), &a), v)) in each.enumerate() {
                 let i = first + k;
-                let drag = self.force_on(p, i, a, v);
+                let drag = self.force_on(p, i, a, v, fluid.at(i));
                 match onto {
                     Onto::Add => {
                         *f -= drag;

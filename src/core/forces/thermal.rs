@@ -51,7 +51,7 @@ impl ForceTerm for Thermal {
             parallel::for_each_share(&mut out[..], |first, share| {
                 for (k, f) in share.iter_mut().enumerate() {
                     let slot = first + k;
-                    let id = state.ids.get(slot).map_or(slot as u32, |&id| id);
+                    let id = state.id(slot) as u32;
                     *f = scale(gamma(p.radius[slot])) * Vec3::from(noise.normal3(step, id, stream));
                 }
             });

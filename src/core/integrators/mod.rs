@@ -93,6 +93,19 @@ pub trait IntegratorSpec {
     fn build(&self, ctx: &IntegratorContext) -> Box<dyn Integrator>;
 }
 
+/// `slow_every`'s default: the slow forces every step.
+fn every_step() -> u64 {
+    1
+}
+
+/// Refuses K = 0 (`integration.slow_every`) for the multiple-time-stepping schemes.
+fn check_slow_every(k: u64) -> Result<(), Invalid> {
+    if k == 0 {
+        return Err(super::checks::invalid("integration.slow_every", 0, "must be at least 1"));
+    }
+    Ok(())
+}
+
 macro_rules! schemes {
     ($($variant:ident($spec:ident) = $name:literal,)*) => {
         /// The time-integration scheme of a scene, with its own parameters: `integration.scheme`

@@ -7,8 +7,9 @@
 //! OpenFOAM's colliding clouds do.
 
 use super::ForceGroup;
+use super::{check_slow_every, every_step};
 use super::{kick, kick_drift, slow_kick, tick, Evaluate, Integrator, IntegratorContext, IntegratorSpec, Renumbering};
-use crate::core::checks::{invalid, Invalid};
+use crate::core::checks::Invalid;
 use crate::core::state::State;
 
 pub struct SubcycledEuler {
@@ -43,26 +44,19 @@ impl Integrator for SubcycledEuler {
 #[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SubcycledEulerSpec {
-    #[serde(default = "one")]
+    #[serde(default = "every_step")]
     pub slow_every: u64,
 }
 
 impl Default for SubcycledEulerSpec {
     fn default() -> Self {
-        Self { slow_every: 1 }
+        Self { slow_every: every_step() }
     }
-}
-
-fn one() -> u64 {
-    1
 }
 
 impl IntegratorSpec for SubcycledEulerSpec {
     fn check(&self) -> Result<(), Invalid> {
-        if self.slow_every == 0 {
-            return Err(invalid("integration.slow_every", 0, "must be at least 1"));
-        }
-        Ok(())
+        check_slow_every(self.slow_every)
     }
     fn slow_every(&self) -> u64 {
         self.slow_every
