@@ -58,6 +58,7 @@ impl<'a> From<&'a Scene> for RunHeader<'a> {
             steps_per_frame: scene.steps_per_frame(),
             forces: scene.spec.output.forces,
             contacts: scene.spec.output.contacts,
+            outlets: scene.spec.exits.iter().flat_map(|e| &e.outlets).map(|o| o.name.as_str()).collect(),
         }
     }
 }

@@ -61,8 +61,22 @@ impl<'a> FrameReader<'a> {
         let k = k as usize;
         let position = self.trajectory.frame_vectors("position", k)?;
         let velocity = self.trajectory.frame_vectors("velocity", k)?;
-        let frame = Frame { position: &position, velocity: &velocity, radius: &self.radius, mass: &self.mass };
-        Ok((self.times[k], aggregates(&frame, &self.domain, &self.field, gap_tolerance)))
+        // The particles in the run at this frame: those that left it have NaN rows. Members
+        // are given as particle ids.
+        let present: Vec<usize> = (0..position.len()).filter(|&i| !position[i].x.is_nan()).collect();
+        if present.len() == position.len() {
+            let frame = Frame { position: &position, velocity: &velocity, radius: &self.radius, mass: &self.mass };
+            return Ok((self.times[k], aggregates(&frame, &self.domain, &self.field, gap_tolerance)));
+        }
+        let pick = |v: &[Vec3]| present.iter().map(|&i| v[i]).collect::<Vec<_>>();
+        let (radius, mass): (Vec<f64>, Vec<f64>) = present.iter().map(|&i| (self.radius[i], self.mass[i])).unzip();
+        let (position, velocity) = (pick(&position), pick(&velocity));
+        let frame = Frame { position: &position, velocity: &velocity, radius: &radius, mass: &mass };
+        let mut found = aggregates(&frame, &self.domain, &self.field, gap_tolerance);
+        for a in &mut found {
+            a.members.iter_mut().for_each(|m| *m = present[*m]);
+        }
+        Ok((self.times[k], found))
     }
 }
 

@@ -115,6 +115,14 @@ impl Flow {
         }
     }
 
+    /// The vessel the flow runs along, if any.
+    pub fn vessel(&self) -> Option<&Vessel> {
+        match self {
+            Flow::Uniform(_) => None,
+            Flow::Vessel(flow) => Some(&flow.vessel),
+        }
+    }
+
     /// The velocity of a uniform flow, `None` for one that varies in space or time.
     pub fn uniform(&self) -> Option<Vec3> {
         match self {

@@ -278,9 +278,10 @@ impl VerletList {
     /// the same candidates as a build at those positions with the skin in use, so the rebuilds
     /// (and the adaptive skin) go on as without the renumbering. Returns whether there were
     /// candidates to rename (none before a build or for another particle set: rebuilt at the
-    /// next update).
+    /// next update; so after a removal).
     pub fn renumber(&mut self, r: &Renumbering) -> bool {
-        if self.reference.len() != r.len() {
+        // A removal drops candidates too: rebuilt at the next update.
+        if self.reference.len() != r.old_len() || r.removes() {
             self.reference.clear();
             return false;
         }

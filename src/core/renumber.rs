@@ -11,23 +11,45 @@
 use super::domain::Domain;
 use super::vector::Vec3;
 
-/// A permutation of the particles' slots: new slot k holds the particle of old slot `from[k]`.
+/// A new order of the particles' slots, perhaps without some: new slot k holds the particle of
+/// old slot `from[k]`. A particle that leaves the run (through an outlet, or captured) has no new
+/// slot; everything that follows a renumbering drops what it holds of it.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Renumbering {
     from: Vec<u32>,
-    /// `to[i]`: the new slot of old slot i.
+    /// `to[i]`: the new slot of old slot i ([`GONE`] for a particle removed).
     to: Vec<u32>,
 }
+
+/// The new slot of a removed particle.
+pub const GONE: u32 = u32::MAX;
 
 impl Renumbering {
     /// The renumbering whose new slot k holds old slot `from[k]` (`from` a permutation of 0..n).
     pub fn new(from: Vec<u32>) -> Self {
-        let mut to = vec![u32::MAX; from.len()];
+        let n = from.len();
+        Self::keeping(from, n)
+    }
+
+    /// The renumbering of `old` slots that keeps slots `from` (distinct, each below `old`), new
+    /// slot k holding old slot `from[k]`; the others are removed.
+    pub fn keeping(from: Vec<u32>, old: usize) -> Self {
+        let mut to = vec![GONE; old];
         for (k, &i) in from.iter().enumerate() {
-            assert!(to[i as usize] == u32::MAX, "slot {i} appears twice in a renumbering");
+            assert!(to[i as usize] == GONE, "slot {i} appears twice in a renumbering");
             to[i as usize] = k as u32;
         }
         Self { from, to }
+    }
+
+    /// The number of slots before.
+    pub fn old_len(&self) -> usize {
+        self.to.len()
+    }
+
+    /// Whether some particles leave.
+    pub fn removes(&self) -> bool {
+        self.from.len() < self.to.len()
     }
 
     /// The slots in the order of a Morton (Z-order) curve through cubic cells of edge `cell` from
@@ -45,23 +67,25 @@ impl Renumbering {
         self.from.is_empty()
     }
 
-    /// The new slot of old slot `i`.
+    /// The new slot of old slot `i` ([`GONE`] if removed).
     #[inline]
     pub fn to(&self, i: u32) -> u32 {
         self.to[i as usize]
     }
 
-    /// The key (a, b) of the pair of old slots (i, j), a < b, and whether its ends swapped.
+    /// The key (a, b) of the pair of old slots (i, j), a < b, and whether its ends swapped (b is
+    /// [`GONE`] if either end is removed).
     #[inline]
     pub fn pair(&self, (i, j): (u32, u32)) -> ((u32, u32), bool) {
         let (a, b) = (self.to(i), self.to(j));
         ((a.min(b), a.max(b)), a > b)
     }
 
-    /// `v` in the new order. A vector of another length (a cache not yet filled or left over from
-    /// another particle set) is emptied: its holder fills it again.
+    /// `v` in the new order, without the removed slots. A vector of another length than the old
+    /// slots (a cache not yet filled or left over from another particle set) is emptied: its
+    /// holder fills it again.
     pub fn permute<T: Copy>(&self, v: &mut Vec<T>) {
-        if v.len() == self.len() {
+        if v.len() == self.old_len() {
             *v = self.from.iter().map(|&i| v[i as usize]).collect();
         } else {
             v.clear();
@@ -100,6 +124,20 @@ mod tests {
         let mut stale = vec![1.0; 3];
         r.permute(&mut stale);
         assert!(stale.is_empty());
+    }
+
+    /// Keeping slots 3 and 1 of five: the others have no new slot, vectors lose them, and a pair
+    /// with a removed end is keyed [`GONE`].
+    #[test]
+    fn a_renumbering_that_removes() {
+        let r = Renumbering::keeping(vec![3, 1], 5);
+        assert!(r.removes() && r.len() == 2 && r.old_len() == 5);
+        assert_eq!((0..5).map(|i| r.to(i)).collect::<Vec<_>>(), [GONE, 1, GONE, 0, GONE]);
+        let mut v = vec!['a', 'b', 'c', 'd', 'e'];
+        r.permute(&mut v);
+        assert_eq!(v, ['d', 'b']);
+        assert_eq!(r.pair((1, 3)), ((0, 1), true));
+        assert_eq!(r.pair((0, 3)).0 .1, GONE);
     }
 
     /// Points on a line of cells come out in cell order; two in one cell keep theirs.

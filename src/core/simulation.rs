@@ -6,6 +6,7 @@
 //! each is timed.
 
 use super::domain::Domain;
+use super::exits::ExitRules;
 use super::forces::{ConstantForce, Context, ForceGroup, ForceTerm, Forces, TermError};
 use super::integrators::Integrator;
 use super::neighbours::{Neighbours, RangeUsage};
@@ -179,6 +180,8 @@ pub struct Simulation {
     pub estimate: StepEstimate,
     /// Renumbering during the run, or none.
     pub renumber: Option<RenumberSchedule>,
+    /// How particles leave the run (none leave by default).
+    pub exits: ExitRules,
     /// How the step's loops split between two threads (learnt as the run goes; never changes a
     /// result).
     pub balance: parallel::Balance,
@@ -208,6 +211,18 @@ impl Simulation {
         self.integrator.renumber(&r);
     }
 
+    /// Removes the particles that leave by the exit rules after a step: the state, the
+    /// neighbour lists, the terms and the integrator follow.
+    fn remove_leaving(&mut self) {
+        let leaving = self.exits.leaving(&mut self.state);
+        if !leaving.is_empty() {
+            let r = ExitRules::remove(&mut self.state, &leaving);
+            self.state.renumber(&r);
+            self.field.renumber(&r);
+            self.integrator.renumber(&r);
+        }
+    }
+
     /// Advances one step and checks it.
     pub fn step(&mut self) -> Result<(), RunError> {
         let n = self.state.particles.len();
@@ -231,6 +246,11 @@ impl Simulation {
             let t0 = self.field.timers.start();
             let result = self.check();
             self.field.timers.stop("monitor", t0);
+            if !self.exits.is_empty() {
+                let t0 = self.field.timers.start();
+                self.remove_leaving();
+                self.field.timers.stop("exits", t0);
+            }
             result
         });
         self.balance = balance;

@@ -2,7 +2,7 @@
 //!
 //! Everything a run needs to continue bit for bit lives here, so a checkpoint is this struct.
 
-use super::renumber::Renumbering;
+use super::renumber::{Renumbering, GONE};
 pub use super::vector::Vec3;
 
 /// Saturation of the induced magnetisation at Ms (A/m).
@@ -555,6 +555,29 @@ impl Fields {
     }
 }
 
+/// Where a particle went.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Way {
+    /// Through outlet k of `ExitRules::outlets` ([`crate::core::exits`]).
+    Outlet(u16),
+    /// Held by the vessel's wall.
+    Captured,
+}
+
+/// One particle's exit: its id, the step and time after which it left, and its centre then.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Exit {
+    pub id: u32,
+    pub step: u64,
+    pub time: f64,
+    pub position: Vec3,
+    pub way: Way,
+}
+
+/// What the rules carry between steps: since when each particle touching the vessel's wall has
+/// touched it, by id (sorted).
+pub type Touching = Vec<(u32, f64)>;
+
 /// Full simulation state: particles, what the forces computed from them, contact history, clock.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct State {
@@ -572,6 +595,10 @@ pub struct State {
     /// `ids[k]`: the id of the particle in slot k, its index in the scene's particles (and in the
     /// trajectory's frames, which are written in id order); 0, 1, … until a renumbering.
     pub ids: Vec<u32>,
+    /// The particles that left the run so far, in order ([`crate::core::exits`]).
+    pub exits: Vec<Exit>,
+    /// Since when each particle touching the vessel's wall has touched it, by id.
+    pub touching: Touching,
 }
 
 /// The per-particle vectors of a state by name (see [`State::vectors`]); one body for the shared
@@ -579,7 +606,19 @@ pub struct State {
 macro_rules! state_vectors {
     ($state:expr, $position:ident => $access:expr) => {{
         // `ids` are stored as the checkpoint's `id` (and index the fixed properties).
-        let State { particles, fields, history: _, diagnostics: _, step: _, time: _, next_substep: _, ids: _ } = $state;
+        // `exits` and `touching` are stored with the trajectory's exits.
+        let State {
+            particles,
+            fields,
+            history: _,
+            diagnostics: _,
+            step: _,
+            time: _,
+            next_substep: _,
+            ids: _,
+            exits: _,
+            touching: _,
+        } = $state;
         let Particles {
             position: $position,
             velocity,
@@ -657,7 +696,19 @@ impl State {
     /// skipped with `..`), so a field added to [`State`], [`Particles`] or [`Fields`] does not
     /// compile until it says what a renumbering does to it.
     pub fn renumber(&mut self, r: &Renumbering) {
-        let State { particles, fields, history, diagnostics, step: _, time: _, next_substep: _, ids } = self;
+        // The exits and the wall-contact times are kept by id.
+        let State {
+            particles,
+            fields,
+            history,
+            diagnostics,
+            step: _,
+            time: _,
+            next_substep: _,
+            ids,
+            exits: _,
+            touching: _,
+        } = self;
         let Particles {
             species,
             radius,
@@ -695,10 +746,14 @@ impl State {
             r.permute(v);
         }
         history.renumber(r);
-        // The diagnostics name the pair of the last evaluation.
+        // The diagnostics name the pair of the last evaluation (none if it left).
         if !r.is_empty() {
             let (i, j) = diagnostics.max_overlap_pair;
-            diagnostics.max_overlap_pair = (r.to(i), j.map(|j| r.to(j)));
+            let (i, j) = (r.to(i), j.map(|j| r.to(j)));
+            *diagnostics = match i == GONE || j == Some(GONE) {
+                true => ContactDiagnostics::default(),
+                false => ContactDiagnostics { max_overlap_pair: (i, j), ..*diagnostics },
+            };
         }
     }
 }
@@ -706,15 +761,17 @@ impl State {
 impl PairHistory {
     /// The history with old slot i renamed `r.to(i)`, sorted again. A pair whose ends swap
     /// stores the spring of j against i: the relative tangential displacement, negated.
+    /// The springs of a particle removed are dropped.
     pub fn renumber(&mut self, r: &Renumbering) {
         let renamed = |&(key, spring): &PairSpring| {
             let (key, swapped) = r.pair(key);
-            (key, if swapped { -spring } else { spring })
+            (key.1 != GONE).then_some((key, if swapped { -spring } else { spring }))
         };
-        self.pairs = self.pairs.iter().map(renamed).collect::<Vec<_>>().into();
+        self.pairs = self.pairs.iter().filter_map(renamed).collect::<Vec<_>>().into();
         for ((i, _), _) in &mut self.walls {
             *i = r.to(*i);
         }
+        self.walls.retain(|((i, _), _)| *i != GONE);
         self.walls.sort_unstable_by_key(|(key, _)| *key);
     }
 }

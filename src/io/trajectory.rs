@@ -6,6 +6,7 @@
 //! The `checkpoint` group holds the full state (forces and contact history included) and is
 //! rewritten in place with every frame and on interruption; `--resume` continues from it.
 
+use crate::core::state::{Exit, Way};
 use crate::core::state::{PairHistory, Particles, State, Vec3};
 use hdf5::types::VarLenUnicode;
 use hdf5::{Dataset, Extent, File, Group, SimpleExtents};
@@ -90,9 +91,23 @@ fn extendible<T: hdf5::H5Type>(
     units: &str,
     rows: Rows,
 ) -> H5Result<Dataset> {
+    let chunk = if rows == Rows::Frames { 1 } else { 1024 };
+    chunked::<T>(group, name, tail, units, rows, chunk)
+}
+
+/// [`extendible`] with chunks of `chunk_rows` rows: small for datasets that stay small (the
+/// exits, a small run's checkpoint), since HDF5 allocates whole chunks.
+fn chunked<T: hdf5::H5Type>(
+    group: &Group,
+    name: &str,
+    tail: &[usize],
+    units: &str,
+    rows: Rows,
+    chunk_rows: usize,
+) -> H5Result<Dataset> {
     let mut extents = vec![Extent::resizable(0)];
     extents.extend(tail.iter().map(|&n| Extent::fixed(n)));
-    let mut chunk = vec![if rows == Rows::Frames { 1 } else { 1024 }];
+    let mut chunk = vec![chunk_rows.max(1)];
     chunk.extend_from_slice(tail);
     let builder = group.new_dataset::<T>().shape(SimpleExtents::from_vec(extents)).chunk(chunk);
     let ds = match rows {
@@ -101,6 +116,27 @@ fn extendible<T: hdf5::H5Type>(
     };
     write_str_attr(&ds, "units", units)?;
     Ok(ds)
+}
+
+/// Writes `data` over `ds`, resizing it first if it is resizable and of another shape (the
+/// checkpoint's rows follow the particles still in the run).
+fn rewrite<T: hdf5::H5Type, D: ndarray::Dimension>(ds: &Dataset, data: &ndarray::Array<T, D>) -> H5Result<()> {
+    if ds.shape() != data.shape() {
+        ds.resize(data.shape())?;
+    }
+    ds.write(data)
+}
+
+/// A frame's rows: the slots' values `v` in id order over `n` ids, NaN for the particles that
+/// left the run.
+fn frame_rows(state: &State, v: &[Vec3], n: usize) -> Array2<f64> {
+    let mut rows = Array2::from_elem((n, 3), f64::NAN);
+    for (&id, x) in state.ids.iter().zip(v) {
+        for k in 0..3 {
+            rows[(id as usize, k)] = x[k];
+        }
+    }
+    rows
 }
 
 fn vec3_rows(v: &[Vec3]) -> Array2<f64> {
@@ -141,6 +177,8 @@ pub struct RunHeader<'a> {
     pub forces: bool,
     /// Write each frame's contacts.
     pub contacts: bool,
+    /// The names of the outlets particles may leave through (`[[exits.outlets]]`), in order.
+    pub outlets: Vec<&'a str>,
 }
 
 /// Appends frames to a trajectory file and keeps its checkpoint current.
@@ -207,10 +245,21 @@ impl TrajectoryWriter {
                 extendible::<f64>(&c, "overlap", &[], "m", Rows::Appended)?;
             }
             let ck = file.create_group("checkpoint")?;
+            // As many rows as particles in the run (resizable), in one chunk up to 4 096 rows.
+            let rows = n.min(4096);
             for name in State::vector_names() {
-                ck.new_dataset::<f64>().shape((n, 3)).create(name)?;
+                chunked::<f64>(&ck, name, &[3], "SI", Rows::Appended, rows)?.resize((n, 3))?;
             }
-            ck.new_dataset::<u32>().shape(n).create("id")?;
+            chunked::<u32>(&ck, "id", &[], "particle id", Rows::Appended, rows)?.resize(n)?;
+            let exits = file.create_group("exits")?;
+            write_str_attr(&exits, "outlets", &header.outlets.join(","))?;
+            let outlet = "index into the outlets attribute; -1 captured";
+            chunked::<u32>(&exits, "id", &[], "particle id", Rows::Appended, 64)?;
+            chunked::<u64>(&exits, "step", &[], "1", Rows::Appended, 64)?;
+            chunked::<f64>(&exits, "time", &[], "s", Rows::Appended, 64)?;
+            chunked::<f64>(&exits, "position", &[3], "m", Rows::Appended, 64)?;
+            chunked::<i32>(&exits, "outlet", &[], outlet, Rows::Appended, 64)?;
+            chunked::<f64>(&ck, "touching", &[2], "particle id, s since first contact", Rows::Appended, 64)?;
             extendible::<u32>(&ck, "pair_keys", &[2], "particle index", Rows::Appended)?;
             extendible::<f64>(&ck, "pair_shear", &[3], "m", Rows::Appended)?;
             extendible::<u32>(&ck, "wall_keys", &[2], "particle index, wall face", Rows::Appended)?;
@@ -300,7 +349,7 @@ impl TrajectoryWriter {
                 "torque" => total(&p.torque, &p.slow_torque),
                 _ => vectors_now.iter().find(|(n, _)| n == name).expect("a state vector").1.clone(),
             };
-            ds.write_slice(&vec3_rows(&state.in_id_order(&slots)), s![f, .., ..])?;
+            ds.write_slice(&frame_rows(state, &slots, self.n), s![f, .., ..])?;
         }
         if self.contacts {
             let c = self.file.group("contacts")?;
@@ -341,7 +390,7 @@ impl TrajectoryWriter {
         (|| -> H5Result<()> {
             let ck = self.file.group("checkpoint")?;
             for (name, vector) in state.vectors() {
-                ck.dataset(name)?.write(&vec3_rows(vector))?;
+                rewrite(&ck.dataset(name)?, &vec3_rows(vector))?;
             }
             // The checkpoint keeps the particles' slots; `id` names the particle of each (files
             // written before renumbering existed have none: 0, 1, …).
@@ -349,7 +398,16 @@ impl TrajectoryWriter {
                 Ok(ds) => ds,
                 Err(_) => ck.new_dataset::<u32>().shape(self.n).create("id")?,
             };
-            ids.write(&Array1::from(state.ids.clone()))?;
+            rewrite(&ids, &Array1::from(state.ids.clone()))?;
+            // Files written before particles could leave have no exits.
+            if let Ok(exits) = self.file.group("exits") {
+                write_exits(&exits, &state.exits)?;
+                let touching = Array2::from_shape_fn((state.touching.len(), 2), |(r, c)| match c {
+                    0 => state.touching[r].0 as f64,
+                    _ => state.touching[r].1,
+                });
+                rewrite(&ck.dataset("touching")?, &touching)?;
+            }
             let (pairs, walls) = (&state.history.pairs, &state.history.walls);
             let keys =
                 Array2::from_shape_vec((pairs.len(), 2), pairs.iter().flat_map(|((i, j), _)| [*i, *j]).collect())
@@ -486,6 +544,37 @@ impl Trajectory {
         let frames: u64 = ck.attr("frames")?.read_scalar()?;
         let next_substep = ck.attr("next_substep").and_then(|a| a.read_scalar::<f64>()).ok().filter(|h| h.is_finite());
         (state.history, state.step, state.time, state.next_substep) = (contacts, step, time, next_substep);
+        if let Ok(exits) = self.file.group("exits") {
+            state.exits = read_exits(&exits)?;
+            let touching: Array2<f64> = ck.dataset("touching")?.read_2d()?;
+            state.touching = touching.rows().into_iter().map(|r| (r[0] as u32, r[1])).collect();
+        }
         Ok((state, frames as usize))
     }
+}
+
+/// Rewrites the `exits` group with every exit so far.
+fn write_exits(g: &Group, exits: &[Exit]) -> H5Result<()> {
+    let outlet = |e: &Exit| match e.way {
+        Way::Outlet(k) => k as i32,
+        Way::Captured => -1,
+    };
+    rewrite(&g.dataset("id")?, &exits.iter().map(|e| e.id).collect::<Array1<_>>())?;
+    rewrite(&g.dataset("step")?, &exits.iter().map(|e| e.step).collect::<Array1<_>>())?;
+    rewrite(&g.dataset("time")?, &exits.iter().map(|e| e.time).collect::<Array1<_>>())?;
+    rewrite(&g.dataset("position")?, &vec3_rows(&exits.iter().map(|e| e.position).collect::<Vec<_>>()))?;
+    rewrite(&g.dataset("outlet")?, &exits.iter().map(outlet).collect::<Array1<_>>())
+}
+
+/// The exits a trajectory records.
+pub fn read_exits(g: &Group) -> H5Result<Vec<Exit>> {
+    let id: Vec<u32> = g.dataset("id")?.read_raw()?;
+    let step: Vec<u64> = g.dataset("step")?.read_raw()?;
+    let time: Vec<f64> = g.dataset("time")?.read_raw()?;
+    let position = rows_vec3(&g.dataset("position")?.read_2d()?);
+    let outlet: Vec<i32> = g.dataset("outlet")?.read_raw()?;
+    let way = |k: i32| if k < 0 { Way::Captured } else { Way::Outlet(k as u16) };
+    Ok((0..id.len())
+        .map(|r| Exit { id: id[r], step: step[r], time: time[r], position: position[r], way: way(outlet[r]) })
+        .collect())
 }

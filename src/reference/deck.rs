@@ -59,6 +59,7 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
         integration,
         output,
         stability,
+        exits,
     } = &scene.spec;
     for group in particles {
         let ParticleGroupSpec {
@@ -71,6 +72,8 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
             lattice: _,
             region: _,
             order: _,
+            // Needs a vessel, which the decks refuse.
+            in_vessel: _,
         } = group;
     }
     for boundary in [x, y, z] {
@@ -89,6 +92,9 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
             "fluid.vessel",
             "the decks write no flow field (fix viscous drags towards rest)",
         ));
+    }
+    if exits.is_some() {
+        return Err(unsupported(engine, "exits", "the decks remove no particles (outlets and capture are magdem's)"));
     }
     // Magnetic terms: magdem computes the moments (from the applied field, with the induction,
     // cut-off and iteration settings) and the dipole and gradient forces, and hands them to
@@ -132,7 +138,14 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
     }
     let walls = scene.domain.walls().next().is_some();
     check_species(engine, species, contact.is_some() && walls)?;
-    if let Some(ContactSpec { walls: with_walls, normal, stiffness: _, tangential }) = contact {
+    if let Some(ContactSpec { particles, walls: with_walls, normal, stiffness: _, tangential }) = contact {
+        if !particles {
+            return Err(unsupported(
+                engine,
+                "forces.contact.particles = false",
+                "the decks write one granular pair style for every pair",
+            ));
+        }
         // The decks write Hertz–Mindlin with history (§10.2 of docs/model.md) only.
         match normal {
             NormalSpec::Hertz => {}
@@ -714,6 +727,27 @@ mod tests {
                         )),
                     )],
                     [Some("fluid.vessel"); 2],
+                ),
+                (
+                    "particles touching the walls only",
+                    vec![("forces.contact.particles", b(false))],
+                    [Some("forces.contact.particles = false"); 2],
+                ),
+                (
+                    "an outlet (beyond every box)",
+                    vec![(
+                        "exits.outlets",
+                        Some(Value::Array(vec![Value::Table(
+                            [
+                                ("name".to_string(), Value::String("far".into())),
+                                ("point".to_string(), v3([1e3, 0.0, 0.0]).unwrap()),
+                                ("normal".to_string(), v3([1.0, 0.0, 0.0]).unwrap()),
+                            ]
+                            .into_iter()
+                            .collect(),
+                        )])),
+                    )],
+                    [Some("exits"); 2],
                 ),
                 (
                     "moving fluid, no drag",

@@ -100,8 +100,8 @@ pub fn check(f: &FluidSpec) -> Result<(), SceneError> {
     Ok(())
 }
 
-/// Refuses particles that start outside the vessel or through its wall (r + a > R): the vessel
-/// has no contact wall, and the flow is zero outside it.
+/// Refuses particles that start outside the vessel or through its wall (r + a > R): the flow is
+/// zero outside it, and its surface is a contact wall.
 pub fn check_particles(f: &FluidSpec, particles: &Particles) -> Result<(), SceneError> {
     let Flow::Vessel(flow) = self::flow(f) else { return Ok(()) };
     for (i, (x, a)) in particles.position.iter().zip(&particles.radius).enumerate() {
@@ -117,11 +117,15 @@ pub fn check_particles(f: &FluidSpec, particles: &Particles) -> Result<(), Scene
     Ok(())
 }
 
+/// The vessel's geometry.
+pub fn vessel(v: &VesselSpec) -> Vessel {
+    Vessel { centre: Vec3::from(v.centre), axis: Unit::new_normalize(Vec3::from(v.axis)), radius: v.radius }
+}
+
 /// The fluid's velocity field.
 pub fn flow(f: &FluidSpec) -> Flow {
     let Some(v) = &f.vessel else { return Flow::Uniform(Vec3::from(f.velocity)) };
-    let vessel =
-        Vessel { centre: Vec3::from(v.centre), axis: Unit::new_normalize(Vec3::from(v.axis)), radius: v.radius };
+    let vessel = vessel(v);
     let mut flow = VesselFlow::poiseuille(vessel, v.mean_speed, f.density, f.viscosity);
     if let Some(period) = v.period {
         flow.period = period;

@@ -1,6 +1,7 @@
 //! The scene layer: the only code that reads TOML. It parses a scene, checks every value (errors
 //! name the key, the value and why), places particles and builds a [`Simulation`].
 
+pub mod exits;
 pub mod experiment;
 pub mod fluid;
 pub mod placement;
@@ -21,7 +22,7 @@ use crate::core::state::{
     Vec3,
 };
 use nalgebra::Matrix3;
-use rand::SeedableRng;
+use rand::{RngExt, SeedableRng};
 use sha2::{Digest, Sha256};
 pub use spec::*;
 use std::path::Path;
@@ -128,6 +129,10 @@ impl Scene {
             }
         }
         check_forces(&spec, &domain, &species, &mut warnings)?;
+        if let Some(e) = &spec.exits {
+            let vessel = spec.fluid.as_ref().is_some_and(|f| f.vessel.is_some());
+            exits::check(e, vessel, spec.forces.contact.as_ref().is_some_and(|c| c.walls))?;
+        }
         let (initial, initial_history) = match &spec.start {
             Some(start) => {
                 let started = start::load(&spec, start, dir, &domain, &species, &mut warnings)?;
@@ -142,6 +147,7 @@ impl Scene {
         if let Some(f) = &spec.fluid {
             fluid::check_particles(f, &initial)?;
         }
+        exits::check_particles(spec.exits.as_ref(), &initial)?;
         let hash = hasher.finalize().iter().map(|b| format!("{b:02x}")).collect();
         check_integration(&spec)?;
 
@@ -272,6 +278,7 @@ impl Scene {
             },
             estimate: self.estimate.clone(),
             balance: Default::default(),
+            exits: exits::rules(spec.exits.as_ref()),
             renumber: (spec.integration.renumber_every > 0).then(|| RenumberSchedule {
                 every: spec.integration.renumber_every,
                 cell: 2.0 * self.initial.radius.iter().copied().fold(f64::INFINITY, f64::min),
@@ -686,7 +693,23 @@ fn random_sites(
             (0..count).map(|_| size.draw(&mut rng)).collect()
         }
     };
-    let placed = placement::place_random(&radii, lo, hi, domain, existing, seed).map_err(|k| {
+    let vessel = match (group.in_vessel, spec.fluid.as_ref().and_then(|f| f.vessel.as_ref())) {
+        (None, _) => None,
+        (Some(how), Some(v)) => Some((how, fluid::vessel(v))),
+        (Some(how), None) => {
+            return Err(invalid(key("in_vessel"), format!("{how:?}").to_lowercase(), "needs a [fluid.vessel]"))
+        }
+    };
+    // Inside the vessel, wholly (r + a ≤ R); flux-weighted by rejection, 1 − r²/R² ≥ a uniform draw.
+    let inside = |x: &Vec3, a: f64, rng: &mut rand_chacha::ChaCha8Rng| match &vessel {
+        None => true,
+        Some((how, v)) => {
+            let r = v.radial(*x);
+            r + a <= v.radius
+                && (*how == VesselPlacement::Uniform || rng.random::<f64>() <= 1.0 - (r / v.radius).powi(2))
+        }
+    };
+    let placed = placement::place_random_where(&radii, lo, hi, domain, existing, seed, inside).map_err(|k| {
         let l = hi - lo;
         let fraction = count as f64 * s.volume() / (l.x * l.y * l.z);
         invalid(

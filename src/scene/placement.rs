@@ -36,6 +36,20 @@ pub fn place_random(
     existing: &[(Vec3, f64)],
     seed: u64,
 ) -> Result<Vec<Vec3>, usize> {
+    place_random_where(radii, lo, hi, domain, existing, seed, |_, _, _| true)
+}
+
+/// [`place_random`], keeping a drawn centre only where `accept(centre, radius, rng)` holds (a
+/// shape inside the region, or a density by rejection from the same stream).
+pub fn place_random_where(
+    radii: &[f64],
+    lo: Vec3,
+    hi: Vec3,
+    domain: &Domain,
+    existing: &[(Vec3, f64)],
+    seed: u64,
+    mut accept: impl FnMut(&Vec3, f64, &mut rand_chacha::ChaCha8Rng) -> bool,
+) -> Result<Vec<Vec3>, usize> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let clamp = |radius: f64| centre_range(radius, lo, hi, domain);
     let mut placed: Vec<Vec3> = Vec::with_capacity(radii.len());
@@ -45,7 +59,7 @@ pub fn place_random(
         let mut ok = false;
         for _ in 0..MAX_ATTEMPTS {
             let x = Vec3::from_fn(|a, _| lo_c[a] + (hi_c[a] - lo_c[a]) * rng.random::<f64>());
-            if grid.overlaps(&x, radius, domain) {
+            if !accept(&x, radius, &mut rng) || grid.overlaps(&x, radius, domain) {
                 continue;
             }
             grid.insert(x, radius);

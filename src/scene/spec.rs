@@ -4,6 +4,7 @@
 use crate::core::integrators::Scheme;
 use serde::Deserialize;
 
+pub use super::exits::{ExitsSpec, OutletSpec};
 pub use super::fluid::{FluidSpec, VesselSpec};
 pub use crate::core::forces::contact::{ContactSpec, NormalSpec, TangentialSpec};
 pub use crate::core::forces::dipole::{DipoleSpec, InductionSpec};
@@ -44,6 +45,8 @@ pub struct SceneSpec {
     pub output: OutputSpec,
     #[serde(default)]
     pub stability: StabilitySpec,
+    /// How particles leave the run: outlets and capture (none by default).
+    pub exits: Option<ExitsSpec>,
 }
 
 /// `[start]`: the particles, their velocities and spins, and the contact history (tangential
@@ -207,6 +210,20 @@ pub struct ParticleGroupSpec {
     /// How randomly placed particles are numbered (default: in the order they were placed).
     #[serde(default)]
     pub order: ParticleOrder,
+    /// Randomly placed particles inside the `[fluid.vessel]` only (within the region), at a
+    /// uniform density or weighted by the flow.
+    pub in_vessel: Option<VesselPlacement>,
+}
+
+/// `in_vessel`: where in the vessel's cross-section random particles go.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum VesselPlacement {
+    /// A uniform density over the part of the region inside the vessel.
+    Uniform,
+    /// A density proportional to the steady flow's speed, 1 − r²/R²: the particles a uniform
+    /// concentration carries through a cross-section (a flux-weighted inlet).
+    Flux,
 }
 
 /// The numbering of randomly placed or started particles. The physics does not depend on it; the

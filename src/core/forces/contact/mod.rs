@@ -8,6 +8,7 @@ mod spec;
 mod walls;
 
 use super::{Context, ForceTerm, Forces, Renumbering};
+use crate::core::flow::Vessel;
 use crate::core::neighbours::{Pair, PairRange};
 use crate::core::parallel;
 use crate::core::parallel::Pieced;
@@ -18,6 +19,7 @@ pub use law::PairMaterial;
 use law::{ContactLaw, Lanes, LANES};
 pub use spec::{ContactSpec, NormalSpec, TangentialSpec};
 use std::sync::Mutex;
+pub use walls::VESSEL_FACE;
 use walls::{WallScan, WallTouch};
 
 /// What one contact gives: the force on i (j receives −force), the torques on i and j, the
@@ -106,7 +108,11 @@ pub struct Contact {
     materials: Vec<PairMaterial>,
     n_species: usize,
     law: ContactLaw,
+    /// Contacts between particles (false: the particles touch the walls only).
+    particles: bool,
+    /// Contacts with the box's wall faces, and with the vessel's surface if there is one.
     walls: bool,
+    vessel: Option<Vessel>,
     /// The near-pair search: the largest contact distance (times 1 + a touch tolerance).
     near: PairRange,
     wall_scan: WallScan,
@@ -161,7 +167,9 @@ impl Contact {
             materials,
             n_species: n,
             law,
+            particles: true,
             walls,
+            vessel: None,
             near,
             wall_scan: WallScan::default(),
             wall_found: vec![],
@@ -169,6 +177,17 @@ impl Contact {
             shares: vec![],
             spare_pairs: vec![],
         }
+    }
+
+    /// The same contacts, and the vessel's surface a wall too (with `walls`).
+    pub fn with_vessel(self, vessel: Option<Vessel>) -> Self {
+        Self { vessel, ..self }
+    }
+
+    /// The same contacts without those between particles: non-interacting particles that
+    /// touch the walls only.
+    pub fn walls_only(self) -> Self {
+        Self { particles: false, ..self }
     }
 
     /// The pair constants of every pair, with one species.
@@ -236,7 +255,7 @@ impl Contact {
         lanes.set(
             l,
             touch.overlap,
-            touch.normal(),
+            touch.normal,
             Some((a, p.mass[i])),
             p.velocity[i],
             spin,
@@ -395,7 +414,7 @@ impl Contact {
     fn apply_walls(&mut self, ctx: &Context, p: &Particles, out: &mut Forces, diag: &mut ContactDiagnostics) {
         let history = std::mem::take(&mut out.history.walls);
         let mut found = std::mem::take(&mut self.wall_found);
-        self.wall_scan.find(p, ctx.domain, ctx.neighbours.rebuilt(self.near), &mut found);
+        self.wall_scan.find(p, ctx.domain, self.vessel.as_ref(), ctx.neighbours.rebuilt(self.near), &mut found);
         let (shares, size) = parallel::split_of(out.force.len());
         let mut slots = std::mem::take(&mut self.wall_shares);
         slots.resize_with(shares.max(slots.len()), Default::default);
@@ -503,7 +522,7 @@ impl ForceTerm for Contact {
         "contact"
     }
     fn pairs(&self) -> Option<PairRange> {
-        Some(self.near)
+        self.particles.then_some(self.near)
     }
     /// The tangential springs.
     fn keeps_history(&self) -> bool {
@@ -511,7 +530,9 @@ impl ForceTerm for Contact {
     }
     fn apply(&mut self, ctx: &Context, p: &Particles, out: &mut Forces) {
         let mut diag = ContactDiagnostics::default();
-        self.apply_pairs(ctx, p, out, &mut diag);
+        if self.particles {
+            self.apply_pairs(ctx, p, out, &mut diag);
+        }
         if self.walls {
             self.apply_walls(ctx, p, out, &mut diag);
         }

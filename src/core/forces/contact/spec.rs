@@ -14,7 +14,12 @@ use std::f64::consts::PI;
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ContactSpec {
-    /// Particle–wall contacts on the wall faces (default true).
+    /// Contacts between particles (default true); false leaves the walls only: particles that
+    /// do not touch each other, as in a deposition study of independent particles.
+    #[serde(default = "default_true")]
+    pub particles: bool,
+    /// Particle–wall contacts on the wall faces, and on a `[fluid.vessel]`'s surface (default
+    /// true).
     #[serde(default = "default_true")]
     pub walls: bool,
     /// Normal force: `hertz` (default) or `hooke` (a linear spring of `stiffness`).
@@ -129,6 +134,8 @@ impl TermSpec for ContactSpec {
     }
 
     fn build(&self, ctx: &SceneContext) -> Box<dyn ForceTerm> {
-        Box::new(Contact::new(ctx.species, self.law(), self.walls, ctx.pairs.near))
+        let vessel = ctx.fluid.as_ref().and_then(|f| f.flow.vessel()).copied();
+        let contact = Contact::new(ctx.species, self.law(), self.walls, ctx.pairs.near).with_vessel(vessel);
+        Box::new(if self.particles { contact } else { contact.walls_only() })
     }
 }

@@ -1,28 +1,23 @@
-//! Wall geometry: which particles touch which faces of the box, apart from the contact law.
-//! Walls stand on the faces of non-periodic axes; a particle touches a face when its centre is
-//! closer to it than its radius (overlap a − gap, normal pointing into the box).
+//! Wall geometry: which particles touch which walls, apart from the contact law. Walls stand on
+//! the faces of non-periodic axes (faces 0–5: x-lo, x-hi, y-lo, …) and, in a vessel, on its
+//! cylindrical surface ([`VESSEL_FACE`]). A particle touches a wall when its centre is closer to
+//! it than its radius (overlap a − gap, normal pointing into the fluid).
 
 use crate::core::domain::Domain;
+use crate::core::flow::Vessel;
 use crate::core::parallel::{self, Pieces};
 use crate::core::state::{Particles, Vec3, WallFace};
 
-/// A particle touching a wall face: (particle, face, axis, upper face?, overlap).
+/// The wall face of a vessel's cylindrical surface (after the box's six).
+pub const VESSEL_FACE: WallFace = 6;
+
+/// A particle touching a wall: (particle, face, unit normal into the fluid, overlap).
 #[derive(Clone, Copy, Default)]
 pub struct WallTouch {
     pub i: u32,
     pub face: WallFace,
-    pub axis: usize,
-    pub upper: bool,
+    pub normal: Vec3,
     pub overlap: f64,
-}
-
-impl WallTouch {
-    /// Unit normal of the face, into the box.
-    pub fn normal(&self) -> Vec3 {
-        let mut normal = Vec3::zeros();
-        normal[self.axis] = if self.upper { -1.0 } else { 1.0 };
-        normal
-    }
 }
 
 /// The wall search, with the particles that may touch a wall before the near list's next
@@ -46,10 +41,29 @@ impl WallScan {
     /// list's skin when it was rebuilt in this evaluation — until the next rebuild no particle
     /// moves more than skin/2, so only particles within a radius plus half the skin of a wall
     /// can touch it, and only those are tested.
-    pub fn find(&mut self, p: &Particles, domain: &Domain, rebuilt: Option<f64>, found: &mut Vec<WallTouch>) {
+    ///
+    /// A `vessel`'s surface is a wall at distance R from its axis: gap R − ρ at a centre a
+    /// distance ρ from the axis, normal −ρ̂ (LIGGGHTS' `zcylinder` seen from inside).
+    pub fn find(
+        &mut self,
+        p: &Particles,
+        domain: &Domain,
+        vessel: Option<&Vessel>,
+        rebuilt: Option<f64>,
+        found: &mut Vec<WallTouch>,
+    ) {
         // Walls on periodic axes are infinitely far away.
         let lo = Vec3::from_fn(|k, _| if domain.periodic[k] { f64::NEG_INFINITY } else { domain.lo[k] });
         let hi = Vec3::from_fn(|k, _| if domain.periodic[k] { f64::INFINITY } else { domain.hi[k] });
+        // The centre's offset from the vessel's axis, and the gap to its surface.
+        let radial = |x: &Vec3| {
+            vessel.map(|v| {
+                let d = x - v.centre;
+                let off = d - d.dot(&v.axis) * v.axis.into_inner();
+                let rho = off.norm();
+                (off, rho, v.radius - rho)
+            })
+        };
         let near = |i: usize, margin: f64| {
             let (a, x) = (p.radius[i] + margin, p.position[i]);
             (x.x - lo.x < a)
@@ -58,6 +72,7 @@ impl WallScan {
                 | (hi.x - x.x < a)
                 | (hi.y - x.y < a)
                 | (hi.z - x.z < a)
+                | radial(&x).is_some_and(|(_, _, gap)| gap < a)
         };
         if let Some(skin) = rebuilt {
             let mut candidates = self.candidates.take().unwrap_or_default();
@@ -77,9 +92,14 @@ impl WallScan {
                 for (upper, gap) in [(false, x[axis] - lo[axis]), (true, hi[axis] - x[axis])] {
                     if gap < a {
                         let face = (2 * axis + upper as usize) as WallFace;
-                        out.push(WallTouch { i: i as u32, face, axis, upper, overlap: a - gap });
+                        let mut normal = Vec3::zeros();
+                        normal[axis] = if upper { -1.0 } else { 1.0 };
+                        out.push(WallTouch { i: i as u32, face, normal, overlap: a - gap });
                     }
                 }
+            }
+            if let Some((off, rho, gap)) = radial(&x).filter(|&(_, rho, gap)| gap < a && rho > 0.0) {
+                out.push(WallTouch { i: i as u32, face: VESSEL_FACE, normal: -off / rho, overlap: a - gap });
             }
         };
         match &self.candidates {
