@@ -30,8 +30,14 @@ pub fn philox4x32(counter: [u32; 4], key: [u32; 2]) -> [u32; 4] {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[repr(u32)]
 pub enum Stream {
+    /// The thermal force (`[forces.thermal]`).
     Translation = 0,
+    /// The thermal torque.
     Rotation = 1,
+    /// The overdamped scheme's displacement (`scheme = "brownian"`).
+    BrownianTranslation = 2,
+    /// The overdamped scheme's turn of a permanent moment.
+    BrownianRotation = 3,
 }
 
 /// The noise source of one run.

@@ -245,6 +245,9 @@ impl Scene {
             rotational_drag: &rotational_drag,
             // A flow that is not uniform is refused with this scheme (the drag's check).
             fluid_velocity: fluid.map_or(Vec3::zeros(), |f| fluid::flow(f).uniform().unwrap_or_default()),
+            viscosity: mu,
+            temperature: self.spec.forces.thermal.as_ref().map_or(0.0, |t| t.temperature),
+            seed: self.spec.seed,
         })
     }
 
@@ -334,13 +337,20 @@ fn estimate(spec: &SceneSpec, domain: &Domain, species: &[Species], initial: &Pa
             .iter()
             .zip(&moments)
             .map(|(s, &m)| {
-                // A term's agitation (thermal motion) adds its closing speed to the field's.
-                let agitation = terms.iter().map(|t| t.agitation_speed(s)).fold(0.0, f64::max);
+                // A term's agitation (thermal motion) adds its closing speed to the field's. Without
+                // inertia (overdamped dynamics) the noise is a displacement, which the contact's
+                // overdamped bound takes itself.
+                let agitation = if spec.integration.scheme.spec().overdamped() {
+                    0.0
+                } else {
+                    terms.iter().map(|t| t.agitation_speed(s)).fold(0.0, f64::max)
+                };
                 impact_speed(s, m, drag_viscosity, max_initial_speed) + agitation
             })
             .collect(),
         moments,
         drag_viscosity,
+        temperature: spec.forces.thermal.as_ref().map(|t| t.temperature),
         max_initial_speed,
     };
     // The moments' bound (held over several steps), then each term's.
@@ -492,6 +502,7 @@ fn check_forces(
     warnings: &mut Vec<String>,
 ) -> Result<(), SceneError> {
     let ctx = term_context(spec, domain, species, Skins::default());
+    spec.integration.scheme.spec().check_scene(&ctx)?;
     for term in spec.forces.terms() {
         term.check(&ctx)?;
     }

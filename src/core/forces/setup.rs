@@ -117,6 +117,8 @@ pub struct StepContext<'a> {
     pub impact_speeds: Vec<f64>,
     /// Viscosity if drag is included.
     pub drag_viscosity: Option<f64>,
+    /// T (K) of `[forces.thermal]`, if listed.
+    pub temperature: Option<f64>,
     pub max_initial_speed: f64,
 }
 

@@ -16,6 +16,9 @@ use std::f64::consts::PI;
 /// Boltzmann's constant (J/K), exact in the SI since 2019.
 pub const BOLTZMANN: f64 = 1.380_649e-23;
 
+/// The largest rms displacement √(6 D h) of an overdamped step, as a fraction of the radius.
+pub const BROWNIAN_STEP: f64 = 0.1;
+
 #[derive(Debug, Clone)]
 pub struct Thermal {
     /// kT (J).
@@ -25,6 +28,8 @@ pub struct Thermal {
     /// Rotational noise, balancing the rotational drag.
     pub rotational: bool,
     pub noise: Noise,
+    /// The overdamped scheme draws the noise itself (`scheme = "brownian"`): the term adds nothing.
+    pub in_integrator: bool,
     /// This evaluation's force and torque per slot (zero at dt = 0, the setup evaluation).
     force: Vec<Vec3>,
     torque: Vec<Vec3>,
@@ -33,7 +38,7 @@ pub struct Thermal {
 impl Thermal {
     pub fn new(temperature: f64, viscosity: f64, rotational: bool, seed: u64) -> Self {
         let kt = BOLTZMANN * temperature;
-        Self { kt, viscosity, rotational, noise: Noise { seed }, force: vec![], torque: vec![] }
+        Self { kt, viscosity, rotational, noise: Noise { seed }, in_integrator: false, force: vec![], torque: vec![] }
     }
 }
 
@@ -43,6 +48,9 @@ impl ForceTerm for Thermal {
     }
     /// Draws each particle's force (and torque) for the state's step.
     fn prepare(&mut self, ctx: &Context, state: &State) -> Result<(), TermError> {
+        if self.in_integrator {
+            return Ok(());
+        }
         let p = &state.particles;
         let (kt, mu, dt, step, noise) = (self.kt, self.viscosity, ctx.dt, state.step, self.noise);
         let scale = |gamma: f64| if dt > 0.0 { (2.0 * kt * gamma / dt).sqrt() } else { 0.0 };
@@ -63,6 +71,9 @@ impl ForceTerm for Thermal {
         Ok(())
     }
     fn apply(&mut self, _ctx: &Context, _p: &Particles, out: &mut Forces) {
+        if self.in_integrator {
+            return;
+        }
         parallel::for_each_share((&mut *out.force, &self.force[..]), |_, (f, n)| {
             f.iter_mut().zip(n).for_each(|(f, n)| *f += n)
         });
@@ -92,6 +103,7 @@ impl TermSpec for ThermalSpec {
     /// needs that drag, unshielded and without a wall, and an integrator that evaluates each step
     /// once per time (not adaptive step doubling, which would reuse a step's draw) and does not
     /// integrate the drag itself (exponential Verlet would need the noise of its exact update).
+    /// The overdamped scheme (`brownian`) takes the temperature and draws its own noise.
     fn check(&self, ctx: &SceneContext) -> Result<(), Invalid> {
         positive("forces.thermal.temperature", self.temperature)?;
         let Some(drag) = &ctx.forces.drag else {
@@ -100,7 +112,8 @@ impl TermSpec for ThermalSpec {
         if let Some((key, value, why)) = drag.unlike_stokes() {
             return Err(invalid(key, value, format!("the thermal forces balance a lone sphere's Stokes drag; {why}")));
         }
-        if ctx.scheme.spec().compares_evaluations() || ctx.scheme.spec().integrates_linear_drag() {
+        let scheme = ctx.scheme.spec();
+        if scheme.compares_evaluations() || (scheme.integrates_linear_drag() && !scheme.overdamped()) {
             return Err(invalid(
                 "integration.scheme",
                 ctx.scheme,
@@ -110,9 +123,24 @@ impl TermSpec for ThermalSpec {
         Ok(())
     }
     /// The rms thermal speed √(3kT/m) may carry the lightest particle a tenth of its radius in a
-    /// step (contacts then resolve as without noise).
+    /// step (contacts then resolve as without noise). Overdamped, a step's rms displacement
+    /// √(6 D h), D = kT/(6π μ a), may be a tenth of the smallest radius: h ≤ (a/10)²/(6D).
     fn stable_dt(&self, ctx: &StepContext) -> Option<StepBound> {
         let kt = BOLTZMANN * self.temperature;
+        if let (true, Some(mu)) = (ctx.scheme.spec().overdamped(), ctx.drag_viscosity) {
+            let bound = ctx
+                .species
+                .iter()
+                .map(|s| (BROWNIAN_STEP * s.radius).powi(2) / (6.0 * kt / (6.0 * PI * mu * s.radius)))
+                .fold(f64::INFINITY, f64::min);
+            return Some(StepBound {
+                term: "thermal",
+                dt: Some(bound),
+                limited_by: "Brownian displacement",
+                collision: None,
+                summary: format!("; Brownian rms displacement of a tenth of a radius {bound:.3e} s"),
+            });
+        }
         let bound =
             ctx.species.iter().map(|s| 0.1 * s.radius / (3.0 * kt / s.mass()).sqrt()).fold(f64::INFINITY, f64::min);
         Some(StepBound {
@@ -131,6 +159,8 @@ impl TermSpec for ThermalSpec {
     fn build(&self, ctx: &SceneContext) -> Box<dyn ForceTerm> {
         let viscosity = ctx.fluid.as_ref().expect("checked: the drag has a [fluid] table").viscosity;
         let rotational = ctx.forces.drag.as_ref().is_some_and(|d| d.rotational);
-        Box::new(Thermal::new(self.temperature, viscosity, rotational, ctx.seed))
+        let mut thermal = Thermal::new(self.temperature, viscosity, rotational, ctx.seed);
+        thermal.in_integrator = ctx.scheme.spec().overdamped();
+        Box::new(thermal)
     }
 }

@@ -8,6 +8,7 @@
 //! keys sit beside it in the same table.
 
 mod adaptive_verlet;
+mod brownian;
 mod explicit_euler;
 mod exponential_verlet;
 mod respa;
@@ -16,6 +17,7 @@ mod subcycled_euler;
 mod velocity_verlet;
 
 pub use adaptive_verlet::{AdaptiveVerlet, AdaptiveVerletSpec};
+pub use brownian::{Brownian, BrownianSpec};
 pub use explicit_euler::{ExplicitEuler, ExplicitEulerSpec};
 pub use exponential_verlet::{ExponentialVerlet, ExponentialVerletSpec};
 pub use respa::{Respa, RespaSpec};
@@ -24,6 +26,7 @@ pub use subcycled_euler::{SubcycledEuler, SubcycledEulerSpec};
 pub use velocity_verlet::{VelocityVerlet, VelocityVerletSpec};
 
 use super::checks::Invalid;
+use super::forces::setup::SceneContext;
 pub use super::forces::ForceGroup;
 use super::parallel;
 use super::renumber::Renumbering;
@@ -57,6 +60,12 @@ pub struct IntegratorContext<'a> {
     pub rotational_drag: &'a [f64],
     /// u_f (m/s), uniform; zero without a fluid.
     pub fluid_velocity: Vec3,
+    /// μ (Pa s) of the drag; zero without drag.
+    pub viscosity: f64,
+    /// T (K) of `[forces.thermal]`; zero without it.
+    pub temperature: f64,
+    /// The scene's seed (the key of the noise).
+    pub seed: u64,
 }
 
 /// A scheme's `[integration]` keys (plain serde data, in the scheme's own file): its checks, what
@@ -89,6 +98,16 @@ pub trait IntegratorSpec {
     /// schemes for dt < (2/ω)(√(1+ζ²) − ζ)).
     fn forward_euler_in_contact(&self) -> bool {
         false
+    }
+    /// Overdamped (Brownian) dynamics: positions move with the mobility times the force plus the
+    /// noise, with no inertia. The thermal term's noise is then drawn by the integrator, and the
+    /// contact's step bound is the overdamped relaxation of the contact.
+    fn overdamped(&self) -> bool {
+        false
+    }
+    /// Refuses a scene whose other tables the scheme cannot run with, naming the key.
+    fn check_scene(&self, _ctx: &SceneContext) -> Result<(), Invalid> {
+        Ok(())
     }
     fn build(&self, ctx: &IntegratorContext) -> Box<dyn Integrator>;
 }
@@ -164,6 +183,7 @@ schemes! {
     ExponentialVerlet(ExponentialVerletSpec) = "exponential-verlet",
     AdaptiveVerlet(AdaptiveVerletSpec) = "adaptive-verlet",
     SubcycledEuler(SubcycledEulerSpec) = "subcycled-euler",
+    Brownian(BrownianSpec) = "brownian",
 }
 
 impl Default for Scheme {
@@ -343,8 +363,7 @@ fn advance(p: &mut Particles, force: &[Vec3], torque: &[Vec3], kick: Kick, drift
                 );
             }
         }
-        // √3 rounded up, and the relative rounding of a difference (half an ulp) on top.
-        f64::from_bits(largest.into_inner()) * (1.732_050_807_568_878 * (1.0 + f64::EPSILON))
+        displacement_bound(largest.into_inner())
     });
     if p.has_permanent_moments && drift != 0.0 {
         let turn = |(m, w): (&mut Vec3, &Vec3)| {
@@ -354,6 +373,13 @@ fn advance(p: &mut Particles, force: &[Vec3], torque: &[Vec3], kick: Kick, drift
         };
         p.permanent_moment.iter_mut().zip(&p.angular_velocity).for_each(turn);
     }
+}
+
+/// A bound on any particle's displacement from the bits of the largest change of a coordinate
+/// (see [`step`]): that change times √3 rounded up, and the relative rounding of a difference
+/// (half an ulp) on top.
+fn displacement_bound(largest: u64) -> f64 {
+    f64::from_bits(largest) * (1.732_050_807_568_878 * (1.0 + f64::EPSILON))
 }
 
 /// x += dx, folded into `moved`, the bits of the largest |Δx| so far (the change of x as the

@@ -5,6 +5,7 @@ use super::Contact;
 use crate::core::forces::setup::{
     invalid, positive, Collision, Invalid, SceneContext, StepBound, StepContext, TermSpec,
 };
+use crate::core::forces::thermal::BOLTZMANN;
 use crate::core::forces::ForceTerm;
 use serde::Deserialize;
 use std::f64::consts::PI;
@@ -92,6 +93,9 @@ impl TermSpec for ContactSpec {
     /// semi-implicit Euler) are stable for dt < (2/ω)(√(1+ζ²) − ζ), explicit Euler only for
     /// dt < 2ζ/ω (never when e = 1).
     fn stable_dt(&self, ctx: &StepContext) -> Option<StepBound> {
+        if ctx.scheme.spec().overdamped() {
+            return overdamped_bound(self.law(), ctx);
+        }
         let law = self.law();
         let (mut speed, mut duration, mut bound) = (ctx.max_initial_speed, f64::INFINITY, f64::INFINITY);
         for (k, s) in ctx.species.iter().enumerate() {
@@ -138,4 +142,73 @@ impl TermSpec for ContactSpec {
         let contact = Contact::new(ctx.species, self.law(), self.walls, ctx.pairs.near).with_vessel(vessel);
         Box::new(if self.particles { contact } else { contact.walls_only() })
     }
+}
+
+/// The contact's step bound under overdamped dynamics (`scheme = "brownian"`), where a contact
+/// has no oscillator: its overlap and its spring relax. Two touching spheres of one species (a,
+/// mobilities μ = 1/(6πηa), μ_r = 1/(8πηa³)): Euler's overlap obeys δ ← δ − 2μ k_n δ h, k_n =
+/// dF/dδ = 2E*√(R*δ) (Hertz, R* = a/2, E* = E/(2(1 − ν²))) or the Hooke stiffness; the Mindlin
+/// spring s ← s − 2(μ + a²μ_r) k_t s h = s − 3.5 μ k_t s h, k_t = 8G*√(R*δ), G* = E/(4(2 − ν)(1 + ν)).
+/// Each update is monotone (no overshoot through zero) for h ≤ 1/λ, λ the larger rate: the
+/// bound is the contact's overdamped relaxation time 1/λ. The overlap is the deepest one a step
+/// makes from touching: the drift closing speed times h ([`StepContext::impact_speeds`]) plus five
+/// standard deviations √(4Dh) of the relative noise along the line of centres, D = kT μ. As δ
+/// grows with h, h λ(δ(h)) = 1 is solved by bisection on ln h. A wall contact (R* = a, mobility
+/// μ) relaxes 2^(3/4) times slower at the same noise (Hertz), so the pair bounds it.
+fn overdamped_bound(law: ContactLaw, ctx: &StepContext) -> Option<StepBound> {
+    let (Some(mu), Some(temperature)) = (ctx.drag_viscosity, ctx.temperature) else {
+        return None;
+    };
+    let kt = BOLTZMANN * temperature;
+    let (mut bound, mut deepest, mut speed) = (f64::INFINITY, 0.0, ctx.max_initial_speed);
+    for (k, s) in ctx.species.iter().enumerate() {
+        let a = s.radius;
+        let mobility = 1.0 / (6.0 * PI * mu * a);
+        let diffusion = kt * mobility;
+        let e_star = s.youngs_modulus / (2.0 * (1.0 - s.poisson_ratio.powi(2)));
+        let g_star = s.youngs_modulus / (4.0 * (2.0 - s.poisson_ratio) * (1.0 + s.poisson_ratio));
+        let v = ctx.impact_speeds[k];
+        speed = speed.max(v);
+        let overlap = |h: f64| v * h + 5.0 * (4.0 * diffusion * h).sqrt();
+        let rate = |h: f64| {
+            let sq = (0.5 * a * overlap(h)).sqrt();
+            let normal = match law.normal {
+                Normal::Hertz => 2.0 * e_star * sq,
+                Normal::Hooke { stiffness } => stiffness,
+            };
+            let tangential = match law.tangential {
+                Tangential::Mindlin => 8.0 * g_star * sq,
+                Tangential::None => 0.0,
+            };
+            (2.0 * mobility * normal).max(3.5 * mobility * tangential)
+        };
+        // h λ(δ(h)) grows with h: bisect ln h between 1e-24 s and 1e6 s.
+        let (mut lo, mut hi) = (1e-24_f64.ln(), 1e6_f64.ln());
+        if hi.exp() * rate(hi.exp()) <= 1.0 {
+            lo = hi;
+        } else {
+            for _ in 0..100 {
+                let mid = 0.5 * (lo + hi);
+                if mid.exp() * rate(mid.exp()) > 1.0 {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+        }
+        let h = lo.exp();
+        if h < bound {
+            (bound, deepest) = (h, overlap(h));
+        }
+    }
+    Some(StepBound {
+        term: "contact",
+        dt: Some(bound),
+        limited_by: "overdamped contact relaxation",
+        collision: Some(Collision { speed, duration: bound }),
+        summary: format!(
+            "; overdamped contact: drift closing speed up to {speed:.3e} m/s and the noise give an overlap of \
+             {deepest:.3e} m, relaxation bound {bound:.3e} s"
+        ),
+    })
 }
