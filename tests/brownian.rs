@@ -377,7 +377,7 @@ fn scenes_the_scheme_cannot_run_are_refused_by_key() {
         ),
         (
             good.replace("[forces.drag]\nlaw = \"stokes\"\nshielding = \"none\"\n", ""),
-            "integration.scheme = brownian",
+            "forces.thermal",
             "add [forces.drag]",
         ),
         (

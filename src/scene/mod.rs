@@ -502,7 +502,14 @@ fn check_forces(
     warnings: &mut Vec<String>,
 ) -> Result<(), SceneError> {
     let ctx = term_context(spec, domain, species, Skins::default());
-    spec.integration.scheme.spec().check_scene(&ctx)?;
+    // An overdamped scheme takes the temperature from the thermal term (which checks the drag).
+    if spec.integration.scheme.spec().overdamped() && spec.forces.thermal.is_none() {
+        return Err(invalid(
+            "integration.scheme",
+            spec.integration.scheme,
+            "overdamped Brownian dynamics takes its temperature from [forces.thermal]: add it",
+        ));
+    }
     for term in spec.forces.terms() {
         term.check(&ctx)?;
     }

@@ -6,6 +6,7 @@
 //! With velocity Verlet the free particle's ⟨v²⟩ is 3kT/m at any dt/τ and its long-time diffusion
 //! coefficient kT/γ (docs/model.md §13).
 
+use super::drag::DragLawSpec;
 use super::setup::{invalid, positive, Invalid, SceneContext, StepBound, StepContext, TermSpec};
 use super::{Context, ForceTerm, Forces, Renumbering, TermError};
 use crate::core::noise::{Noise, Stream};
@@ -113,6 +114,25 @@ impl TermSpec for ThermalSpec {
             return Err(invalid(key, value, format!("the thermal forces balance a lone sphere's Stokes drag; {why}")));
         }
         let scheme = ctx.scheme.spec();
+        if scheme.overdamped() {
+            if drag.law != DragLawSpec::Stokes {
+                return Err(invalid(
+                    "forces.drag.law",
+                    "schiller-naumann", // RPY is refused above
+                    format!("the {} scheme moves each sphere with a lone sphere's Stokes mobility 1/(6πμa); use law = \"stokes\"", ctx.scheme),
+                ));
+            }
+            if !drag.rotational {
+                return Err(invalid(
+                    "forces.drag.rotational",
+                    false,
+                    format!(
+                        "the {} scheme turns the particles with the rotational mobility 1/(8πμa³); set it true",
+                        ctx.scheme
+                    ),
+                ));
+            }
+        }
         if scheme.compares_evaluations() || (scheme.integrates_linear_drag() && !scheme.overdamped()) {
             return Err(invalid(
                 "integration.scheme",

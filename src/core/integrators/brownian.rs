@@ -15,11 +15,8 @@
 //! ([`Stream::BrownianTranslation`], [`Stream::BrownianRotation`]): the same bits on any number of
 //! threads and after `--resume`. docs/model.md §14.
 
+use super::Renumbering;
 use super::{displacement_bound, step, tick, Evaluate, ForceGroup, Integrator, IntegratorContext, IntegratorSpec};
-use super::{Invalid, Renumbering};
-use crate::core::checks::invalid;
-use crate::core::forces::drag::DragLawSpec;
-use crate::core::forces::setup::SceneContext;
 use crate::core::forces::thermal::BOLTZMANN;
 use crate::core::noise::{Noise, Stream};
 use crate::core::parallel;
@@ -111,44 +108,6 @@ impl IntegratorSpec for BrownianSpec {
         true
     }
     /// Refuses a scene without the temperature or the Stokes mobilities the scheme takes.
-    fn check_scene(&self, ctx: &SceneContext) -> Result<(), Invalid> {
-        let scheme = "brownian";
-        if ctx.forces.thermal.is_none() {
-            return Err(invalid(
-                "integration.scheme",
-                scheme,
-                "overdamped Brownian dynamics takes its temperature from [forces.thermal]: add it",
-            ));
-        }
-        let Some(drag) = &ctx.forces.drag else {
-            return Err(invalid(
-                "integration.scheme",
-                scheme,
-                "overdamped Brownian dynamics takes its mobilities from the Stokes drag: add [forces.drag] with \
-                 law = \"stokes\" and shielding = \"none\"",
-            ));
-        };
-        let law = match drag.law {
-            DragLawSpec::Stokes => None,
-            DragLawSpec::SchillerNaumann => Some("schiller-naumann"),
-            DragLawSpec::Rpy => Some("rpy"),
-        };
-        if let Some(law) = law {
-            return Err(invalid(
-                "forces.drag.law",
-                law,
-                "the brownian scheme moves each sphere with a lone sphere's Stokes mobility 1/(6πμa); use law = \"stokes\"",
-            ));
-        }
-        if !drag.rotational {
-            return Err(invalid(
-                "forces.drag.rotational",
-                false,
-                "the brownian scheme turns the particles with the rotational mobility 1/(8πμa³); set it true",
-            ));
-        }
-        Ok(())
-    }
     fn build(&self, ctx: &IntegratorContext) -> Box<dyn Integrator> {
         Box::new(Brownian {
             kt: BOLTZMANN * ctx.temperature,

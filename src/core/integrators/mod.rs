@@ -26,7 +26,6 @@ pub use subcycled_euler::{SubcycledEuler, SubcycledEulerSpec};
 pub use velocity_verlet::{VelocityVerlet, VelocityVerletSpec};
 
 use super::checks::Invalid;
-use super::forces::setup::SceneContext;
 pub use super::forces::ForceGroup;
 use super::parallel;
 use super::renumber::Renumbering;
@@ -100,14 +99,11 @@ pub trait IntegratorSpec {
         false
     }
     /// Overdamped (Brownian) dynamics: positions move with the mobility times the force plus the
-    /// noise, with no inertia. The thermal term's noise is then drawn by the integrator, and the
-    /// contact's step bound is the overdamped relaxation of the contact.
+    /// noise, with no inertia. The thermal term's noise is then drawn by the integrator (which
+    /// needs `[forces.thermal]` and the Stokes drag), and the contact's step bound is the
+    /// overdamped relaxation of the contact.
     fn overdamped(&self) -> bool {
         false
-    }
-    /// Refuses a scene whose other tables the scheme cannot run with, naming the key.
-    fn check_scene(&self, _ctx: &SceneContext) -> Result<(), Invalid> {
-        Ok(())
     }
     fn build(&self, ctx: &IntegratorContext) -> Box<dyn Integrator>;
 }
