@@ -385,7 +385,7 @@ fn scenes_the_scheme_cannot_run_are_refused_by_key() {
             "forces.drag.law = schiller-naumann",
             "Stokes",
         ),
-        (good.replace("law = \"stokes\"", "law = \"rpy\""), "forces.drag.law = rpy", "Stokes"),
+        (good.replace("law = \"stokes\"", "law = \"rpy\""), "law = \"rpy\"", "Stokes"),
         (
             good.replace("shielding = \"none\"\n", "shielding = \"none\"\nrotational = false\n"),
             "forces.drag.rotational = false",
