@@ -194,3 +194,91 @@ fn independent_beads_deposit_in_pichs_fraction() {
         assert!((fraction - reference).abs() < 3.5 * sigma, "ε = {eps}: {fraction} against {reference} ± {sigma}");
     }
 }
+
+/// A saturated magnetite bead (11 µm, Ms = 4.8e5 A/m, capped: its moment V Ms lies along the
+/// 0.4 T field) in steady Poiseuille flow along x (R = 50 µm, ū = 1 mm/s) under the curl-free
+/// gradient ∂B_y/∂x = ∂B_x/∂y = g: the force g V Ms along y drifts it across the flow at
+/// v_d = g V Ms/(6π μ a) while the flow carries it along at u(y). With the drag's relaxation
+/// time τ, y = y0 + v_d (t − τ(1 − e^(−t/τ))) in closed form, and x follows τ x'' = u(y(t)) − x',
+/// integrated here by RK4 at τ/100. The solver's step is τ/10 (first order in it for the drag's
+/// half-step velocity: 1e-4 of the displacement); the moment's tilt g x/B0 adds 4e-5.
+#[test]
+fn a_saturated_bead_drifts_across_poiseuille_flow_in_the_closed_form() {
+    let (g, ms, b0, mean_speed, radius) = (-1.0, 4.8e5, 0.4, 1.0e-3, 5.0e-5);
+    let (a, rho, mu): (f64, f64, f64) = (5.5e-6, 1087.0, 1.0e-3);
+    let tau = 2.0 * rho * a * a / (9.0 * mu);
+    let (dt, end) = (tau / 10.0, 5.0e-3);
+    let y0 = 2.0e-5;
+    let text = format!(
+        r#"version = 1
+[domain]
+lo = [-1e-3, -6e-5, -6e-5]
+hi = [1e-3, 6e-5, 6e-5]
+[fluid]
+density = 1000.0
+viscosity = {mu:e}
+[fluid.vessel]
+centre = [0.0, 0.0, 0.0]
+axis = [1.0, 0.0, 0.0]
+radius = {radius:e}
+mean_speed = {mean_speed:e}
+[field]
+b0 = [{b0}, 0.0, 0.0]
+gradient = [[0.0, {g}, 0.0], [{g}, 0.0, 0.0], [0.0, 0.0, 0.0]]
+[[species]]
+name = "p"
+diameter = {d:e}
+density = {rho}
+youngs_modulus = 1.0e9
+poisson_ratio = 0.5
+friction = 0.5
+restitution = 0.5
+relative_permeability = 12.3
+saturation_magnetisation = {ms:e}
+[[particles]]
+species = "p"
+positions = [[0.0, {y0:e}, 0.0]]
+[forces.gradient]
+[forces.drag]
+law = "stokes"
+shielding = "none"
+rotational = false
+[integration]
+dt = {dt:e}
+end_time = {end:e}
+"#,
+        d = 2.0 * a
+    );
+    let scene = Scene::parse(&text, "drift").unwrap_or_else(|e| panic!("{e}"));
+    let mut sim = scene.simulation(None);
+    sim.initialise().unwrap();
+    for _ in 0..scene.total_steps() {
+        sim.step().unwrap();
+    }
+    let t = sim.state.time;
+    let x = sim.state.particles.position[0];
+    let drift = g * 4.0 / 3.0 * PI * a.powi(3) * ms / (6.0 * PI * mu * a);
+    let y = y0 + drift * (t - tau * (1.0 - (-t / tau).exp()));
+    // τ x'' = u(y(t)) − x' by RK4, (x, x') from rest.
+    let u = |s: f64| {
+        let ys = y0 + drift * (s - tau * (1.0 - (-s / tau).exp()));
+        2.0 * mean_speed * (1.0 - ys * ys / (radius * radius))
+    };
+    let f = |s: f64, (_, v): (f64, f64)| (v, (u(s) - v) / tau);
+    let (mut s, mut state, h) = (0.0, (0.0, 0.0), tau / 100.0);
+    let n = (t / h).round() as usize;
+    let h = t / n as f64;
+    for _ in 0..n {
+        let k1 = f(s, state);
+        let k2 = f(s + h / 2.0, (state.0 + h / 2.0 * k1.0, state.1 + h / 2.0 * k1.1));
+        let k3 = f(s + h / 2.0, (state.0 + h / 2.0 * k2.0, state.1 + h / 2.0 * k2.1));
+        let k4 = f(s + h, (state.0 + h * k3.0, state.1 + h * k3.1));
+        state.0 += h / 6.0 * (k1.0 + 2.0 * k2.0 + 2.0 * k3.0 + k4.0);
+        state.1 += h / 6.0 * (k1.1 + 2.0 * k2.1 + 2.0 * k3.1 + k4.1);
+        s += h;
+    }
+    let (ex, ey) = ((x.x - state.0) / state.0, (x.y - y) / (y - y0));
+    println!("drift across the flow: x {:.4e} m ({ex:.1e}), y {:.4e} m ({ey:.1e})", x.x, x.y);
+    assert!(y - y0 < -1.0e-5 && state.0 > 5.0e-6, "the bead crossed a fifth of the vessel and moved along it");
+    assert!(ex.abs() < 1e-3 && ey.abs() < 1e-3, "x {} against {}, y {} against {y}", x.x, state.0, x.y);
+}
