@@ -5,6 +5,7 @@
 use super::vector::Vec3;
 use nalgebra::{Complex, Unit};
 use std::f64::consts::PI;
+use std::sync::Arc;
 
 /// A straight cylindrical vessel: its axis through `centre` along `axis`, and its `radius` (m).
 #[derive(Debug, Clone, Copy)]
@@ -103,6 +104,8 @@ pub enum Flow {
     Uniform(Vec3),
     /// Poiseuille or Womersley flow along a straight vessel, zero outside it.
     Vessel(VesselFlow),
+    /// Velocities on a grid (a CFD solution), trilinear in space and linear in time.
+    Grid(Arc<GriddedFlow>),
 }
 
 impl Flow {
@@ -112,13 +115,14 @@ impl Flow {
         match self {
             Flow::Uniform(u) => *u,
             Flow::Vessel(flow) => flow.velocity(at, t),
+            Flow::Grid(grid) => grid.velocity(at, t),
         }
     }
 
     /// The vessel the flow runs along, if any.
     pub fn vessel(&self) -> Option<&Vessel> {
         match self {
-            Flow::Uniform(_) => None,
+            Flow::Uniform(_) | Flow::Grid(_) => None,
             Flow::Vessel(flow) => Some(&flow.vessel),
         }
     }
@@ -127,8 +131,83 @@ impl Flow {
     pub fn uniform(&self) -> Option<Vec3> {
         match self {
             Flow::Uniform(u) => Some(*u),
-            Flow::Vessel(_) => None,
+            Flow::Vessel(_) | Flow::Grid(_) => None,
         }
+    }
+}
+
+/// A velocity field sampled on a regular grid at one or more times: node (i, j, k) of frame f
+/// sits at origin + (i, j, k) ∘ spacing and time `times[f]`. Between nodes the velocity is
+/// trilinear, between frames linear; before the first frame and after the last it holds the
+/// end frame, unless the frames repeat with `period`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GriddedFlow {
+    pub origin: Vec3,
+    pub spacing: Vec3,
+    /// Nodes along x, y and z (at least 2 each).
+    pub shape: [usize; 3],
+    /// Ascending frame times (s).
+    pub times: Vec<f64>,
+    /// The frames repeat with this period (s): frame f also stands at times[f] + n period.
+    pub period: Option<f64>,
+    /// Frame by frame, node (i, j, k) at `((f nx + i) ny + j) nz + k` (z fastest).
+    pub velocity: Vec<Vec3>,
+}
+
+impl GriddedFlow {
+    /// The grid's far corner.
+    pub fn end(&self) -> Vec3 {
+        self.origin + self.spacing.component_mul(&Vec3::from_fn(|k, _| (self.shape[k] - 1) as f64))
+    }
+
+    /// Node (i, j, k) of frame f.
+    #[inline]
+    fn node(&self, f: usize, i: usize, j: usize, k: usize) -> Vec3 {
+        let [nx, ny, nz] = self.shape;
+        self.velocity[((f * nx + i) * ny + j) * nz + k]
+    }
+
+    /// Trilinear interpolation in frame f: with s = (x − origin)/spacing, cell c = ⌊s⌋ (kept
+    /// inside the grid) and weights w = s − c, the sum over the cell's corners of
+    /// Π (w or 1 − w) u_corner. Exact at the nodes and linear along each axis between them.
+    fn in_frame(&self, f: usize, at: Vec3) -> Vec3 {
+        let mut cell = [0usize; 3];
+        let mut w = [0.0; 3];
+        for a in 0..3 {
+            let s = (at[a] - self.origin[a]) / self.spacing[a];
+            let c = (s.floor().max(0.0) as usize).min(self.shape[a] - 2);
+            cell[a] = c;
+            w[a] = (s - c as f64).clamp(0.0, 1.0);
+        }
+        let [i, j, k] = cell;
+        let mut u = Vec3::zeros();
+        for (di, wi) in [(0, 1.0 - w[0]), (1, w[0])] {
+            for (dj, wj) in [(0, 1.0 - w[1]), (1, w[1])] {
+                for (dk, wk) in [(0, 1.0 - w[2]), (1, w[2])] {
+                    u += wi * wj * wk * self.node(f, i + di, j + dj, k + dk);
+                }
+            }
+        }
+        u
+    }
+
+    /// u(x, t): trilinear in the frames either side of t, linear between them.
+    pub fn velocity(&self, at: Vec3, t: f64) -> Vec3 {
+        let last = self.times.len() - 1;
+        let t0 = self.times[0];
+        let t = match self.period {
+            Some(p) => t0 + (t - t0).rem_euclid(p),
+            None => t.clamp(t0, self.times[last]),
+        };
+        // The frame at or before t, and the one after (the first again, a period on, if they repeat).
+        let f = self.times.partition_point(|&s| s <= t).saturating_sub(1);
+        let (g, t_next) = match (f < last, self.period) {
+            (true, _) => (f + 1, self.times[f + 1]),
+            (false, Some(p)) => (0, t0 + p),
+            (false, None) => return self.in_frame(f, at),
+        };
+        let w = (t - self.times[f]) / (t_next - self.times[f]);
+        (1.0 - w) * self.in_frame(f, at) + w * self.in_frame(g, at)
     }
 }
 

@@ -83,7 +83,11 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
     }
     // Density: the buoyancy in fix gravity; viscosity: fix viscous; velocity: refused with drag
     // (without drag it acts on nothing).
-    let fluid_velocity = fluid.as_ref().map(|FluidSpec { density: _, viscosity: _, velocity, vessel: _ }| velocity);
+    let fluid_velocity =
+        fluid.as_ref().map(|FluidSpec { density: _, viscosity: _, velocity, vessel: _, grid: _ }| velocity);
+    if fluid.as_ref().is_some_and(|f| f.grid.is_some()) {
+        return Err(unsupported(engine, "fluid.grid", "the decks write no flow field read from a grid"));
+    }
     // A vessel's flow would be fix addforce with atom-style variables of position and velocity:
     // not written yet, refused whether or not a drag term reads it.
     if fluid.as_ref().is_some_and(|f| f.vessel.is_some()) {

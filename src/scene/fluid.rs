@@ -1,13 +1,15 @@
-//! `[fluid]` and `[fluid.vessel]`: the carrier fluid, at rest, moving uniformly, or flowing along
-//! a straight cylindrical vessel (Poiseuille's steady flow, Womersley's pulsatile one). Its checks
-//! and the flow the drag laws read.
+//! `[fluid]`, `[fluid.vessel]` and `[fluid.grid]`: the carrier fluid, at rest, moving uniformly,
+//! flowing along a straight cylindrical vessel (Poiseuille's steady flow, Womersley's pulsatile
+//! one), or given on a grid by a CFD solution. Its checks and the flow the drag laws read.
 
 use super::{invalid, positive, SceneError};
-use crate::core::flow::{Flow, Harmonic, Vessel, VesselFlow, MAX_WOMERSLEY};
+use crate::core::flow::{Flow, GriddedFlow, Harmonic, Vessel, VesselFlow, MAX_WOMERSLEY};
 use crate::core::forces::setup::Fluid;
 use crate::core::state::{Particles, Vec3};
 use nalgebra::{Complex, Unit};
 use serde::Deserialize;
+use std::path::Path;
+use std::sync::Arc;
 
 /// `[fluid]`: the carrier fluid, still, moving uniformly, or flowing along a vessel.
 #[derive(Debug, Clone, Deserialize)]
@@ -22,6 +24,23 @@ pub struct FluidSpec {
     pub velocity: [f64; 3],
     /// Flow along a straight cylindrical vessel instead ([`VesselSpec`]).
     pub vessel: Option<VesselSpec>,
+    /// A flow field on a grid read from a file instead ([`GridSpec`]).
+    pub grid: Option<GridSpec>,
+}
+
+/// `[fluid.grid]`: velocities on a regular grid, from HDF5 or legacy VTK (`io::flow_grid`),
+/// trilinear in space and linear in time. The grid must cover the box.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GridSpec {
+    /// The file, relative to the scene file.
+    pub file: String,
+    /// The frames repeat with this period (s), a cardiac cycle; without it the last frame must
+    /// reach `integration.end_time` (one frame: a steady flow).
+    pub period: Option<f64>,
+    /// The grid as read (filled when the scene is built).
+    #[serde(skip)]
+    pub loaded: Option<Arc<GriddedFlow>>,
 }
 
 /// `[fluid.vessel]`: flow along a straight cylindrical vessel, zero outside it. Steady Poiseuille
@@ -49,6 +68,9 @@ pub struct VesselSpec {
 pub fn check(f: &FluidSpec) -> Result<(), SceneError> {
     positive("fluid.viscosity", f.viscosity)?;
     super::non_negative("fluid.density", f.density)?;
+    if f.grid.is_some() && (f.vessel.is_some() || f.velocity != [0.0; 3]) {
+        return Err(invalid("fluid.grid", "{…}", "sets the flow: leave out fluid.velocity and [fluid.vessel]"));
+    }
     let Some(v) = &f.vessel else { return Ok(()) };
     if f.velocity != [0.0; 3] {
         return Err(invalid(
@@ -117,6 +139,62 @@ pub fn check_particles(f: &FluidSpec, particles: &Particles) -> Result<(), Scene
     Ok(())
 }
 
+/// Reads `[fluid.grid]`'s file (relative to `dir`) into the spec, refusing by key a grid that
+/// cannot serve the run: too few nodes, spacing not positive, values not finite, frames out of
+/// order, not covering the box `[lo, hi]`, or ending before `end_time` without a period. Returns
+/// the file's bytes, which the scene's hash includes.
+pub fn load_grid(f: &mut FluidSpec, dir: &Path, (lo, hi): (Vec3, Vec3), end_time: f64) -> Result<Vec<u8>, SceneError> {
+    let Some(spec) = &mut f.grid else { return Ok(vec![]) };
+    let path = dir.join(&spec.file);
+    let bytes =
+        std::fs::read(&path).map_err(|e| invalid("fluid.grid.file", &spec.file, format!("cannot read it: {e}")))?;
+    let refuse = |why: String| invalid("fluid.grid.file", &spec.file, why);
+    let mut grid = crate::io::flow_grid::read(&path).map_err(refuse)?;
+    if grid.shape.iter().any(|&n| n < 2) {
+        return Err(refuse(format!("has {:?} nodes: at least 2 along each axis", grid.shape)));
+    }
+    if !grid.spacing.iter().all(|&h| h > 0.0 && h.is_finite()) || !grid.origin.iter().all(|x| x.is_finite()) {
+        return Err(refuse(format!(
+            "spacing {:?}, origin {:?}: must be finite, spacing positive",
+            grid.spacing, grid.origin
+        )));
+    }
+    if let Some(k) = grid.velocity.iter().position(|u| !u.iter().all(|c| c.is_finite())) {
+        return Err(refuse(format!("velocity value {k} is not finite")));
+    }
+    if !grid.times.iter().all(|t| t.is_finite()) || grid.times.windows(2).any(|w| w[1] <= w[0]) {
+        return Err(refuse(format!("frame times {:?} must rise", grid.times)));
+    }
+    let end = grid.end();
+    if (0..3).any(|k| grid.origin[k] > lo[k] || end[k] < hi[k]) {
+        return Err(refuse(format!(
+            "spans {:?} to {:?} m and does not cover the box {:?} to {:?} m",
+            grid.origin.as_slice(),
+            end.as_slice(),
+            lo.as_slice(),
+            hi.as_slice()
+        )));
+    }
+    let (first, last) = (grid.times[0], grid.times[grid.times.len() - 1]);
+    match spec.period {
+        Some(p) => {
+            positive("fluid.grid.period", p)?;
+            if last - first >= p {
+                return Err(invalid("fluid.grid.period", p, format!("is shorter than the frames' span {:e} s", last - first)));
+            }
+        }
+        None if grid.times.len() > 1 && (first > 0.0 || last < end_time) => {
+            return Err(refuse(format!(
+                "its frames span {first:e} to {last:e} s, not the run's 0 to {end_time:e} s: set fluid.grid.period to repeat them"
+            )))
+        }
+        None => {}
+    }
+    grid.period = spec.period;
+    spec.loaded = Some(Arc::new(grid));
+    Ok(bytes)
+}
+
 /// The vessel's geometry.
 pub fn vessel(v: &VesselSpec) -> Vessel {
     Vessel { centre: Vec3::from(v.centre), axis: Unit::new_normalize(Vec3::from(v.axis)), radius: v.radius }
@@ -124,6 +202,9 @@ pub fn vessel(v: &VesselSpec) -> Vessel {
 
 /// The fluid's velocity field.
 pub fn flow(f: &FluidSpec) -> Flow {
+    if let Some(grid) = f.grid.as_ref().and_then(|g| g.loaded.clone()) {
+        return Flow::Grid(grid);
+    }
     let Some(v) = &f.vessel else { return Flow::Uniform(Vec3::from(f.velocity)) };
     let vessel = vessel(v);
     let mut flow = VesselFlow::poiseuille(vessel, v.mean_speed, f.density, f.viscosity);

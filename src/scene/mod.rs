@@ -109,14 +109,16 @@ impl Scene {
         Self::build(spec, text.to_string(), hasher, dir)
     }
 
-    fn build(spec: SceneSpec, text: String, mut hasher: Sha256, dir: &Path) -> Result<Self, SceneError> {
+    fn build(mut spec: SceneSpec, text: String, mut hasher: Sha256, dir: &Path) -> Result<Self, SceneError> {
         let mut warnings = vec![];
         if spec.version != 1 {
             return Err(invalid("version", spec.version, "this magdem reads scene version 1"));
         }
         let domain = check_domain(&spec.domain)?;
-        if let Some(f) = &spec.fluid {
+        let end_time = spec.integration.end_time;
+        if let Some(f) = &mut spec.fluid {
             fluid::check(f)?;
+            hasher.update(fluid::load_grid(f, dir, (domain.lo, domain.hi), end_time)?);
         }
         let species =
             spec.species.iter().enumerate().map(|(k, s)| check_species(k, s)).collect::<Result<Vec<_>, _>>()?;

@@ -50,7 +50,7 @@ impl<'a> FluidAt<'a> {
     fn of(flow: &Flow, samples: &'a [Vec3]) -> Self {
         match flow {
             Flow::Uniform(u) => FluidAt::Uniform(*u),
-            Flow::Vessel(_) => FluidAt::Sampled(samples),
+            Flow::Vessel(_) | Flow::Grid(_) => FluidAt::Sampled(samples),
         }
     }
 
@@ -103,7 +103,8 @@ impl Drag {
 
     /// Samples a flow that varies in space or time at every particle, at the evaluation's time.
     fn sample_flow(&mut self, ctx: &Context, p: &Particles) {
-        if let Flow::Vessel(flow) = &self.fluid.flow {
+        if self.fluid.flow.uniform().is_none() {
+            let flow = &self.fluid.flow;
             self.local_flow.resize(p.len(), Vec3::zeros());
             parallel::for_each_share((&mut self.local_flow[..], &p.position[..]), |_, (u, x)| {
                 u.iter_mut().zip(x).for_each(|(u, x)| *u = flow.velocity(*x, ctx.time));
@@ -493,14 +494,14 @@ impl TermSpec for DragSpec {
                 return Err(invalid(
                     "integration.scheme",
                     ctx.scheme,
-                    "integrates the drag towards one uniform fluid velocity; the [fluid.vessel] flow varies in space",
+                    "integrates the drag towards one uniform fluid velocity; the fluid's flow varies in space",
                 ));
             }
             if self.wall.is_some() {
                 return Err(invalid(
                     "forces.drag.wall",
                     "{…}",
-                    "the wall correction is for a fluid at rest beside a plane; the [fluid.vessel] flow is not",
+                    "the wall correction is for a fluid at rest beside a plane; the fluid's flow is not",
                 ));
             }
         }
