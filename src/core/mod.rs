@@ -4,6 +4,7 @@
 pub mod checks;
 pub mod coils;
 pub mod domain;
+pub mod field;
 pub mod flow;
 pub mod forces;
 pub mod integrators;
