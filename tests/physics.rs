@@ -1,5 +1,6 @@
 //! Physics verification against closed forms and independent solutions (docs/model.md §11).
 
+use magdem::core::field::AppliedField;
 use magdem::core::flow::Flow;
 use magdem::core::forces::drag::{Drag, DragLaw, Fluid, Shielding};
 use magdem::core::forces::magnetisation::{Induction, Magnetisation, MU0};
@@ -333,8 +334,12 @@ fn five_sphere_chain_moments_match_a_direct_solve() {
         ("dense", Induction::Exact { tolerance: 1e-12, max_iterations: 500, dense_max: 150 }),
         ("iterative", Induction::Exact { tolerance: 1e-12, max_iterations: 500, dense_max: 0 }),
     ] {
-        let mag =
-            Magnetisation::new(induction, b0, nalgebra::Matrix3::zeros(), std::slice::from_ref(&sp), Skins::default());
+        let mag = Magnetisation::new(
+            induction,
+            AppliedField::linear(b0, Matrix3::zeros()),
+            std::slice::from_ref(&sp),
+            Skins::default(),
+        );
         let mut field = ForceField::new(domain.clone(), vec![Box::new(mag) as Box<dyn ForceTerm>]);
         let mut state = State::new(p.clone());
         field.evaluate(&mut state, 1e-8);

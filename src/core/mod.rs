@@ -5,6 +5,7 @@ pub mod checks;
 pub mod coils;
 pub mod domain;
 pub mod exits;
+pub mod field;
 pub mod flow;
 pub mod forces;
 pub mod integrators;

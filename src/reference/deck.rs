@@ -16,6 +16,7 @@ use crate::scene::{
     ForcesSpec, GradientSpec, GravitySpec, IntegrationSpec, NormalSpec, OutputSpec, ParticleGroupSpec, Scene,
     SceneSpec, ShieldingSpec, SpeciesSpec, StabilitySpec, TangentialSpec,
 };
+use nalgebra::Matrix3;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -102,8 +103,26 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
     }
     // Magnetic terms: magdem computes the moments (from the applied field, with the induction,
     // cut-off and iteration settings) and the dipole and gradient forces, and hands them to
-    // fix.magnetic (`fix external` in process, `fix addforce` by the files route).
-    if let Some(FieldSpec { b0: _, gradient: _ }) = field {}
+    // fix.magnetic (`fix external` in process, `fix addforce` by the files route). A linear
+    // field (`gradient` or `gradient_mri`) is magdem's alone, as are coils and a waveform; but
+    // the exchanges evaluate the field at t = 0, and the native deck holds fixed moments: both
+    // are refused until the couplings carry the time and the coils.
+    if let Some(FieldSpec { b0: _, gradient: _, gradient_mri: _, coils, waveform }) = field {
+        if !coils.is_empty() {
+            return Err(unsupported(
+                engine,
+                "field.coils",
+                "the couplings are verified with a linear field only; a coil field is not handed to the engines yet",
+            ));
+        }
+        if waveform.is_some() {
+            return Err(unsupported(
+                engine,
+                "field.waveform",
+                "the couplings evaluate the magnetic forces without the simulated time",
+            ));
+        }
+    }
     if let Some(DipoleSpec {
         induction: _,
         cutoff_diameters: _,
@@ -361,7 +380,7 @@ fn native_moments(engine: Engine, scene: &Scene) -> Result<Vec<crate::core::stat
     if dipole.cutoff_diameters.is_none() {
         return native("forces.dipole without cutoff_diameters in a native deck", "lj/cut/dipole/cut needs a cut-off");
     }
-    if f.gradient.is_some() || scene.spec.field.as_ref().is_some_and(|fd| fd.gradient != [[0.0; 3]; 3]) {
+    if f.gradient.is_some() || scene.spec.field.as_ref().is_some_and(|fd| fd.linear_gradient() != Matrix3::zeros()) {
         return native(
             "a field gradient in a native deck",
             "the moments would vary with position and the gradient force has no LAMMPS equivalent",
@@ -694,6 +713,26 @@ mod tests {
             let periodic = Some(Value::Table(
                 ["x", "y", "z"].iter().map(|k| (k.to_string(), Value::String("periodic".into()))).collect(),
             ));
+            let coils = Some(Value::Array(vec![Value::Table(
+                [
+                    ("kind".to_string(), Value::String("maxwell".into())),
+                    ("centre".to_string(), v3([0.0; 3]).unwrap()),
+                    ("axis".to_string(), v3([0.0, 0.0, 1.0]).unwrap()),
+                    ("radius".to_string(), Value::Float(1.0)),
+                    ("current".to_string(), Value::Float(100.0)),
+                ]
+                .into_iter()
+                .collect(),
+            )]));
+            let waveform = Some(Value::Table(
+                [("period".to_string(), Value::Float(1e-3)), ("duty".to_string(), Value::Float(0.5))]
+                    .into_iter()
+                    .collect(),
+            ));
+            let v3x3 = || {
+                let row = |r: [f64; 3]| v3(r).unwrap();
+                Some(Value::Array(vec![row([0.0, 0.0, 0.1]), row([0.0; 3]), row([0.1, 0.0, 0.0])]))
+            };
             let variants: Vec<Variant> = vec![
                 ("expressible", vec![], [None, None]),
                 (
@@ -752,6 +791,21 @@ mod tests {
                         )])),
                     )],
                     [Some("exits"); 2],
+                ),
+                (
+                    "MRI gradient",
+                    vec![("field.gradient", None), ("field.gradient_mri", v3([0.0, 0.0, 0.1]))],
+                    [None, None],
+                ),
+                (
+                    "coil field",
+                    vec![("field.gradient", None), ("field.coils", coils.clone())],
+                    [Some("field.coils"); 2],
+                ),
+                (
+                    "gradient waveform",
+                    vec![("field.gradient", v3x3()), ("field.waveform", waveform.clone())],
+                    [Some("field.waveform"); 2],
                 ),
                 (
                     "moving fluid, no drag",

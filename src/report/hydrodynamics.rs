@@ -135,7 +135,7 @@ fn scene_facts(scene: &Scene) -> SceneFacts {
         particles: scene.initial.position.len(),
         diameter_um: 1e6 * spec.species.first().map_or(f64::NAN, |s| s.diameter),
         b0: field.map_or(f64::NAN, |f| f.b0.iter().map(|b| b * b).sum::<f64>().sqrt()),
-        gradient: field.map_or(f64::NAN, |f| f.gradient[0][0]),
+        gradient: field.map_or(f64::NAN, |f| f.linear_gradient()[(0, 0)]),
         end_time: spec.integration.end_time,
         dt: spec.integration.dt,
         scheme: match spec.integration.scheme {

@@ -336,8 +336,7 @@ fn image_measures(
 fn applied_magnetisation(scene: &crate::scene::Scene) -> f64 {
     let (Some(field), Some(species)) = (scene.spec.field.as_ref(), scene.species.first()) else { return f64::NAN };
     let centre = 0.5 * (scene.domain.lo + scene.domain.hi);
-    let gradient = nalgebra::Matrix3::from_fn(|a, b| field.gradient[a][b]);
-    let h = ((nalgebra::Vector3::from(field.b0) + gradient * centre) / crate::core::forces::magnetisation::MU0).norm();
+    let h = (field.applied().on().field(&centre) / crate::core::forces::magnetisation::MU0).norm();
     let linear = species.susceptibility * h;
     species.saturation.map_or(linear, |s| s.magnetisation(linear))
 }

@@ -3,6 +3,7 @@
 
 pub mod exits;
 pub mod experiment;
+pub mod field;
 pub mod fluid;
 pub mod placement;
 pub mod spec;
@@ -21,7 +22,6 @@ use crate::core::state::{
     largest_diameter, PairHistory, Particles, Saturation, SaturationLaw, SizeDistribution, SizeLaw, Species, State,
     Vec3,
 };
-use nalgebra::Matrix3;
 use rand::{RngExt, SeedableRng};
 use sha2::{Digest, Sha256};
 pub use spec::*;
@@ -120,6 +120,9 @@ impl Scene {
             fluid::check(f)?;
             hasher.update(fluid::load_grid(f, dir, (domain.lo, domain.hi), end_time)?);
         }
+        if let Some(f) = &spec.field {
+            field::check(f)?;
+        }
         let species =
             spec.species.iter().enumerate().map(|(k, s)| check_species(k, s)).collect::<Result<Vec<_>, _>>()?;
         if species.is_empty() {
@@ -150,6 +153,9 @@ impl Scene {
             fluid::check_particles(f, &initial)?;
         }
         exits::check_particles(spec.exits.as_ref(), &initial)?;
+        if let Some(f) = &spec.field {
+            field::check_particles(f, &initial)?;
+        }
         let hash = hasher.finalize().iter().map(|b| format!("{b:02x}")).collect();
         check_integration(&spec)?;
 
@@ -312,7 +318,7 @@ fn term_context<'a>(spec: &'a SceneSpec, domain: &'a Domain, species: &'a [Speci
         domain,
         species,
         fluid: spec.fluid.as_ref().map(fluid::fluid),
-        field: spec.field.as_ref().map(|f| (Vec3::from(f.b0), Matrix3::from_fn(|r, c| f.gradient[r][c]))),
+        field: spec.field.as_ref().map(FieldSpec::applied),
         scheme: spec.integration.scheme,
         steps_per_frame: steps_per_frame(spec),
         pairs: Pairs { near: PairRange::Within { range, skin: skins.near * range }, skins },
@@ -322,14 +328,16 @@ fn term_context<'a>(spec: &'a SceneSpec, domain: &'a Domain, species: &'a [Speci
 }
 
 /// The stable-step estimate: each term's bound, with the species at their smallest radius (the
-/// strictest for every bound) and the moment of an isolated particle at the box centre.
+/// strictest for every bound) and the moment of an isolated particle in the largest applied field
+/// ([`crate::core::field::AppliedField::largest_field`]: at the box centre for a linear field, the
+/// largest over the centre and the corners for coils, the gradient on).
 fn estimate(spec: &SceneSpec, domain: &Domain, species: &[Species], initial: &Particles) -> StepEstimate {
     let terms = spec.forces.terms();
     let ctx = term_context(spec, domain, species, Skins::default());
     let induction = induction(&terms, &ctx);
-    let centre = 0.5 * (domain.lo + domain.hi);
+    let b = ctx.field().largest_field(domain.lo, domain.hi);
     let smallest: Vec<Species> = species.iter().map(Species::smallest).collect();
-    let moments: Vec<f64> = smallest.iter().map(|s| isolated_moment(induction, ctx.field(), centre, s)).collect();
+    let moments: Vec<f64> = smallest.iter().map(|s| isolated_moment(induction, b, s)).collect();
     let drag_viscosity = spec.forces.drag.as_ref().and(spec.fluid.as_ref()).map(|f| f.viscosity);
     let max_initial_speed = initial.velocity.iter().map(|v| v.norm()).fold(0.0, f64::max);
     let step = StepContext {
@@ -370,8 +378,7 @@ fn induction(terms: &[&dyn TermSpec], ctx: &SceneContext) -> Option<Induction> {
 /// The force terms in registry order, after the moments term when any of them reads moments.
 fn build_terms(terms: &[&dyn TermSpec], ctx: &SceneContext) -> Vec<Box<dyn ForceTerm>> {
     let moments = induction(terms, ctx).map(|induction| {
-        let (b0, gradient) = ctx.field();
-        Box::new(Magnetisation::new(induction, b0, gradient, ctx.species, ctx.pairs.skins)) as Box<dyn ForceTerm>
+        Box::new(Magnetisation::new(induction, ctx.field(), ctx.species, ctx.pairs.skins)) as Box<dyn ForceTerm>
     });
     moments.into_iter().chain(terms.iter().map(|t| t.build(ctx))).collect()
 }
@@ -515,8 +522,8 @@ fn check_forces(
     for term in spec.forces.terms() {
         term.check(&ctx)?;
     }
-    if let Some(field) = &spec.field {
-        let g = field.gradient;
+    if let Some(field) = spec.field.as_ref().filter(|f| f.coils.is_empty()) {
+        let g: [[f64; 3]; 3] = field.linear_gradient().transpose().into();
         let div = g[0][0] + g[1][1] + g[2][2];
         let scale = g.iter().flatten().fold(0.0_f64, |a, v| a.max(v.abs()));
         if scale > 0.0 && div.abs() > 1e-12 * scale {
@@ -958,7 +965,8 @@ fn syntax_error(text: &str, origin: &str, e: &toml::de::Error) -> SceneError {
 }
 
 /// Keys whose values are 3-vectors, lists of 3-vectors, or 3 × 3 matrices.
-const VECTOR_KEYS: [&str; 6] = ["lo", "hi", "b0", "g", "velocity", "permanent_moment"];
+const VECTOR_KEYS: [&str; 11] =
+    ["lo", "hi", "b0", "g", "velocity", "permanent_moment", "gradient_mri", "centre", "axis", "from", "to"];
 const VECTOR_LIST_KEYS: [&str; 4] = ["positions", "velocities", "angular_velocities", "gradient"];
 
 /// Refuses a vector of `VECTOR_KEYS` (or an entry of `VECTOR_LIST_KEYS`) that has more or fewer

@@ -5,6 +5,7 @@ use crate::core::integrators::Scheme;
 use serde::Deserialize;
 
 pub use super::exits::{ExitsSpec, OutletSpec};
+pub use super::field::{CoilSpec, FieldSpec, WaveformSpec};
 pub use super::fluid::{FluidSpec, VesselSpec};
 pub use crate::core::forces::contact::{ContactSpec, NormalSpec, TangentialSpec};
 pub use crate::core::forces::dipole::{DipoleSpec, InductionSpec};
@@ -110,17 +111,6 @@ impl BoundarySpec {
     pub fn axis(&self, k: usize) -> Boundary {
         [self.x, self.y, self.z][k]
     }
-}
-
-/// `[field]`: B_ext(x) = b0 + gradient · x, x in scene coordinates.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct FieldSpec {
-    /// Uniform field B0 at the origin (T).
-    pub b0: [f64; 3],
-    /// gradient[a][b] = ∂B_a/∂x_b (T/m); default zero.
-    #[serde(default)]
-    pub gradient: [[f64; 3]; 3],
 }
 
 /// `[[species]]`: one kind of particle.

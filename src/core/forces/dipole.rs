@@ -20,11 +20,11 @@ use super::magnetisation::{
 use super::setup::{invalid, positive, Invalid, SceneContext, TermSpec};
 use super::{Context, ForceTerm, Forces, Renumbering};
 use crate::core::domain::Domain;
+use crate::core::field::{AppliedField, FieldAt};
 use crate::core::lanes;
 use crate::core::neighbours::{CellList, Pair, PairList, RangePairs, Skins, VerletList};
 use crate::core::parallel;
 use crate::core::state::{Particles, Vec3};
-use nalgebra::Matrix3;
 use std::f64::consts::PI;
 use wide::f64x4;
 
@@ -362,8 +362,7 @@ pub struct DipoleForce {
     /// Verlet skin of the cut-off list: `cutoff` times this.
     skin: f64,
     /// Applied field, for the torque on permanent moments.
-    pub b0: Vec3,
-    pub gradient: Matrix3<f64>,
+    pub applied: AppliedField,
     verlet: VerletList,
     pairs: PairList,
     particle_blocks: Vec<ParticleBlock>,
@@ -372,12 +371,11 @@ pub struct DipoleForce {
 }
 
 impl DipoleForce {
-    pub fn new(cutoff: Option<f64>, b0: Vec3, gradient: Matrix3<f64>, skins: Skins) -> Self {
+    pub fn new(cutoff: Option<f64>, applied: AppliedField, skins: Skins) -> Self {
         Self {
             cutoff,
             skin: skins.magnetic,
-            b0,
-            gradient,
+            applied,
             verlet: VerletList::default(),
             pairs: PairList::default(),
             particle_blocks: vec![],
@@ -496,9 +494,8 @@ impl TermSpec for DipoleSpec {
     }
 
     fn build(&self, ctx: &SceneContext) -> Box<dyn ForceTerm> {
-        let (b0, gradient) = ctx.field();
         let cutoff = self.cutoff_diameters.map(|c| c * ctx.largest_diameter());
-        Box::new(DipoleForce::new(cutoff, b0, gradient, ctx.pairs.skins))
+        Box::new(DipoleForce::new(cutoff, ctx.field(), ctx.pairs.skins))
     }
 }
 
@@ -559,7 +556,10 @@ impl ForceTerm for DipoleForce {
                     RangePairs::own(self.pairs.seq())
                 }
             };
-            let mut b_loc: Vec<Vec3> = p.position.iter().map(|x| self.b0 + self.gradient * x).collect();
+            let mut b_loc: Vec<Vec3> = match self.applied.at(ctx.time) {
+                FieldAt::Linear { b0, g } => p.position.iter().map(|x| b0 + g * x).collect(),
+                applied => p.position.iter().map(|x| applied.field(x)).collect(),
+            };
             let moment = &*out.moment;
             pairs.add_in_order_by_four(
                 &mut b_loc,

@@ -1,16 +1,18 @@
-//! Force of the applied field gradient on a point dipole, F = (m·∇) B_ext = G m, with
-//! G_ab = ∂B_a/∂x_b (paper eq. 4, written for the moment m = V M).
+//! Force of the applied field gradient on a point dipole, F = (m·∇) B_ext = G(x, t) m, with
+//! G_ab = ∂B_a/∂x_b at the particle (paper eq. 4, written for the moment m = V M; the Jacobian of
+//! coils in [`crate::core::field`]).
 
 use super::magnetisation::{needs_field, Induction};
 use super::setup::{Invalid, SceneContext, TermSpec};
 use super::{Context, ForceTerm, Forces, Renumbering};
+use crate::core::field::{AppliedField, FieldAt};
+use crate::core::parallel;
 use crate::core::state::Particles;
-use nalgebra::Matrix3;
 
 #[derive(Debug, Clone)]
 pub struct GradientForce {
-    /// G_ab = ∂B_a/∂x_b (T/m).
-    pub gradient: Matrix3<f64>,
+    /// The applied field whose Jacobian pulls on the moments.
+    pub field: AppliedField,
 }
 
 impl ForceTerm for GradientForce {
@@ -20,9 +22,20 @@ impl ForceTerm for GradientForce {
     fn is_slow(&self) -> bool {
         true
     }
-    fn apply(&mut self, _ctx: &Context, _p: &Particles, out: &mut Forces) {
-        for (f, m) in out.force.iter_mut().zip(out.moment.iter()) {
-            *f += self.gradient * m;
+    /// One constant G for every particle when the field is linear; the Jacobian at each particle
+    /// (in parallel for many) for coils.
+    fn apply(&mut self, ctx: &Context, p: &Particles, out: &mut Forces) {
+        match self.field.at(ctx.time) {
+            FieldAt::Linear { g, .. } => {
+                for (f, m) in out.force.iter_mut().zip(out.moment.iter()) {
+                    *f += g * m;
+                }
+            }
+            field => parallel::for_each_share((&mut *out.force, &*out.moment, &p.position[..]), |_, (f, m, x)| {
+                for ((f, m), x) in f.iter_mut().zip(m).zip(x) {
+                    *f += field.jacobian(x) * m;
+                }
+            }),
         }
     }
     /// Holds nothing per particle.
@@ -43,6 +56,6 @@ impl TermSpec for GradientSpec {
         Some(Induction::None)
     }
     fn build(&self, ctx: &SceneContext) -> Box<dyn ForceTerm> {
-        Box::new(GradientForce { gradient: ctx.field().1 })
+        Box::new(GradientForce { field: ctx.field() })
     }
 }

@@ -2,9 +2,10 @@
 //! dipoles (mutual induction):
 //!
 //!   m_i = m_perm,i + sat(χ_eff V_i H_loc,i),  H_loc,i = H_ext(x_i) + Σ_j H_dip,j(x_i)
-//!   H_ext(x) = (B0 + G x) / μ0,  H_dip(r) = [3 (m·r̂) r̂ − m] / (4π r³)
+//!   H_ext(x, t) = B_ext(x, t) / μ0,  H_dip(r) = [3 (m·r̂) r̂ − m] / (4π r³)
 //!
-//! sat() saturates |M| at the species' Ms (a cap, or the Fröhlich–Kennelly law). The moments are
+//! B_ext is the applied field ([`crate::core::field`]), B0 + G x or coils, at each particle's
+//! position and the evaluated time. sat() saturates |M| at the species' Ms (a cap, or the Fröhlich–Kennelly law). The moments are
 //! a force term of their own ("moments", slow): it adds no force, it writes the moments that the
 //! dipole and gradient terms after it read. Levels (docs/model.md §4.3):
 //! - `None`: H_loc = H_ext.
@@ -18,6 +19,7 @@
 pub use super::setup::Induction;
 use super::setup::{invalid, Invalid, SceneContext, StepBound, StepContext};
 use super::{Context, ForceTerm, Forces, Renumbering, TermError};
+use crate::core::field::{AppliedField, FieldAt};
 use crate::core::lanes::{self, Vec3x4};
 use crate::core::neighbours::{Pair, PairRange, RangePairs, Skins};
 use crate::core::parallel;
@@ -27,8 +29,7 @@ use nalgebra::Matrix3;
 use std::f64::consts::PI;
 use wide::f64x4;
 
-/// Vacuum permeability μ0 (T·m/A).
-pub const MU0: f64 = 4.0e-7 * PI;
+pub use crate::core::coils::MU0;
 
 /// Fields of a pair's dipoles on each other, with r = x_i − x_j: on i from m_j and on j from m_i,
 /// H = [3(m·r̂)r̂ − m]/(4π r³) (A/m; even in r̂, so both share r̂ and 1/(4π r³)).
@@ -71,16 +72,15 @@ pub fn needs_field(ctx: &SceneContext) -> Result<(), Invalid> {
     }
 }
 
-/// Moment magnitude of an isolated sphere of species `s` at `centre` in the applied `field`
-/// (zero without moments), saturated, enhanced by mutual induction with one touching neighbour
+/// Moment magnitude of an isolated sphere of species `s` in the applied field `b` (T; zero
+/// moment without moments), saturated, enhanced by mutual induction with one touching neighbour
 /// along the field when induction is on: m/(1 − χ_eff/12); plus its permanent moment. For the
 /// step estimate.
-pub fn isolated_moment(induction: Option<Induction>, field: (Vec3, Matrix3<f64>), centre: Vec3, s: &Species) -> f64 {
+pub fn isolated_moment(induction: Option<Induction>, b: Vec3, s: &Species) -> f64 {
     let Some(induction) = induction else {
         return 0.0;
     };
-    let (b0, gradient) = field;
-    let h = ((b0 + gradient * centre) / MU0).norm();
+    let h = (b / MU0).norm();
     let mut m = s.susceptibility * s.volume() * h;
     if let Some(sat) = s.saturation {
         m = m.min(sat.moment(s.susceptibility * h, s.volume()));
@@ -140,8 +140,7 @@ pub fn held_bound(ctx: &StepContext) -> Option<StepBound> {
 
 pub struct Magnetisation {
     pub induction: Induction,
-    pub b0: Vec3,
-    pub gradient: Matrix3<f64>,
+    pub applied: AppliedField,
     /// χ_eff of each species.
     susceptibility: Vec<f64>,
     saturation: Vec<Option<Saturation>>,
@@ -154,7 +153,7 @@ pub struct Magnetisation {
 }
 
 impl Magnetisation {
-    pub fn new(induction: Induction, b0: Vec3, gradient: Matrix3<f64>, species: &[Species], skins: Skins) -> Self {
+    pub fn new(induction: Induction, applied: AppliedField, species: &[Species], skins: Skins) -> Self {
         let range = match induction {
             Induction::None => None,
             Induction::Paper { radius } => Some(PairRange::Within { range: radius, skin: radius * skins.induction }),
@@ -162,8 +161,7 @@ impl Magnetisation {
         };
         Self {
             induction,
-            b0,
-            gradient,
+            applied,
             susceptibility: species.iter().map(|s| s.susceptibility).collect(),
             saturation: species.iter().map(|s| s.saturation).collect(),
             range,
@@ -173,14 +171,14 @@ impl Magnetisation {
         }
     }
 
-    /// Applied field H_ext(x) = (B0 + G x)/μ0.
-    pub fn external_field(&self, x: &Vec3) -> Vec3 {
-        (self.b0 + self.gradient * x) / MU0
-    }
-
-    /// The applied field at every particle into `field` (in parallel for many particles).
-    fn external_fields(&self, p: &Particles, field: &mut Vec<Vec3>) {
-        parallel::map_ordered(p.len(), field, |i| self.external_field(&p.position[i]));
+    /// The applied field H_ext(x_i, t) = B_ext(x_i, t)/μ0 at every particle into `field` (in
+    /// parallel for many particles); a linear field computes (B0 + G x)/μ0.
+    fn external_fields(&self, p: &Particles, t: f64, field: &mut Vec<Vec3>) {
+        let x = &p.position;
+        match self.applied.at(t) {
+            FieldAt::Linear { b0, g } => parallel::map_ordered(p.len(), field, |i| (b0 + g * x[i]) / MU0),
+            applied => parallel::map_ordered(p.len(), field, |i| applied.field(&x[i]) / MU0),
+        }
     }
 
     /// Induced plus permanent moment of particle i in local field `h`.
@@ -206,9 +204,9 @@ impl Magnetisation {
     }
 
     /// Local fields from the applied field and the moments `moment` over `pairs`.
-    fn sweep_fields(&mut self, p: &Particles, moment: &[Vec3], pairs: &RangePairs) {
+    fn sweep_fields(&mut self, p: &Particles, t: f64, moment: &[Vec3], pairs: &RangePairs) {
         let mut field = std::mem::take(&mut self.field);
-        self.external_fields(p, &mut field);
+        self.external_fields(p, t, &mut field);
         pairs.add_in_order_by_four(
             &mut field,
             |q| pair_dipole_fields(&moment[q.i as usize], &moment[q.j as usize], q),
@@ -218,28 +216,29 @@ impl Magnetisation {
         self.field = field;
     }
 
-    /// Computes the moments for the current positions into `self.moments`; `previous` are the
-    /// last evaluation's (the paper's lagged sweep reads them, the iteration starts from them).
-    fn update(&mut self, p: &Particles, previous: &[Vec3], pairs: &RangePairs) -> Result<(), TermError> {
+    /// Computes the moments for the current positions and time `t` into `self.moments`;
+    /// `previous` are the last evaluation's (the paper's lagged sweep reads them, the iteration
+    /// starts from them).
+    fn update(&mut self, p: &Particles, t: f64, previous: &[Vec3], pairs: &RangePairs) -> Result<(), TermError> {
         match self.induction {
             Induction::None => {
                 let mut field = std::mem::take(&mut self.field);
-                self.external_fields(p, &mut field);
+                self.external_fields(p, t, &mut field);
                 self.field = field;
                 self.set_moments(p);
             }
             Induction::Paper { .. } => {
-                self.sweep_fields(p, previous, pairs);
+                self.sweep_fields(p, t, previous, pairs);
                 self.set_moments(p);
             }
             Induction::Exact { tolerance, max_iterations, dense_max } => {
                 if p.len() <= dense_max && self.saturation.iter().all(Option::is_none) {
-                    self.solve_dense(p, pairs.pairs);
+                    self.solve_dense(p, t, pairs.pairs);
                     self.last_iterations = 1;
                 } else {
                     self.moments.clear();
                     self.moments.extend_from_slice(previous);
-                    self.iterate(p, pairs, tolerance, max_iterations)?;
+                    self.iterate(p, t, pairs, tolerance, max_iterations)?;
                 }
             }
         }
@@ -250,6 +249,7 @@ impl Magnetisation {
     fn iterate(
         &mut self,
         p: &Particles,
+        t: f64,
         pairs: &RangePairs,
         tolerance: f64,
         max_iterations: usize,
@@ -257,7 +257,7 @@ impl Magnetisation {
         let mut residual = f64::INFINITY;
         let mut moments = std::mem::take(&mut self.moments);
         for iteration in 1..=max_iterations {
-            self.sweep_fields(p, &moments, pairs);
+            self.sweep_fields(p, t, &moments, pairs);
             let (mut change, mut largest) = (0.0_f64, 0.0_f64);
             for (i, moment) in moments.iter_mut().enumerate() {
                 let m = self.moment_in(p, i, &self.field[i]);
@@ -277,13 +277,14 @@ impl Magnetisation {
     }
 
     /// Dense solve of (I − D T) m = m_perm + D H_ext (no saturation).
-    fn solve_dense(&mut self, p: &Particles, pairs: Pieced<Pair>) {
+    fn solve_dense(&mut self, p: &Particles, t: f64, pairs: Pieced<Pair>) {
         let n = p.len();
         let chi_v = |i: usize| self.susceptibility[p.species[i] as usize] * 4.0 / 3.0 * PI * p.radius[i].powi(3);
         let mut a = faer::Mat::<f64>::identity(3 * n, 3 * n);
         let mut rhs = faer::Mat::<f64>::zeros(3 * n, 1);
+        let applied = self.applied.at(t);
         for i in 0..n {
-            let h = self.external_field(&p.position[i]);
+            let h = applied.field(&p.position[i]) / MU0;
             for k in 0..3 {
                 rhs[(3 * i + k, 0)] = chi_v(i) * h[k] + p.permanent_moment[i][k];
             }
@@ -320,7 +321,7 @@ impl ForceTerm for Magnetisation {
     fn prepare(&mut self, ctx: &Context, state: &State) -> Result<(), TermError> {
         // Without induction no pairs are read (and none declared).
         let pairs = ctx.neighbours.range_pairs(self.range.unwrap_or(PairRange::All));
-        self.update(&state.particles, &state.fields.moment, &pairs)
+        self.update(&state.particles, ctx.time, &state.fields.moment, &pairs)
     }
     fn apply(&mut self, _ctx: &Context, _p: &Particles, out: &mut Forces) {
         parallel::for_each_share((&mut *out.moment, &self.moments[..]), |_, (out, m)| out.copy_from_slice(m));

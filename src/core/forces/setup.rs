@@ -6,11 +6,11 @@
 use super::ForceTerm;
 pub use crate::core::checks::{invalid, non_negative, positive, Invalid};
 use crate::core::domain::Domain;
+use crate::core::field::AppliedField;
 use crate::core::flow::Flow;
 use crate::core::integrators::Scheme;
 use crate::core::neighbours::{PairRange, Skins};
-use crate::core::state::{largest_diameter, Species, Vec3};
-use nalgebra::Matrix3;
+use crate::core::state::{largest_diameter, Species};
 
 /// The fluid the particles move in.
 #[derive(Debug, Clone)]
@@ -50,8 +50,8 @@ pub struct SceneContext<'a> {
     pub species: &'a [Species],
     /// The `[fluid]` table, if given.
     pub fluid: Option<Fluid>,
-    /// The `[field]` table, B_ext(x) = b0 + G x, if given.
-    pub field: Option<(Vec3, Matrix3<f64>)>,
+    /// The `[field]` table, B_ext(x, t), if given.
+    pub field: Option<AppliedField>,
     /// The integration scheme, with its parameters.
     pub scheme: Scheme,
     pub steps_per_frame: u64,
@@ -70,9 +70,9 @@ impl SceneContext<'_> {
         largest_diameter(self.species)
     }
 
-    /// The applied field B0 and gradient G (zero without a `[field]` table).
-    pub fn field(&self) -> (Vec3, Matrix3<f64>) {
-        self.field.unwrap_or((Vec3::zeros(), Matrix3::zeros()))
+    /// The applied field (zero without a `[field]` table).
+    pub fn field(&self) -> AppliedField {
+        self.field.clone().unwrap_or_else(AppliedField::zero)
     }
 }
 

@@ -96,7 +96,7 @@ fn single_velocity(scene: &Scene) -> (f64, f64) {
     let s = &scene.species[0];
     let field = scene.spec.field.as_ref();
     let b0 = field.map_or(0.0, |f| nalgebra::Vector3::from(f.b0).norm());
-    let g = field.map_or(0.0, |f| f.gradient[0][0]);
+    let g = field.map_or(0.0, |f| f.linear_gradient()[(0, 0)]);
     let mu = scene.spec.fluid.as_ref().map_or(f64::NAN, |f| f.viscosity);
     let m = s.susceptibility * b0 / MU0;
     let volume = 4.0 / 3.0 * std::f64::consts::PI * s.radius.powi(3);
@@ -215,7 +215,7 @@ pub fn case2(inp: &Inputs) -> Result<Value, Error> {
         dt => integration.dt,
         slow_every => integration.slow_every(),
         b0 => scene.spec.field.as_ref().map(|f| nalgebra::Vector3::from(f.b0).norm()),
-        gradient => scene.spec.field.as_ref().map(|f| f.gradient[0][0]),
+        gradient => scene.spec.field.as_ref().map(|f| f.linear_gradient()[(0, 0)]),
         diameter_um => 2e6 * scene.species[0].radius,
         susceptibility => scene.species[0].susceptibility,
         m_scene => m_scene,
