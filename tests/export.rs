@@ -210,3 +210,98 @@ fn a_render_without_its_programs_exits_1_naming_one_and_keeps_the_earlier_pictur
         .unwrap();
     assert_eq!(missing.status.code(), Some(2), "a missing trajectory is bad input");
 }
+
+/// A run whose particles leave through an outlet or are captured by the vessel's wall: the dump
+/// lists the particles still in the run in each snapshot (HDF5 rows that are not NaN), and OVITO
+/// reads those counts and ids frame by frame.
+#[test]
+fn ovito_reads_a_dump_whose_particles_leave() {
+    if !absent::present(
+        has("python3", &["-c", "import ovito"]),
+        "the ovito Python module",
+        "run `python3 -m pip install ovito` (scripts/setup.sh does)",
+    ) {
+        return;
+    }
+    let work = tempfile::tempdir().unwrap();
+    let scene = work.path().join("leaving.toml");
+    std::fs::write(
+        &scene,
+        r#"version = 1
+[domain]
+lo = [-1e-4, -2.5e-4, -2.5e-4]
+hi = [1.1e-3, 2.5e-4, 2.5e-4]
+[fluid]
+density = 1000.0
+viscosity = 1.0e-3
+[fluid.vessel]
+centre = [0.0, 0.0, 0.0]
+axis = [1.0, 0.0, 0.0]
+radius = 2.5e-4
+mean_speed = 0.05
+[[species]]
+name = "bead"
+diameter = 1.0e-5
+density = 5000.0
+youngs_modulus = 1.0e5
+poisson_ratio = 0.3
+friction = 0.5
+restitution = 0.5
+[[particles]]
+species = "bead"
+count = 30
+region = { lo = [0.0, -2.5e-4, -2.5e-4], hi = [1e-4, 2.5e-4, 2.5e-4] }
+in_vessel = "flux"
+[forces.contact]
+[forces.drag]
+law = "stokes"
+shielding = "none"
+[forces.gravity]
+g = [0.0, -500.0, 0.0]
+[exits]
+capture_after = 0.0
+[[exits.outlets]]
+name = "end"
+point = [1.0e-3, 0.0, 0.0]
+normal = [1.0, 0.0, 0.0]
+[integration]
+dt = 2.0e-6
+end_time = 4.0e-2
+[output]
+interval = 4.0e-3
+"#,
+    )
+    .unwrap();
+    let h5 = work.path().join("leaving.h5");
+    let magdem = |args: &[&str]| Command::new(env!("CARGO_BIN_EXE_magdem")).args(args).output().unwrap();
+    let out = magdem(&["run", path(&scene), "-q", "-o", path(&h5)]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = magdem(&["export", path(&h5), "--format", "lammps-dump"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // Per frame, the ids (1-based, as in the dump) of the rows that are not NaN.
+    let t = magdem::io::trajectory::Trajectory::open(&h5).unwrap();
+    let x = t.all_vectors("position").unwrap();
+    let present: Vec<Vec<usize>> = (0..x.shape()[0])
+        .map(|f| (0..x.shape()[1]).filter(|&i| !x[(f, i, 0)].is_nan()).map(|i| i + 1).collect())
+        .collect();
+    assert!(present[0].len() == 30 && present.last().unwrap().len() < 30, "particles leave: {present:?}");
+    let script = r#"
+import sys
+from ovito.io import import_file
+p = import_file(sys.argv[1])
+for k in range(p.source.num_frames):
+    print("frame", *sorted(p.compute(k).particles.identifiers))
+"#;
+    std::fs::write(work.path().join("check.py"), script).unwrap();
+    let out = Command::new("python3")
+        .args([path(&work.path().join("check.py")), path(&h5.with_extension("dump"))])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let read: Vec<Vec<usize>> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .filter_map(|l| l.strip_prefix("frame"))
+        .map(|l| l.split_whitespace().map(|w| w.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(read, present);
+}

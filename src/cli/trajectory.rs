@@ -3,6 +3,7 @@
 use magdem::analysis::aggregates::{finite_lengths, Aggregate, BOX_LIMITED_FRACTION};
 use magdem::analysis::stats::summary;
 use magdem::analysis::trajectory::FrameReader;
+use magdem::core::state::Way;
 use magdem::io::export;
 use magdem::io::trajectory::Trajectory;
 use std::path::{Path, PathBuf};
@@ -161,6 +162,16 @@ fn describe(path: &Path) -> Result<(), Error> {
         frames,
         state.history.pairs.len()
     );
+    if !state.exits.is_empty() {
+        let names = t.outlet_names()?;
+        let captured = state.exits.iter().filter(|e| e.way == Way::Captured).count();
+        let mut ways = vec![format!("{captured} captured")];
+        for (k, name) in names.iter().enumerate() {
+            let through = state.exits.iter().filter(|e| e.way == Way::Outlet(k as u16)).count();
+            ways.push(format!("{through} through {name}"));
+        }
+        println!("{:<16} {} left the run: {}", "exits", state.exits.len(), ways.join(", "));
+    }
     Ok(())
 }
 

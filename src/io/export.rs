@@ -116,18 +116,21 @@ pub fn write_lammps_dump(h5: &Path, out: &Path) -> Result<(), Error> {
     for (k, step) in steps.iter().enumerate().take(frames) {
         let (x, v, m) =
             (t.frame_vectors("position", k)?, t.frame_vectors("velocity", k)?, t.frame_vectors("moment", k)?);
+        // The particles in the run: those that left it (NaN rows) are not written, as a LAMMPS
+        // dump lists the atoms present in each snapshot.
+        let present: Vec<usize> = (0..x.len()).filter(|&i| !x[i].x.is_nan()).collect();
         let _ = writeln!(
             text,
             "ITEM: TIMESTEP\n{}\nITEM: NUMBER OF ATOMS\n{}\nITEM: BOX BOUNDS {}",
             step,
-            x.len(),
+            present.len(),
             bounds.join(" ")
         );
         for a in 0..3 {
             let _ = writeln!(text, "{:e} {:e}", d.lo[a], d.hi[a]);
         }
         text += "ITEM: ATOMS id type x y z vx vy vz radius mux muy muz\n";
-        for i in 0..x.len() {
+        for i in present {
             let _ = writeln!(
                 text,
                 "{} {} {:e} {:e} {:e} {:e} {:e} {:e} {:e} {:e} {:e} {:e}",

@@ -508,6 +508,14 @@ impl Trajectory {
         self.file.dataset(&format!("frames/{name}"))?.read::<f64, ndarray::Ix3>()
     }
 
+    /// The names of the outlets the `exits` group's `outlet` indices refer to (none in files
+    /// written before particles could leave).
+    pub fn outlet_names(&self) -> H5Result<Vec<String>> {
+        let Ok(exits) = self.file.group("exits") else { return Ok(vec![]) };
+        let names = read_str_attr(&exits, "outlets")?;
+        Ok(names.split(',').filter(|n| !n.is_empty()).map(str::to_string).collect())
+    }
+
     /// The checkpointed state and the number of frames it follows.
     pub fn checkpoint(&self) -> H5Result<(State, usize)> {
         let ck = self.file.group("checkpoint")?;
