@@ -19,6 +19,21 @@ pub enum SaturationLaw {
     /// Fröhlich–Kennelly: |M| = χ_eff |H| · Ms / (Ms + χ_eff |H|) (Jiles 1998, §1.5): linear at
     /// low field, Ms at infinite field, smooth in between.
     FrohlichKennelly,
+    /// Langevin: |M| = Ms L(3 χ_eff |H| / Ms), L(ξ) = coth ξ − 1/ξ: a superparamagnetic core's
+    /// thermal average, whose initial susceptibility is χ_eff (Rosensweig, Ferrohydrodynamics,
+    /// 1985, §2.5). With χ_eff = μ0 m_c²/(3kT V) it is m_c L(μ0 m_c H/kT) per particle.
+    Langevin,
+}
+
+/// The Langevin function L(ξ) = coth ξ − 1/ξ, ≥ 0 for ξ ≥ 0; below ξ = 1e-2 its series
+/// ξ/3 − ξ³/45 + 2ξ⁵/945 (the closed form cancels there), error below 1e-16 of it.
+pub fn langevin(xi: f64) -> f64 {
+    if xi < 1e-2 {
+        let x2 = xi * xi;
+        xi * (1.0 / 3.0 - x2 / 45.0 + 2.0 * x2 * x2 / 945.0)
+    } else {
+        1.0 / xi.tanh() - 1.0 / xi
+    }
 }
 
 impl Saturation {
@@ -27,6 +42,7 @@ impl Saturation {
         match self.law {
             SaturationLaw::Cap => linear.min(self.ms),
             SaturationLaw::FrohlichKennelly => linear * self.ms / (self.ms + linear),
+            SaturationLaw::Langevin => self.ms * langevin(3.0 * linear / self.ms),
         }
     }
 
@@ -35,7 +51,7 @@ impl Saturation {
     pub fn moment(&self, linear: f64, volume: f64) -> f64 {
         match self.law {
             SaturationLaw::Cap => self.ms * volume,
-            SaturationLaw::FrohlichKennelly => self.magnetisation(linear) * volume,
+            SaturationLaw::FrohlichKennelly | SaturationLaw::Langevin => self.magnetisation(linear) * volume,
         }
     }
 }

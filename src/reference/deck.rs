@@ -268,6 +268,9 @@ fn check_species(engine: Engine, species: &[SpeciesSpec], wall_contacts: bool) -
             susceptibility: _,
             saturation_magnetisation: _,
             saturation_law: _,
+            // With the other magnetic keys: magdem's moments, handed over by the callback.
+            core_diameter: _,
+            temperature: _,
             permanent_moment,
             size,
         } = s;

@@ -11,8 +11,9 @@ mod start;
 
 use crate::core::domain::Domain;
 use crate::core::forces::drag::Drag;
-use crate::core::forces::magnetisation::{held_bound, impact_speed, isolated_moment, Induction, Magnetisation};
+use crate::core::forces::magnetisation::{held_bound, impact_speed, isolated_moment, Induction, Magnetisation, MU0};
 use crate::core::forces::setup::{self, Invalid, Pairs, SceneContext, StepBound, StepContext, TermSpec};
+use crate::core::forces::thermal::BOLTZMANN;
 use crate::core::forces::ForceTerm;
 use crate::core::integrators;
 use crate::core::neighbours::{PairRange, Skins};
@@ -25,6 +26,7 @@ use crate::core::state::{
 use rand::{RngExt, SeedableRng};
 use sha2::{Digest, Sha256};
 pub use spec::*;
+use std::f64::consts::PI;
 use std::path::Path;
 
 /// A scene that cannot be used. Shown as one line; the CLI exits with code 2.
@@ -131,6 +133,17 @@ impl Scene {
         for (k, s) in species.iter().enumerate() {
             if species[..k].iter().any(|o| o.name == s.name) {
                 return Err(invalid(format!("species[{k}].name"), &s.name, "the name is used twice"));
+            }
+        }
+        if let Some(thermal) = &spec.forces.thermal {
+            for (k, s) in spec.species.iter().enumerate() {
+                if let Some(t) = s.temperature.filter(|&t| t != thermal.temperature) {
+                    return Err(invalid(
+                        format!("species[{k}].temperature"),
+                        t,
+                        format!("differs from forces.thermal.temperature = {}", thermal.temperature),
+                    ));
+                }
             }
         }
         check_forces(&spec, &domain, &species, &mut warnings)?;
@@ -443,17 +456,53 @@ fn check_species(k: usize, s: &SpeciesSpec) -> Result<Species, SceneError> {
     if let Some(ms) = s.saturation_magnetisation {
         positive(&key("saturation_magnetisation"), ms)?;
     }
+    let law_name = |law| match law {
+        SaturationLawSpec::Cap => "cap",
+        SaturationLawSpec::FrohlichKennelly => "frohlich-kennelly",
+        SaturationLawSpec::Langevin => "langevin",
+    };
     if let (Some(law), None) = (s.saturation_law, s.saturation_magnetisation) {
-        let name = match law {
-            SaturationLawSpec::Cap => "cap",
-            SaturationLawSpec::FrohlichKennelly => "frohlich-kennelly",
-        };
-        return Err(invalid(key("saturation_law"), name, "needs saturation_magnetisation"));
+        return Err(invalid(key("saturation_law"), law_name(law), "needs saturation_magnetisation"));
     }
     let law = match s.saturation_law {
         Some(SaturationLawSpec::FrohlichKennelly) => SaturationLaw::FrohlichKennelly,
+        Some(SaturationLawSpec::Langevin) => SaturationLaw::Langevin,
         Some(SaturationLawSpec::Cap) | None => SaturationLaw::Cap,
     };
+    // A superparamagnetic core: its moment m_c = Ms V_c, its susceptibility μ0 m_c²/(3kT V) and
+    // the particle's saturation m_c/V (docs/model.md §4.4).
+    let mut saturation = s.saturation_magnetisation.map(|ms| Saturation { ms, law });
+    let mut chi_eff = 3.0 * chi / (chi + 3.0);
+    match (law, s.core_diameter, s.temperature) {
+        (SaturationLaw::Langevin, core, Some(t)) => {
+            positive(&key("temperature"), t)?;
+            if s.relative_permeability.is_some() || s.susceptibility.is_some() {
+                return Err(invalid(
+                    key("saturation_law"),
+                    "langevin",
+                    "the cores' susceptibility follows from their moment and temperature: leave out relative_permeability and susceptibility",
+                ));
+            }
+            let d_c = core.unwrap_or(s.diameter);
+            positive(&key("core_diameter"), d_c)?;
+            if d_c > s.diameter {
+                return Err(invalid(key("core_diameter"), d_c, format!("exceeds the diameter {:e} m", s.diameter)));
+            }
+            let ms = s.saturation_magnetisation.unwrap_or_default();
+            let (volume, core_moment) = ((s.diameter / 2.0).powi(3), ms * (d_c / 2.0).powi(3));
+            let (volume, core_moment) = (4.0 / 3.0 * PI * volume, 4.0 / 3.0 * PI * core_moment);
+            chi_eff = MU0 * core_moment * core_moment / (3.0 * BOLTZMANN * t * volume);
+            saturation = Some(Saturation { ms: core_moment / volume, law });
+        }
+        (SaturationLaw::Langevin, _, None) => {
+            return Err(invalid(key("saturation_law"), "langevin", "needs the cores' temperature (K)"));
+        }
+        (_, Some(d_c), _) => {
+            return Err(invalid(key("core_diameter"), d_c, "applies to saturation_law = \"langevin\""))
+        }
+        (_, _, Some(t)) => return Err(invalid(key("temperature"), t, "applies to saturation_law = \"langevin\"")),
+        (_, None, None) => {}
+    }
     let size = s.size.as_ref().map(|size| check_size(&key("size"), s.diameter, size)).transpose()?;
     Ok(Species {
         name: s.name.clone(),
@@ -463,9 +512,9 @@ fn check_species(k: usize, s: &SpeciesSpec) -> Result<Species, SceneError> {
         poisson_ratio: s.poisson_ratio,
         friction: s.friction,
         restitution: s.restitution,
-        // Clausius–Mossotti: χ_eff = 3(μr − 1)/(μr + 2) = 3χ/(χ + 3).
-        susceptibility: 3.0 * chi / (chi + 3.0),
-        saturation: s.saturation_magnetisation.map(|ms| Saturation { ms, law }),
+        // Clausius–Mossotti: χ_eff = 3(μr − 1)/(μr + 2) = 3χ/(χ + 3); a Langevin core's above.
+        susceptibility: chi_eff,
+        saturation,
         permanent_moment: s.permanent_moment.map(Vec3::from),
         size,
     })

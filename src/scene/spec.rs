@@ -134,9 +134,16 @@ pub struct SpeciesSpec {
     pub susceptibility: Option<f64>,
     /// Saturation magnetisation Ms (A/m).
     pub saturation_magnetisation: Option<f64>,
-    /// How the induced magnetisation reaches Ms: `cap` (default, |M| = min(χ_eff H, Ms)) or
-    /// `frohlich-kennelly` (M = χ_eff H · Ms / (Ms + χ_eff H)). Needs `saturation_magnetisation`.
+    /// How the induced magnetisation reaches Ms: `cap` (default, |M| = min(χ_eff H, Ms)),
+    /// `frohlich-kennelly` (M = χ_eff H · Ms / (Ms + χ_eff H)) or `langevin` (a superparamagnetic
+    /// core: m = m_c L(μ0 m_c H/kT), m_c = Ms π d_c³/6, with `core_diameter` and `temperature`,
+    /// and no permeability or susceptibility). Needs `saturation_magnetisation`.
     pub saturation_law: Option<SaturationLawSpec>,
+    /// The magnetic core's diameter d_c (m), `langevin` only (default `diameter`): one
+    /// single-domain core whose Néel relaxation is fast, inside the particle.
+    pub core_diameter: Option<f64>,
+    /// The cores' temperature T (K), `langevin` only; equal to `[forces.thermal]`'s if listed.
+    pub temperature: Option<f64>,
     /// Permanent moment (A·m²), turning with the particle.
     pub permanent_moment: Option<[f64; 3]>,
     /// Diameters drawn per particle (polydisperse); `diameter` is then their mean.
@@ -174,6 +181,7 @@ pub enum SizeLawSpec {
 pub enum SaturationLawSpec {
     Cap,
     FrohlichKennelly,
+    Langevin,
 }
 
 /// `[[particles]]`: a group of particles of one species, given by exactly one of `positions`,
