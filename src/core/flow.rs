@@ -52,6 +52,13 @@ impl VesselFlow {
         VesselFlow { vessel, mean_flow, period: f64::INFINITY, harmonics: vec![], density, viscosity }
     }
 
+    /// The steady flow's speed on the axis, 2 Q̄/(πR²) = 2ū (the LIGGGHTS and LAMMPS decks
+    /// write it as a number, so that their u(r) rounds as [`Self::axial_speed`] does).
+    pub fn centreline_speed(&self) -> f64 {
+        let big_r = self.vessel.radius;
+        2.0 * self.mean_flow / (PI * big_r * big_r)
+    }
+
     /// Womersley's number of harmonic `n`: α = R √(n ω ρ / μ).
     pub fn womersley_number(&self, n: u32) -> f64 {
         let omega = 2.0 * PI * n as f64 / self.period;
@@ -68,7 +75,7 @@ impl VesselFlow {
         }
         let area = PI * big_r * big_r;
         let s = r / big_r;
-        let mut u = 2.0 * self.mean_flow / area * (1.0 - s * s);
+        let mut u = self.centreline_speed() * (1.0 - s * s);
         for h in &self.harmonics {
             let lambda = Complex::new(-1.0, 1.0) / 2f64.sqrt() * self.womersley_number(h.n);
             let j0 = bessel_j0(lambda);

@@ -9,12 +9,14 @@
 //!   √(kt/Sn) = 2√(G*/E*), which sets x_t. Remaining differences: LAMMPS keeps the magnitude of
 //!   the shear history when projecting it and includes damping in its Coulomb check.
 
+use super::dialect::{Axis, CylinderWall};
 use super::lammps::electric_per_magnetic;
 use super::{Engine, ReferenceError};
+use crate::core::flow::Flow;
 use crate::scene::{
     Boundary, BoundarySpec, ContactSpec, DipoleSpec, DomainSpec, DragLawSpec, DragSpec, FieldSpec, FluidSpec,
     ForcesSpec, GradientSpec, GravitySpec, IntegrationSpec, NormalSpec, OutputSpec, ParticleGroupSpec, Scene,
-    SceneSpec, ShieldingSpec, SpeciesSpec, StabilitySpec, TangentialSpec,
+    SceneSpec, ShieldingSpec, SpeciesSpec, StabilitySpec, TangentialSpec, VesselSpec,
 };
 use nalgebra::Matrix3;
 use std::fmt::Write as _;
@@ -37,7 +39,8 @@ fn unsupported(engine: Engine, term: &str, why: &str) -> ReferenceError {
 ///
 /// Every field of the scene spec is named here, without `..`, with what the deck does with it: a
 /// field or term added to the spec fails to compile here until the deck writes it or refuses it.
-/// The refusals come in a fixed order (drag, gravity, species, contact); the first one is reported.
+/// The refusals come in a fixed order (vessel, exits, drag, thermal, gravity, species, contact); the
+/// first one is reported.
 pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
     let SceneSpec {
         // Metadata; the name heads the deck.
@@ -73,7 +76,7 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
             lattice: _,
             region: _,
             order: _,
-            // Needs a vessel, which the decks refuse.
+            // Placement inside the vessel: the data file holds the placed particles.
             in_vessel: _,
         } = group;
     }
@@ -82,22 +85,17 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
             Boundary::Wall | Boundary::Periodic => {} // `f` or `p` in the `boundary` line
         }
     }
-    // Density: the buoyancy in fix gravity; viscosity: fix viscous; velocity: refused with drag
-    // (without drag it acts on nothing).
+    // Density: the buoyancy in fix gravity; viscosity: fix viscous (or the vessel's fix addforce);
+    // velocity: refused with drag (without drag it acts on nothing); vessel: its wall and flow.
     let fluid_velocity =
         fluid.as_ref().map(|FluidSpec { density: _, viscosity: _, velocity, vessel: _, grid: _ }| velocity);
     if fluid.as_ref().is_some_and(|f| f.grid.is_some()) {
         return Err(unsupported(engine, "fluid.grid", "the decks write no flow field read from a grid"));
     }
-    // A vessel's flow would be fix addforce with atom-style variables of position and velocity:
-    // not written yet, refused whether or not a drag term reads it.
-    if fluid.as_ref().is_some_and(|f| f.vessel.is_some()) {
-        return Err(unsupported(
-            engine,
-            "fluid.vessel",
-            "the decks write no flow field (fix viscous drags towards rest)",
-        ));
-    }
+    let vessel = match fluid.as_ref().and_then(|f| f.vessel.as_ref()) {
+        Some(v) => Some(check_vessel(engine, scene, v)?),
+        None => None,
+    };
     if exits.is_some() {
         return Err(unsupported(engine, "exits", "the decks remove no particles (outlets and capture are magdem's)"));
     }
@@ -160,7 +158,8 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
         }
     }
     let walls = scene.domain.walls().next().is_some();
-    check_species(engine, species, contact.is_some() && walls)?;
+    let vessel_wall = vessel.is_some_and(|v| v.wall.is_some());
+    check_species(engine, species, contact.is_some() && walls || vessel_wall)?;
     if let Some(ContactSpec { particles, walls: with_walls, normal, stiffness: _, tangential }) = contact {
         if !particles {
             return Err(unsupported(
@@ -199,6 +198,52 @@ pub fn check(engine: Engine, scene: &Scene) -> Result<(), ReferenceError> {
         }
     }
     Ok(())
+}
+
+/// A straight vessel as the decks write it: the cylinder wall (with wall contacts) and the
+/// steady flow along a coordinate axis.
+#[derive(Debug, Clone, Copy)]
+struct DeckVessel {
+    wall: Option<CylinderWall>,
+    /// The axis and the flow's sign along it.
+    axis: Axis,
+    sign: f64,
+}
+
+/// A `[fluid.vessel]`: steady Poiseuille flow only (`fix addforce` of atom-style variables
+/// writes u(x) = 2ū(1 − r²/R²) along the axis), along x, y or z, with the engine's cylinder
+/// primitive as its wall when the contact term has walls.
+fn check_vessel(engine: Engine, scene: &Scene, spec: &VesselSpec) -> Result<DeckVessel, ReferenceError> {
+    let VesselSpec { centre: _, axis: _, radius: _, mean_speed: _, period, harmonics } = spec;
+    if period.is_some() || !harmonics.is_empty() {
+        return Err(unsupported(
+            engine,
+            "fluid.vessel.period (pulsatile flow)",
+            "the decks write steady Poiseuille flow; Womersley's profile needs Bessel functions of complex argument",
+        ));
+    }
+    let geometry = crate::scene::fluid::vessel(spec);
+    let (axis, sign) = Axis::of(&geometry.axis).ok_or_else(|| {
+        unsupported(
+            engine,
+            "fluid.vessel.axis not along x, y or z",
+            "the engines' cylinder walls and the decks' flow variables lie along a coordinate axis",
+        )
+    })?;
+    let with_walls = scene.spec.forces.contact.as_ref().is_some_and(|c| c.walls);
+    let wall = with_walls.then_some(CylinderWall {
+        axis,
+        centre: geometry.centre,
+        radius: geometry.radius,
+        periodic: scene.domain.periodic,
+    });
+    if let Some(wall) = &wall {
+        engine
+            .dialect()
+            .cylinder_wall(wall, &scene.species[0])
+            .map_err(|(term, why)| unsupported(engine, term, why))?;
+    }
+    Ok(DeckVessel { wall, axis, sign })
 }
 
 /// fix viscous: linear drag towards rest, 6π μ a per type.
@@ -493,7 +538,7 @@ fn input_deck(engine: Engine, scene: &Scene, data: &Path, dump: &str, coupling: 
     let includes: Vec<(&'static str, String)> = [
         ("fix.contact", Some(contact_section(engine, scene, native))),
         ("fix.gravity", gravity_section(scene)),
-        ("fix.drag", drag_section(scene)),
+        ("fix.drag", drag_section(scene, deck_vessel(engine, scene))),
         ("fix.magnetic", magnetic.then(|| magnetic_section(engine, coupling)).flatten()),
     ]
     .into_iter()
@@ -553,7 +598,17 @@ fn contact_section(engine: Engine, scene: &Scene, native: bool) -> String {
     for (k, plane) in walls {
         s += &dialect.walls(plane, d.lo[k], d.hi[k], &scene.species[0]);
     }
+    if let Some(wall) = deck_vessel(engine, scene).and_then(|v| v.wall) {
+        s += "# The vessel's wall: a cylinder of infinite mass, of the first species' material, touched from inside.\n";
+        s += &dialect.cylinder_wall(&wall, &scene.species[0]).expect("checked by deck::check");
+    }
     s
+}
+
+/// The scene's vessel as the deck writes it (after [`check`]).
+fn deck_vessel(engine: Engine, scene: &Scene) -> Option<DeckVessel> {
+    let spec = scene.spec.fluid.as_ref()?.vessel.as_ref()?;
+    Some(check_vessel(engine, scene, spec).expect("checked by deck::check"))
 }
 
 fn gravity_section(scene: &Scene) -> Option<String> {
@@ -568,15 +623,58 @@ fn gravity_section(scene: &Scene) -> Option<String> {
     ))
 }
 
-fn drag_section(scene: &Scene) -> Option<String> {
+fn drag_section(scene: &Scene, vessel: Option<DeckVessel>) -> Option<String> {
     scene.spec.forces.drag.as_ref()?;
     let mu = scene.spec.fluid.as_ref().map_or(0.0, |f| f.viscosity);
     let gamma = |k: usize| crate::core::forces::drag::Drag::stokes_coefficient(mu, scene.species[k].radius);
+    if let Some(vessel) = vessel {
+        return Some(vessel_drag(scene, vessel, &gamma));
+    }
     let mut s = format!("# Stokes drag 6 pi mu a per type.\nfix drag all viscous {:.17e}", gamma(0));
     for k in 1..scene.species.len() {
         let _ = write!(s, " scale {} {:.17e}", k + 1, gamma(k) / gamma(0));
     }
     Some(s + "\n")
+}
+
+/// Stokes drag towards the vessel's steady flow, F = 6π μ a (u(x) − v) with u = 2ū(1 − r²/R²)
+/// along the axis and zero outside (docs/model.md §3.6, src/core/flow.rs), as `fix addforce` of
+/// atom-style variables. Each variable rounds as magdem's [`crate::core::flow::VesselFlow::axial_speed`]
+/// and drag do: r from the two transverse offsets, s = r/R, u = (2ū)(1 − s s). fix addforce
+/// acts in post_force, after the first half kick and the drift (LAMMPS' and LIGGGHTS' verlet.cpp),
+/// so it sees the new positions and the half-step velocities, as magdem's drag in velocity Verlet.
+fn vessel_drag(scene: &Scene, vessel: DeckVessel, gamma: &dyn Fn(usize) -> f64) -> String {
+    let fluid = scene.spec.fluid.as_ref().expect("a vessel is in [fluid]");
+    let Flow::Vessel(flow) = crate::scene::fluid::flow(fluid) else { unreachable!("a [fluid.vessel] flows along it") };
+    let radius = flow.vessel.radius;
+    let [(t1, c1), (t2, c2)] = vessel.axis.transverse().map(|a| (a.name(), flow.vessel.centre[a.index()]));
+    let gammas = (0..scene.species.len())
+        .map(|k| match scene.species.len() {
+            1 => format!("{:.17e}", gamma(k)),
+            _ => format!("{:.17e}*(type=={})", gamma(k), k + 1),
+        })
+        .collect::<Vec<_>>()
+        .join("+");
+    let mut s = format!(
+        "# Stokes drag towards the vessel's steady Poiseuille flow, 6 pi mu a (u - v) per type, with\n\
+         # u = 2 u_mean (1 - r^2/R^2) along the axis ({}{}), zero outside. fix addforce acts after the first\n\
+         # half kick and the drift: at the new positions and the half-step velocities, as magdem's drag.\n\
+         variable vessel_r atom sqrt(({t1}-({c1:.17e}))*({t1}-({c1:.17e}))+({t2}-({c2:.17e}))*({t2}-({c2:.17e})))\n\
+         variable vessel_s atom v_vessel_r/{radius:.17e}\n\
+         variable vessel_u atom {:.17e}*(1-v_vessel_s*v_vessel_s)*(v_vessel_r<{radius:.17e})\n\
+         variable drag_gamma atom {gammas}\n",
+        if vessel.sign < 0.0 { "-" } else { "+" },
+        vessel.axis.name(),
+        vessel.sign * flow.centreline_speed(),
+    );
+    for axis in [Axis::X, Axis::Y, Axis::Z] {
+        let v = format!("v{}", axis.name());
+        let _ = match axis == vessel.axis {
+            true => writeln!(s, "variable drag_{} atom v_drag_gamma*(v_vessel_u-{v})", axis.name()),
+            false => writeln!(s, "variable drag_{} atom -v_drag_gamma*{v}", axis.name()),
+        };
+    }
+    s + "fix drag all addforce v_drag_x v_drag_y v_drag_z\n"
 }
 
 /// The fix that applies magdem's magnetic forces (none in a native deck: its pair style does).
@@ -652,12 +750,16 @@ mod tests {
             Coupling::Native => unreachable!("the native deck is checked against LAMMPS in tests/reference.rs"),
         };
         let walls = scene.domain.walls().next().is_some();
+        let vessel = scene.spec.fluid.as_ref().is_some_and(|f| f.vessel.is_some());
+        let vessel_wall = vessel && contact.as_ref().is_some_and(|c| c.walls);
         let lines = [
             ("forces.contact", contact.is_some(), pair_style),
             ("no forces.contact", contact.is_none(), "pair_style none"),
-            ("forces.contact on wall faces", contact.is_some() && walls, "all wall/gran"),
+            ("forces.contact on wall faces", contact.is_some() && walls || vessel_wall, "all wall/gran"),
+            ("forces.contact with a vessel's wall", vessel_wall, "fix wall_vessel all wall/gran"),
             ("forces.dipole or forces.gradient", dipole.is_some() || gradient.is_some(), magnetic_fix),
-            ("forces.drag", drag.is_some(), "fix drag all viscous"),
+            ("forces.drag", drag.is_some() && !vessel, "fix drag all viscous"),
+            ("forces.drag in a vessel", drag.is_some() && vessel, "fix drag all addforce v_drag_x v_drag_y v_drag_z"),
             ("forces.gravity", gravity.is_some(), "fix gravity all gravity"),
             ("integration", true, "fix integrate all nve/sphere"),
         ];
@@ -712,6 +814,24 @@ mod tests {
                 Some(Value::Table(other))
             };
             let on_walls = |term| if walls { Some(term) } else { None };
+            // A vessel wider than any box (radius 1 m), with its flow.
+            let vessel = |centre: [f64; 3], axis: [f64; 3]| {
+                Some(Value::Table(
+                    [
+                        ("centre".to_string(), v3(centre).unwrap()),
+                        ("axis".to_string(), v3(axis).unwrap()),
+                        ("radius".to_string(), Value::Float(1.0)),
+                        ("mean_speed".to_string(), Value::Float(1e-4)),
+                    ]
+                    .into_iter()
+                    .collect(),
+                ))
+            };
+            // LAMMPS' zcylinder: along z, in a box not periodic in x or y.
+            let domain = Scene::parse(&toml::to_string(&base).unwrap(), "base").unwrap().domain;
+            let lammps_x = Some("fluid.vessel.axis not along z");
+            let lammps_y = lammps_x;
+            let lammps_z = (domain.periodic[0] || domain.periodic[1]).then_some("fluid.vessel in a box periodic");
             // (Periodic variants drop the dipole term, whose ranges must stay below half the box.)
             let periodic = Some(Value::Table(
                 ["x", "y", "z"].iter().map(|k| (k.to_string(), Value::String("periodic".into()))).collect(),
@@ -757,22 +877,50 @@ mod tests {
                 ("drag touch tolerance", vec![("forces.drag.touch_tolerance", f(1e-2))], [None, None]),
                 ("no drag", vec![("forces.drag", None)], [None, None]),
                 ("moving fluid", vec![("fluid.velocity", v3([1e-4, 0.0, 0.0]))], [Some("fluid.velocity"); 2]),
+                ("vessel flow along x", vec![("fluid.vessel", vessel([0.0; 3], [1.0, 0.0, 0.0]))], [None, lammps_x]),
                 (
-                    "vessel flow (a vessel wider than any box)",
-                    vec![(
-                        "fluid.vessel",
-                        Some(Value::Table(
-                            [
-                                ("centre".to_string(), v3([0.0; 3]).unwrap()),
-                                ("axis".to_string(), v3([1.0, 0.0, 0.0]).unwrap()),
-                                ("radius".to_string(), Value::Float(1.0)),
-                                ("mean_speed".to_string(), Value::Float(1e-4)),
-                            ]
-                            .into_iter()
-                            .collect(),
-                        )),
-                    )],
-                    [Some("fluid.vessel"); 2],
+                    "vessel flow along x, no drag",
+                    vec![("fluid.vessel", vessel([0.0; 3], [1.0, 0.0, 0.0])), ("forces.drag", None)],
+                    [None, lammps_x],
+                ),
+                (
+                    "vessel flow along -y",
+                    vec![("fluid.vessel", vessel([0.0, 0.0, 1e-3], [0.0, -2.0, 0.0]))],
+                    [None, lammps_y],
+                ),
+                (
+                    "vessel flow along z through the origin",
+                    vec![("fluid.vessel", vessel([0.0; 3], [0.0, 0.0, 1.0]))],
+                    [None, lammps_z],
+                ),
+                (
+                    "vessel flow along z off the origin",
+                    vec![("fluid.vessel", vessel([1e-3, 0.0, 0.0], [0.0, 0.0, 1.0]))],
+                    [None, Some("fluid.vessel.centre")],
+                ),
+                (
+                    "vessel flow along x, no wall contacts, periodic",
+                    vec![
+                        ("fluid.vessel", vessel([0.0; 3], [1.0, 0.0, 0.0])),
+                        ("forces.contact.walls", b(false)),
+                        ("domain.boundary", periodic.clone()),
+                        ("forces.dipole", None),
+                    ],
+                    [None, None],
+                ),
+                (
+                    "vessel flow along an oblique axis",
+                    vec![("fluid.vessel", vessel([0.0; 3], [1.0, 1.0, 0.0]))],
+                    [Some("fluid.vessel.axis"); 2],
+                ),
+                (
+                    "pulsatile vessel flow",
+                    vec![
+                        ("fluid.vessel", vessel([0.0; 3], [0.0, 0.0, 1.0])),
+                        ("fluid.vessel.period", f(1e5)),
+                        ("fluid.vessel.harmonics", Some(Value::Array(vec![v3([1.0, 0.5, 0.0]).unwrap()]))),
+                    ],
+                    [Some("fluid.vessel.period"); 2],
                 ),
                 (
                     "particles touching the walls only",

@@ -2,8 +2,55 @@
 //! can hold, and the lines in which a deck says the same thing. One implementation per engine
 //! ([`super::liggghts`], [`super::lammps`]); everything else in a deck is common.
 
-use crate::core::state::Species;
+use crate::core::state::{Species, Vec3};
 use crate::scene::{Scene, SpeciesSpec};
+
+/// A coordinate axis, along which a deck's vessel runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Axis {
+    X,
+    Y,
+    Z,
+}
+
+impl Axis {
+    /// 0, 1, 2.
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    /// "x", "y", "z".
+    pub fn name(self) -> &'static str {
+        ["x", "y", "z"][self.index()]
+    }
+
+    /// The axis a unit vector lies along (its other two components exactly zero), and its sign.
+    pub fn of(direction: &Vec3) -> Option<(Axis, f64)> {
+        let axes = [Axis::X, Axis::Y, Axis::Z];
+        let mut along = axes.into_iter().filter(|a| direction[a.index()] != 0.0);
+        match (along.next(), along.next()) {
+            (Some(a), None) => Some((a, direction[a.index()].signum())),
+            _ => None,
+        }
+    }
+
+    /// The other two axes, in cyclic order after this one (y z, z x, x y).
+    pub fn transverse(self) -> [Axis; 2] {
+        let axes = [Axis::X, Axis::Y, Axis::Z];
+        [axes[(self.index() + 1) % 3], axes[(self.index() + 2) % 3]]
+    }
+}
+
+/// A straight vessel's wall as a deck writes it: the cylinder of `radius` about the line along
+/// `axis` through `centre`.
+#[derive(Debug, Clone, Copy)]
+pub struct CylinderWall {
+    pub axis: Axis,
+    pub centre: Vec3,
+    pub radius: f64,
+    /// Which axes of the box are periodic.
+    pub periodic: [bool; 3],
+}
 
 /// A reference engine's dialect.
 pub trait Dialect: Sync {
@@ -55,4 +102,7 @@ pub trait Dialect: Sync {
     /// The fix(es) of the plane walls normal to `plane` (`xplane` …) at `lo` and `hi`, of the
     /// material of `species`.
     fn walls(&self, plane: &str, lo: f64, hi: f64, species: &Species) -> String;
+    /// The fix of a vessel's cylindrical wall, of the material of `species`, touched from inside;
+    /// `Err((term, why))` for a cylinder the engine's primitive cannot hold.
+    fn cylinder_wall(&self, wall: &CylinderWall, species: &Species) -> Result<String, (&'static str, &'static str)>;
 }

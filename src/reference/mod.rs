@@ -3,7 +3,8 @@
 //! trajectory schema. Outside the physics core.
 //!
 //! What the decks express: Hertz–Mindlin contact with restitution damping (particle–particle and
-//! walls), weight minus buoyancy (`fix gravity`), Stokes drag without shielding (`fix viscous`),
+//! walls), weight minus buoyancy (`fix gravity`), Stokes drag without shielding (`fix viscous`,
+//! or towards a straight vessel's Poiseuille flow by `fix addforce`, with its cylinder wall),
 //! and a `fix external` through which magdem supplies the magnetic forces in lock step
 //! ([`library`]). Anything else is refused with a message naming the term.
 

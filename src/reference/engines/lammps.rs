@@ -3,7 +3,7 @@
 //! calibrated to LIGGGHTS' restitution damping, `wall/gran granular`, and `lj/cut/dipole/cut`
 //! for the native deck's fixed dipoles.
 
-use crate::reference::dialect::Dialect;
+use crate::reference::dialect::{Axis, CylinderWall, Dialect};
 use crate::core::forces::contact::law::restitution_beta;
 use crate::core::forces::contact::PairMaterial;
 use crate::core::state::Species;
@@ -99,6 +99,30 @@ impl Dialect for Lammps {
             "fix wall_{plane} all wall/gran granular {} {plane} {lo:.17e} {hi:.17e}\n",
             lammps_granular_model(species, species, true)
         )
+    }
+    /// `zcylinder R`: LAMMPS' only cylinder, along z through x = y = 0, in a box not periodic in
+    /// x or y (fix_wall_gran.cpp). It takes the wall's curvature into the contact, R_eff =
+    /// a r_w/(a + r_w) with r_w = −2R from inside, where magdem's wall is flat (R_eff = a): at
+    /// a = R/10, R_eff is 5 % larger and the contact 2.6 % stiffer (Hertz: k ∝ √R_eff), with the
+    /// same restitution (tsuji damping scales with √(m k)).
+    fn cylinder_wall(&self, wall: &CylinderWall, species: &Species) -> Result<String, (&'static str, &'static str)> {
+        if wall.axis != Axis::Z {
+            return Err(("fluid.vessel.axis not along z", "LAMMPS' fix wall/gran has a zcylinder only"));
+        }
+        if wall.centre.x != 0.0 || wall.centre.y != 0.0 {
+            return Err(("fluid.vessel.centre off x = y = 0", "LAMMPS' zcylinder's axis passes through x = y = 0"));
+        }
+        if wall.periodic[0] || wall.periodic[1] {
+            return Err((
+                "fluid.vessel in a box periodic in x or y",
+                "LAMMPS refuses a zcylinder wall in a periodic dimension",
+            ));
+        }
+        Ok(format!(
+            "fix wall_vessel all wall/gran granular {} zcylinder {:.17e}\n",
+            lammps_granular_model(species, species, true),
+            wall.radius
+        ))
     }
 }
 

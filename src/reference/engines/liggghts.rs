@@ -1,7 +1,7 @@
 //! LIGGGHTS-PUBLIC 3.8's dialect: `atom_style granular`, materials as `property/global` fixes,
 //! `pair_style gran model hertz tangential history`, `wall/gran` primitives.
 
-use crate::reference::dialect::Dialect;
+use crate::reference::dialect::{CylinderWall, Dialect};
 use crate::core::state::Species;
 use crate::scene::{Scene, SpeciesSpec};
 use std::fmt::Write as _;
@@ -92,5 +92,17 @@ impl Dialect for Liggghts {
     fn walls(&self, plane: &str, lo: f64, hi: f64, _species: &Species) -> String {
         let fix = "all wall/gran model hertz tangential history primitive type 1";
         format!("fix wall_{plane}_lo {fix} {plane} {lo:.17e}\nfix wall_{plane}_hi {fix} {plane} {hi:.17e}\n")
+    }
+    /// `primitive type 1 xcylinder|ycylinder|zcylinder R c1 c2`: the centre's coordinates on the
+    /// two other axes in cyclic order (y z, z x, x y: `Cylinder<dim>` in LIGGGHTS'
+    /// primitive_wall_definitions.h). Its contact is a flat wall's (effective radius a), touched
+    /// from either side, as magdem's from inside.
+    fn cylinder_wall(&self, wall: &CylinderWall, _species: &Species) -> Result<String, (&'static str, &'static str)> {
+        let [c1, c2] = wall.axis.transverse().map(|a| wall.centre[a.index()]);
+        Ok(format!(
+            "fix wall_vessel all wall/gran model hertz tangential history primitive type 1 {}cylinder {:.17e} {c1:.17e} {c2:.17e}\n",
+            wall.axis.name(),
+            wall.radius
+        ))
     }
 }
