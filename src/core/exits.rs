@@ -36,28 +36,28 @@ impl ExitRules {
         let p = &state.particles;
         let mut leaving = vec![];
         if let Some(after) = self.capture_after {
-            // The particles touching the wall now, by id, each with the time it first did.
-            let mut touching: Touching = state
+            // The particles touching the wall now, by id, each with the time it first did: kept
+            // from the last step's list, or now. Captured once that is `after` ago.
+            let mut now: Vec<(u32, usize)> = state
                 .history
                 .walls
                 .iter()
                 .filter(|((_, face), _)| *face == VESSEL_FACE)
-                .map(|((i, _), _)| (state.ids[*i as usize], state.time))
+                .map(|((i, _), _)| (state.ids[*i as usize], *i as usize))
                 .collect();
-            touching.sort_unstable_by_key(|t| t.0);
-            for t in &mut touching {
-                if let Ok(k) = state.touching.binary_search_by_key(&t.0, |s| s.0) {
-                    t.1 = state.touching[k].1;
+            now.sort_unstable();
+            let mut touching = Touching::with_capacity(now.len());
+            for (id, slot) in now {
+                let since = match state.touching.binary_search_by_key(&id, |s| s.0) {
+                    Ok(k) => state.touching[k].1,
+                    Err(_) => state.time,
+                };
+                if state.time - since >= after {
+                    leaving.push((slot, Way::Captured));
                 }
+                touching.push((id, since));
             }
             state.touching = touching;
-            for ((i, face), _) in &state.history.walls {
-                let id = state.ids[*i as usize];
-                let held = |k: usize| state.time - state.touching[k].1 >= after;
-                if *face == VESSEL_FACE && state.touching.binary_search_by_key(&id, |s| s.0).is_ok_and(held) {
-                    leaving.push((*i as usize, Way::Captured));
-                }
-            }
         }
         for (i, x) in p.position.iter().enumerate() {
             if let Some(k) = self.outlets.iter().position(|o| (x - o.point).dot(&o.normal) > 0.0) {

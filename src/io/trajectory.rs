@@ -420,14 +420,10 @@ impl TrajectoryWriter {
                 );
             let wshear = vec3_rows(&walls.iter().map(|p| p.1).collect::<Vec<_>>());
             for (name, data) in [("pair_keys", &keys), ("wall_keys", &wkeys)] {
-                let ds = ck.dataset(name)?;
-                ds.resize(data.dim())?;
-                ds.write(data)?;
+                rewrite(&ck.dataset(name)?, data)?;
             }
             for (name, data) in [("pair_shear", &shear), ("wall_shear", &wshear)] {
-                let ds = ck.dataset(name)?;
-                ds.resize(data.dim())?;
-                ds.write(data)?;
+                rewrite(&ck.dataset(name)?, data)?;
             }
             write_scalar_attr(&ck, "step", state.step)?;
             write_scalar_attr(&ck, "time", state.time)?;

@@ -785,7 +785,7 @@ fn random_sites(
                 && (*how == VesselPlacement::Uniform || rng.random::<f64>() <= 1.0 - (r / v.radius).powi(2))
         }
     };
-    let placed = placement::place_random_where(&radii, lo, hi, domain, existing, seed, inside).map_err(|k| {
+    let placed = placement::place_random(&radii, lo, hi, domain, existing, seed, inside).map_err(|k| {
         let l = hi - lo;
         let fraction = count as f64 * s.volume() / (l.x * l.y * l.z);
         invalid(

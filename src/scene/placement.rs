@@ -26,22 +26,10 @@ pub fn centre_range(radius: f64, lo: Vec3, hi: Vec3, domain: &Domain) -> (Vec3, 
 }
 
 /// Places spheres of `radii` uniformly in `[lo, hi]` (centres kept their radius from wall faces),
-/// in order, avoiding `existing` spheres (centre, radius). Returns the index of the first particle
-/// that could not be placed on failure.
+/// in order, avoiding `existing` spheres (centre, radius), keeping a drawn centre only where
+/// `accept(centre, radius, rng)` holds (a shape inside the region, or a density by rejection from
+/// the same stream). Returns the index of the first particle that could not be placed on failure.
 pub fn place_random(
-    radii: &[f64],
-    lo: Vec3,
-    hi: Vec3,
-    domain: &Domain,
-    existing: &[(Vec3, f64)],
-    seed: u64,
-) -> Result<Vec<Vec3>, usize> {
-    place_random_where(radii, lo, hi, domain, existing, seed, |_, _, _| true)
-}
-
-/// [`place_random`], keeping a drawn centre only where `accept(centre, radius, rng)` holds (a
-/// shape inside the region, or a density by rejection from the same stream).
-pub fn place_random_where(
     radii: &[f64],
     lo: Vec3,
     hi: Vec3,
